@@ -1,0 +1,339 @@
+"""`DrumClutch`: the dimensions of a two-zone MR drum clutch, in SI units, validated.
+
+Layout (see ``geometry/section.py`` for the exact r–z regions and README for a figure):
+
+* The **housing** is the magnetic yoke: a solid steel core on the axis and a steel shell
+  outside the drum stack, joined by non-magnetic (stainless) end caps. It carries the
+  coil and is fixed to the **input** drums; the whole input side turns at the motor speed.
+* The **rotor** (output) is a stainless hub disk carrying ``n_drums`` thin steel drums; it
+  is fixed to the output **shaft**.
+* Output and input drums interleave: core | gap | out 1 | gap | in 1 | gap | out 2 | … |
+  out N | gap | shell. There are ``2·n_drums`` sheared cylindrical gaps and
+  ``n_drums − 1`` input drums.
+* Along the axis the stack has two **active zones** of length ``zone_length`` separated by
+  a **non-magnetic band** of length ``band_length`` (stainless in every drum). The coil
+  sits in the shell over the band, so its flux crosses the stack radially outward in one
+  zone and back inward in the other instead of short-circuiting along the drums.
+
+``drum_inner_diameter`` is the *inner diameter of the innermost output drum*; every other
+radius follows from it, the gaps and the thicknesses.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, fields, replace
+from pathlib import Path
+from typing import Any
+
+from geometry.validation import (
+    ParameterError,
+    check_int,
+    check_nonnegative,
+    check_positive,
+    check_range,
+)
+
+#: Smallest fluid gap we accept. Turned and ground drums of this size hold ~0.02–0.05 mm
+#: runout; a gap below 0.1 mm would be closed by runout and particle chains (LORD
+#: MRF-132DG particles are up to ~10 µm). Exonetik-type drum clutches use 0.2–0.5 mm.
+MIN_GAP = 0.1e-3
+#: Thinnest drum the geometry accepts (razor-thin drums are allowed so that the methods
+#: can be shown failing on them; the CAD tolerance checks catch what the mesh cannot see).
+MIN_DRUM_THICKNESS = 0.02e-3
+#: Largest clutch we model (keeps every dimension in a sane range for the solvers).
+MAX_DIMENSION = 0.5
+#: Fraction of the coil window a layer-wound coil can fill with insulated wire cross-
+#: sections d_ins² (square packing fills 1.0; winding leads and layer steps lose ~10 %).
+COIL_PACKING = 0.9
+
+
+@dataclass(frozen=True)
+class DrumClutch:
+    """Dimensions of a two-zone MR drum clutch (all lengths in metres).
+
+    Hub features (``hub_holes``…) break the axial symmetry: the CAD, mesh and B-rep see
+    them, the analytic section does not (and says so).
+    """
+
+    n_drums: int = 2
+    drum_thickness: float = 0.25e-3
+    input_drum_thickness: float = 0.25e-3
+    gap: float = 0.3e-3
+    drum_inner_diameter: float = 14.0e-3
+    zone_length: float = 5.5e-3
+    band_length: float = 8.5e-3
+    end_clearance: float = 0.5e-3
+    hub_thickness: float = 0.8e-3
+    end_cap_thickness: float = 0.8e-3
+    shell_thickness: float = 1.2e-3
+    sleeve_thickness: float = 0.3e-3
+    coil_depth: float = 2.5e-3
+    coil_turns: int = 140
+    wire_diameter: float = 0.321e-3
+    wire_insulation: float = 0.02e-3
+    shaft_radius: float = 2.0e-3
+    shaft_length: float = 5.0e-3
+    shaft_bore_clearance: float = 0.2e-3
+    hub_holes: int = 0
+    hub_hole_diameter: float = 2.0e-3
+    hub_hole_pitch_radius: float = 4.5e-3
+
+    def __post_init__(self) -> None:
+        check_int("n_drums", self.n_drums, 1, 20)
+        check_range("drum_thickness", self.drum_thickness, MIN_DRUM_THICKNESS, 0.02, " m")
+        check_range(
+            "input_drum_thickness", self.input_drum_thickness, MIN_DRUM_THICKNESS, 0.02, " m"
+        )
+        check_range("gap", self.gap, MIN_GAP, 5e-3, " m")
+        for name in (
+            "drum_inner_diameter",
+            "zone_length",
+            "band_length",
+            "end_clearance",
+            "hub_thickness",
+            "end_cap_thickness",
+            "shell_thickness",
+            "sleeve_thickness",
+            "coil_depth",
+            "wire_diameter",
+            "shaft_radius",
+            "shaft_length",
+            "shaft_bore_clearance",
+        ):
+            check_range(name, getattr(self, name), 0.0, MAX_DIMENSION, " m", lo_open=True)
+        check_nonnegative("wire_insulation", self.wire_insulation, " m")
+        check_int("coil_turns", self.coil_turns, 1, 100_000)
+        check_int("hub_holes", self.hub_holes, 0, 200)
+        check_positive("hub_hole_diameter", self.hub_hole_diameter, " m")
+        check_positive("hub_hole_pitch_radius", self.hub_hole_pitch_radius, " m")
+
+        # Collisions. The core must keep a solid section inside the first gap.
+        core_r = self.core_radius
+        if core_r <= 0:
+            raise ParameterError(
+                f"drum_inner_diameter = {self.drum_inner_diameter:.6g} m: must exceed "
+                f"2·gap = {2 * self.gap:.6g} m so the core has a radius > 0"
+            )
+        if self.shaft_radius >= self.hub_outer_radius:
+            raise ParameterError(
+                f"shaft_radius = {self.shaft_radius:.6g} m: must be < the hub's outer radius "
+                f"{self.hub_outer_radius:.6g} m"
+            )
+        # The coil must fit its window (turns · d_ins² ≤ packing · window area).
+        need = self.coil_turns * self.wire_outer_diameter**2
+        have = COIL_PACKING * self.coil_window_area
+        if need > have:
+            max_turns = math.floor(have / self.wire_outer_diameter**2)
+            raise ParameterError(
+                f"coil_turns = {self.coil_turns}: does not fit the coil window "
+                f"{self.coil_depth * 1e3:.3g} × {self.band_length * 1e3:.3g} mm with "
+                f"{self.wire_outer_diameter * 1e3:.3g} mm wire; allowed range [1, {max_turns}]"
+            )
+        if self.wire_outer_diameter > min(self.coil_depth, self.band_length):
+            raise ParameterError(
+                f"wire_diameter = {self.wire_diameter:.6g} m: the insulated wire must fit "
+                f"the coil window ({self.coil_depth:.6g} × {self.band_length:.6g} m)"
+            )
+        if self.hub_holes:
+            self._check_hub_holes()
+
+    def _check_hub_holes(self) -> None:
+        r_h, d_h = self.hub_hole_pitch_radius, self.hub_hole_diameter
+        lo = self.shaft_radius + 0.25e-3
+        hi = self.drum_radii_out[0][0] - 0.25e-3
+        if not (r_h - d_h / 2 >= lo and r_h + d_h / 2 <= hi):
+            raise ParameterError(
+                f"hub_hole_pitch_radius = {r_h:.6g} m with hub_hole_diameter = {d_h:.6g} m: "
+                f"holes must lie between r = {lo:.6g} m (shaft + 0.25 mm) and "
+                f"r = {hi:.6g} m (first drum − 0.25 mm)"
+            )
+        # Neighbouring holes keep a 0.2 mm web: chord between centres ≥ d + 0.2 mm.
+        if self.hub_holes > 1:
+            chord = 2 * r_h * math.sin(math.pi / self.hub_holes)
+            if chord < d_h + 0.2e-3:
+                max_n = max(1, math.floor(math.pi / math.asin(min(1.0, (d_h + 0.2e-3) / (2 * r_h)))))
+                raise ParameterError(
+                    f"hub_holes = {self.hub_holes}: holes of {d_h * 1e3:.3g} mm on a "
+                    f"{r_h * 1e3:.3g} mm pitch radius overlap; allowed range [0, {max_n}]"
+                )
+
+    # ---- derived radii (single place where the radial stack is laid out) ----------------
+    @property
+    def core_radius(self) -> float:
+        """Outer radius of the steel core = inner wall of the first gap."""
+        return self.drum_inner_diameter / 2 - self.gap
+
+    @property
+    def drum_radii_out(self) -> tuple[tuple[float, float], ...]:
+        """(inner, outer) radius of every output drum, innermost first."""
+        return tuple(self._stack()[0])
+
+    @property
+    def drum_radii_in(self) -> tuple[tuple[float, float], ...]:
+        """(inner, outer) radius of every input drum, innermost first."""
+        return tuple(self._stack()[1])
+
+    @property
+    def pole_radius(self) -> float:
+        """Inner radius of the shell's pole faces = outer wall of the last gap."""
+        return self._stack()[2]
+
+    @property
+    def hub_outer_radius(self) -> float:
+        """The hub reaches the outer face of the outermost output drum."""
+        return self.drum_radii_out[-1][1]
+
+    @property
+    def coil_inner_radius(self) -> float:
+        return self.pole_radius + self.sleeve_thickness
+
+    @property
+    def coil_outer_radius(self) -> float:
+        return self.coil_inner_radius + self.coil_depth
+
+    @property
+    def outer_radius(self) -> float:
+        return self.coil_outer_radius + self.shell_thickness
+
+    @property
+    def wire_outer_diameter(self) -> float:
+        return self.wire_diameter + 2 * self.wire_insulation
+
+    @property
+    def coil_window_area(self) -> float:
+        return self.coil_depth * self.band_length
+
+    @property
+    def active_length(self) -> float:
+        """Total axial length over which the field crosses the stack (both zones)."""
+        return 2 * self.zone_length
+
+    @property
+    def stack_length(self) -> float:
+        """Axial length of the drum stack region (clearance + zone + band + zone + clearance)."""
+        return 2 * self.end_clearance + 2 * self.zone_length + self.band_length
+
+    @property
+    def body_length(self) -> float:
+        """Housing length: front cap + hub + stack + back cap."""
+        return (
+            self.end_cap_thickness
+            + self.end_clearance
+            + self.hub_thickness
+            + self.stack_length
+            + self.end_cap_thickness
+        )
+
+    @property
+    def overall_length(self) -> float:
+        """Envelope length including the output shaft stick-out."""
+        return self.body_length + self.shaft_length
+
+    def _stack(self) -> tuple[list[tuple[float, float]], list[tuple[float, float]], float]:
+        out: list[tuple[float, float]] = []
+        inp: list[tuple[float, float]] = []
+        r = self.core_radius
+        for i in range(self.n_drums):
+            r += self.gap
+            out.append((r, r + self.drum_thickness))
+            r += self.drum_thickness + self.gap
+            if i < self.n_drums - 1:
+                inp.append((r, r + self.input_drum_thickness))
+                r += self.input_drum_thickness
+        return out, inp, r
+
+    # ---- conversion at the edges ----------------------------------------------------------
+    def to_mm(self) -> dict[str, float | int]:
+        """Dimensions as a design-file mapping (lengths in mm with ``_mm`` keys)."""
+        d: dict[str, float | int] = {}
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if f.name in INTEGER_FIELDS:
+                d[f.name] = v
+            else:
+                d[f"{f.name}_mm"] = round(v * 1000.0, 9)
+        return d
+
+    @classmethod
+    def from_mm(
+        cls, data: Mapping[str, Any], base: DrumClutch | None = None, where: str = ""
+    ) -> DrumClutch:
+        """Build from a design-file mapping: lengths in mm under ``<name>_mm`` keys.
+
+        Unknown keys, unit-less length keys and wrong types raise a ParameterError naming
+        the key. Without ``base`` every key must be given.
+        """
+        prefix = f"{where}: " if where else ""
+        values: dict[str, Any] = {}
+        for key, v in data.items():
+            if key in INTEGER_FIELDS:
+                if isinstance(v, bool) or not isinstance(v, int):
+                    raise ParameterError(f"{prefix}{key} = {v!r}: must be an integer")
+                values[key] = v
+            elif key.endswith("_mm") and key[:-3] in LENGTH_FIELDS:
+                if isinstance(v, bool) or not isinstance(v, (int, float)):
+                    raise ParameterError(f"{prefix}{key} = {v!r}: must be a number (mm)")
+                values[key[:-3]] = float(v) / 1000.0
+            elif key in LENGTH_FIELDS:
+                raise ParameterError(
+                    f"{prefix}{key}: lengths need their unit in the key; write {key}_mm (mm)"
+                )
+            else:
+                raise ParameterError(
+                    f"{prefix}{key}: unknown key; known keys are "
+                    + ", ".join(sorted([*INTEGER_FIELDS, *(k + "_mm" for k in LENGTH_FIELDS)]))
+                )
+        if base is None:
+            missing = [f for f in FIELD_NAMES if f not in values]
+            if missing:
+                m = missing[0]
+                key = m if m in INTEGER_FIELDS else f"{m}_mm"
+                raise ParameterError(f"{prefix}{key}: missing (or give base = \"paper\")")
+            return cls(**values)
+        return replace(base, **values)
+
+
+FIELD_NAMES = tuple(f.name for f in fields(DrumClutch))
+INTEGER_FIELDS = frozenset({"n_drums", "coil_turns", "hub_holes"})
+LENGTH_FIELDS = frozenset(n for n in FIELD_NAMES if n not in INTEGER_FIELDS)
+
+#: The paper's clutch (Lebel et al., Table 1: 0.4 N·m, 2.7 g·cm², 85 g, 30×30×40 mm,
+#: 140 turns of 28 AWG). The paper gives no drum dimensions; ours are chosen in
+#: README "The paper preset" so that the rotor inertia, the mass, the envelope and the
+#: torque at 7 A with MRF-132DG match Table 1 and Fig. 2b.
+PRESETS: dict[str, DrumClutch] = {
+    "paper": DrumClutch(),
+}
+
+
+def preset(name: str) -> DrumClutch:
+    """A named preset; ParameterError lists the names if ``name`` is unknown."""
+    try:
+        return PRESETS[name]
+    except KeyError:
+        raise ParameterError(
+            f"preset = {name!r}: unknown; known presets are {', '.join(sorted(PRESETS))}"
+        ) from None
+
+
+def load_clutch_toml(path: str | Path) -> DrumClutch:
+    """Read a design file's ``[clutch]`` table into a DrumClutch.
+
+    ``base = "NAME"`` starts from a preset; every other key overrides it.
+    """
+    p = Path(path)
+    try:
+        data = tomllib.loads(p.read_text())
+    except FileNotFoundError:
+        raise ParameterError(f"design file {p}: not found") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ParameterError(f"design file {p}: not valid TOML ({exc})") from None
+    if "clutch" not in data or not isinstance(data["clutch"], dict):
+        raise ParameterError(f"design file {p}: missing the [clutch] table of dimensions")
+    table = dict(data["clutch"])
+    base_name = table.pop("base", None)
+    base = preset(base_name) if base_name is not None else None
+    return DrumClutch.from_mm(table, base=base, where=str(p))

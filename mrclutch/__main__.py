@@ -1,0 +1,5 @@
+import sys
+
+from mrclutch.cli import main
+
+sys.exit(main())

@@ -1,0 +1,72 @@
+"""Thin command line over the library. ``mrclutch COMMAND --help`` for each command.
+
+Each command lives in a module of ``mrclutch.commands`` that exposes
+``register(subparsers)``; those modules import nothing heavy at module level, so
+``mrclutch --help`` and the analytic commands start fast. Bad input ends in one line on
+stderr and exit status 2, never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from collections.abc import Sequence
+
+from geometry.validation import ParameterError
+
+#: Command modules, in the order their commands appear in ``--help``.
+COMMAND_MODULES: tuple[str, ...] = (
+    "mrclutch.commands.haptic",
+    "mrclutch.commands.geometry",
+    "mrclutch.commands.magnetics",
+    "mrclutch.commands.design",
+    "mrclutch.commands.fidelity",
+)
+
+
+class CLIError(Exception):
+    """A user-facing error: printed as one line, exit status 2."""
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="mrclutch",
+        description="Design MR drum clutches for haptic devices: CAD, inertia, torque, "
+        "drag and the haptic consequences (SI units; lengths in mm where marked _mm).",
+    )
+    parser.add_argument("--version", action="version", version=_version())
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub.required = True
+    for name in COMMAND_MODULES:
+        try:
+            module = importlib.import_module(name)
+        except ModuleNotFoundError as exc:
+            if exc.name == name:  # a command module not written yet
+                continue
+            raise
+        module.register(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except (ParameterError, CLIError) as exc:
+        print(f"mrclutch {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"mrclutch {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+def _version() -> str:
+    from mrclutch import __version__
+
+    return f"mrclutch {__version__}"
+
+
+if __name__ == "__main__":
+    sys.exit(main())

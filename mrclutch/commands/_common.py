@@ -1,0 +1,56 @@
+"""Helpers shared by the command modules: design selection, JSON output, atomic files."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from typing import Any
+
+import numpy as np
+
+from geometry.atomic import atomic_path
+from geometry.params import DrumClutch, load_clutch_toml, preset
+
+__all__ = ["add_design_args", "atomic_path", "load_clutch", "print_json", "to_jsonable"]
+
+
+def add_design_args(p: argparse.ArgumentParser) -> None:
+    """``[DESIGN.toml] [--preset NAME]``: a design file or a named preset (default paper)."""
+    p.add_argument("design", nargs="?", metavar="DESIGN.toml", help="design file (lengths in mm, *_mm keys)")
+    p.add_argument("--preset", default=None, metavar="NAME", help="named preset (default: paper)")
+
+
+def load_clutch(args: argparse.Namespace) -> DrumClutch:
+    """The DrumClutch named by ``add_design_args`` options."""
+    if args.design is not None and args.preset is not None:
+        from mrclutch.cli import CLIError
+
+        raise CLIError("give either a design file or --preset, not both")
+    if args.design is not None:
+        return load_clutch_toml(args.design)
+    return preset(args.preset or "paper")
+
+
+def to_jsonable(obj: Any) -> Any:
+    """Plain JSON types; NaN and ±inf become null (JSON has no NaN)."""
+    if isinstance(obj, dict):
+        return {str(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [to_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return to_jsonable(obj.tolist())
+    if isinstance(obj, (np.bool_, bool)):
+        return bool(obj)
+    if isinstance(obj, (np.integer, int)):
+        return int(obj)
+    if isinstance(obj, (np.floating, float)):
+        v = float(obj)
+        return v if math.isfinite(v) else None
+    return obj
+
+
+def print_json(obj: Any) -> None:
+    json.dump(to_jsonable(obj), sys.stdout, indent=2)
+    sys.stdout.write("\n")
