@@ -8,4 +8,12 @@ from geometry.params import PRESETS, DrumClutch, preset
 from geometry.section import Region, Section, build_section
 from geometry.validation import ParameterError
 
-__all__ = ["PRESETS", "DrumClutch", "ParameterError", "Region", "Section", "build_section", "preset"]
+__all__ = [
+    "PRESETS",
+    "DrumClutch",
+    "ParameterError",
+    "Region",
+    "Section",
+    "build_section",
+    "preset",
+]

@@ -154,7 +154,9 @@ class DrumClutch:
         if self.hub_holes > 1:
             chord = 2 * r_h * math.sin(math.pi / self.hub_holes)
             if chord < d_h + 0.2e-3:
-                max_n = max(1, math.floor(math.pi / math.asin(min(1.0, (d_h + 0.2e-3) / (2 * r_h)))))
+                max_n = max(
+                    1, math.floor(math.pi / math.asin(min(1.0, (d_h + 0.2e-3) / (2 * r_h))))
+                )
                 raise ParameterError(
                     f"hub_holes = {self.hub_holes}: holes of {d_h * 1e3:.3g} mm on a "
                     f"{r_h * 1e3:.3g} mm pitch radius overlap; allowed range [0, {max_n}]"
@@ -291,7 +293,7 @@ class DrumClutch:
             if missing:
                 m = missing[0]
                 key = m if m in INTEGER_FIELDS else f"{m}_mm"
-                raise ParameterError(f"{prefix}{key}: missing (or give base = \"paper\")")
+                raise ParameterError(f'{prefix}{key}: missing (or give base = "paper")')
             return cls(**values)
         return replace(base, **values)
 

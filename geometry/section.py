@@ -227,11 +227,23 @@ def _fill(
     occupied: list[Region], r0: float, r1: float, z0: float, z1: float, part: str, mat: str
 ) -> list[Region]:
     """Cover the free part of the rectangle [r0,r1]×[z0,z1] with rectangles (row-merged)."""
-    inside = [
-        g for g in occupied if g.r1 > r0 and g.r0 < r1 and g.z1 > z0 and g.z0 < z1
-    ]
-    rs = sorted({r0, r1, *(min(max(g.r0, r0), r1) for g in inside), *(min(max(g.r1, r0), r1) for g in inside)})
-    zs = sorted({z0, z1, *(min(max(g.z0, z0), z1) for g in inside), *(min(max(g.z1, z0), z1) for g in inside)})
+    inside = [g for g in occupied if g.r1 > r0 and g.r0 < r1 and g.z1 > z0 and g.z0 < z1]
+    rs = sorted(
+        {
+            r0,
+            r1,
+            *(min(max(g.r0, r0), r1) for g in inside),
+            *(min(max(g.r1, r0), r1) for g in inside),
+        }
+    )
+    zs = sorted(
+        {
+            z0,
+            z1,
+            *(min(max(g.z0, z0), z1) for g in inside),
+            *(min(max(g.z1, z0), z1) for g in inside),
+        }
+    )
     out: list[Region] = []
     for j in range(len(zs) - 1):
         za, zb = zs[j], zs[j + 1]

@@ -18,7 +18,9 @@ __all__ = ["add_design_args", "atomic_path", "load_clutch", "print_json", "to_js
 
 def add_design_args(p: argparse.ArgumentParser) -> None:
     """``[DESIGN.toml] [--preset NAME]``: a design file or a named preset (default paper)."""
-    p.add_argument("design", nargs="?", metavar="DESIGN.toml", help="design file (lengths in mm, *_mm keys)")
+    p.add_argument(
+        "design", nargs="?", metavar="DESIGN.toml", help="design file (lengths in mm, *_mm keys)"
+    )
     p.add_argument("--preset", default=None, metavar="NAME", help="named preset (default: paper)")
 
 
