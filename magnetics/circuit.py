@@ -1,0 +1,353 @@
+"""Saturating magnetic circuit of the two-zone drum clutch, vectorised, bracketed solver.
+
+One flux loop: core (axial) → zone A (every gap and steel drum wall radially) → pole A
+(radially) → back iron (axial) → pole B → zone B → core. Each element's MMF drop is
+``∫ H(B(r)) dr`` with ``B = Φ/(2π r L)`` for radial elements (Gauss–Legendre in ln r:
+exact for a linear material, whose reluctance is ln(r1/r0)/(2π μ L) — Roters, *Electro-
+magnetic Devices*, 1941, ch. 5) and ``H(Φ/A)·l`` for axial ones.
+
+Leakage: the flux that leaves pole A and returns to pole B without crossing the zones
+(through the sleeve and coil window, μ0, and through the stainless bands and the fluid
+between the drums over the band) is a parallel permeance ``P_leak`` across the stack's MMF
+``F_stack(Φ)``; it loads the poles and back iron, not the gaps. The loop equation
+
+    N·I = F_stack(Φ) + F_shell(Φ + P_leak·F_stack(Φ))
+
+stays a single equation, strictly increasing in the gap flux Φ (a composition and sum of
+increasing functions), so a bracket [0, Φ_hi] with F(Φ_hi) ≥ N·I always exists (every H(B)
+grows at least like B/μ0 past saturation) and the Illinois method inside it cannot
+diverge. The band's fluid counts with half its permeance because the magnetic potential
+between the zones falls roughly linearly from the pole to the core across the stack; the
+FEM (magnetics.fem) measures what this first-order estimate misses.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from geometry.batch import layout
+from geometry.params import DrumClutch
+from geometry.section import Section, build_section
+from geometry.validation import ParameterError
+from magnetics.materials import MATERIALS, MU0, BHCurve, Magnetic, magnetic
+
+FloatArray = NDArray[np.float64]
+STEEL, FLUID = "steel_1018", "mrf_132dg"
+_POLE_POINTS = 3  # Gauss points in ln r for the thick pole rings
+#: A steel element is reported saturated where its differential μr falls below this.
+SATURATION_MU_R = 100.0
+
+
+@dataclass(frozen=True)
+class MagneticPath:
+    """The loop's elements for S designs (arrays with leading axis S).
+
+    ``gap_*`` (S, K): the field-carrying part of each sheared gap in each zone (K = both
+    zones), radii and length; ``drum_*`` (S, D): steel drum walls radially crossed in the
+    zones; ``pole_*`` (S, 2); ``core_*``/``back_*`` (S,): axial area and length;
+    ``leak_permeance`` (S,) H; ``turns`` (S,).
+    """
+
+    turns: FloatArray
+    gap_r0: FloatArray
+    gap_r1: FloatArray
+    gap_len: FloatArray
+    gap_mask: NDArray[np.bool_]
+    gap_label: tuple[str, ...]
+    drum_r0: FloatArray
+    drum_r1: FloatArray
+    drum_len: FloatArray
+    drum_mask: NDArray[np.bool_]
+    pole_r0: FloatArray
+    pole_r1: FloatArray
+    pole_len: FloatArray
+    core_area: FloatArray
+    core_len: FloatArray
+    back_area: FloatArray
+    back_len: FloatArray
+    leak_permeance: FloatArray
+    steel: str = STEEL
+    fluid: str = FLUID
+
+    @property
+    def gap_r_mid(self) -> FloatArray:
+        return 0.5 * (self.gap_r0 + self.gap_r1)
+
+
+def _overlap(a0: float, a1: float, b0: float, b1: float) -> float:
+    return max(0.0, min(a1, b1) - max(a0, b0))
+
+
+def _leak_permeance(
+    mu_fluid: float, band: float, fluid_area: float, nonmag_stack: float, window: float
+) -> float:
+    # Axial permeance μA/l of the band region (Roters ch. 5); fluid and stainless inside the
+    # stack at half weight (linear potential drop across the stack), sleeve + coil at full.
+    return (0.5 * (mu_fluid * fluid_area + MU0 * nonmag_stack) + MU0 * window) / band
+
+
+def path_from_section(
+    section: Section, materials: Mapping[str, Magnetic] | None = None
+) -> MagneticPath:
+    """The loop read from the section's regions, gaps and zones (one design, S = 1)."""
+    c = section.clutch
+    mats = MATERIALS if materials is None else materials
+    za, zb = section.zones
+    core = section.region("core")
+    pole_a, pole_b = section.region("shell_A"), section.region("shell_B")
+    back = section.region("shell_back")
+    steel = core.material
+    fluid = section.region(f"gap{section.gaps[0].index}").material
+    gap_r0, gap_r1, gap_len, labels = [], [], [], []
+    for zone in (za, zb):
+        for g in section.gaps:
+            length = _overlap(g.z0, g.z1, zone.z0, zone.z1)
+            if length > 0:
+                gap_r0.append(g.r_inner)
+                gap_r1.append(g.r_outer)
+                gap_len.append(length)
+                labels.append(f"gap{g.index}_{zone.name}")
+    drum_r0, drum_r1, drum_len = [], [], []
+    for zone in (za, zb):
+        for r in section.regions:
+            if r.part in ("rotor", "input") and r.material == steel:
+                length = _overlap(r.z0, r.z1, zone.z0, zone.z1)
+                if length > 0 and core.r1 <= r.r0 and r.r1 <= pole_a.r0:
+                    drum_r0.append(r.r0)
+                    drum_r1.append(r.r1)
+                    drum_len.append(length)
+    # Leakage over the band (za.z1..zb.z0): what lies between core and back iron there.
+    band = zb.z0 - za.z1
+    fluid_area = nonmag = window = 0.0
+    for r in section.regions:
+        if r.z0 <= za.z1 + 1e-12 and r.z1 >= zb.z0 - 1e-12 and r.r0 >= core.r1 - 1e-12:
+            area = np.pi * (r.r1**2 - r.r0**2)
+            if r.r1 <= pole_a.r0 + 1e-12:
+                if r.material == fluid:
+                    fluid_area += area
+                elif r.material != steel:
+                    nonmag += area
+            elif r.r1 <= back.r0 + 1e-12:
+                window += area
+    mu_f = magnetic(fluid, mats).mu_initial
+    one = lambda v: np.asarray([v], dtype=float)  # noqa: E731
+    row = lambda v: np.asarray([v], dtype=float).reshape(1, -1)  # noqa: E731
+    zc = 0.5 * (za.z0 + za.z1), 0.5 * (zb.z0 + zb.z1)
+    return MagneticPath(
+        turns=one(c.coil_turns),
+        gap_r0=row(gap_r0), gap_r1=row(gap_r1), gap_len=row(gap_len),
+        gap_mask=np.ones((1, len(gap_r0)), bool), gap_label=tuple(labels),
+        drum_r0=row(drum_r0), drum_r1=row(drum_r1), drum_len=row(drum_len),
+        drum_mask=np.ones((1, len(drum_r0)), bool),
+        pole_r0=row([pole_a.r0, pole_b.r0]), pole_r1=row([back.r0, back.r0]),
+        pole_len=row([pole_a.z1 - pole_a.z0, pole_b.z1 - pole_b.z0]),
+        core_area=one(np.pi * core.r1**2), core_len=one(zc[1] - zc[0]),
+        back_area=one(np.pi * (back.r1**2 - back.r0**2)), back_len=one(zc[1] - zc[0]),
+        leak_permeance=one(_leak_permeance(mu_f, band, fluid_area, nonmag, window)),
+        steel=steel, fluid=fluid,
+    )  # fmt: skip
+
+
+def path_from_fields(
+    fields: Mapping[str, ArrayLike], materials: Mapping[str, Magnetic] | None = None
+) -> MagneticPath:
+    """The same loop for arrays of designs, from ``geometry.batch.layout`` (vectorised)."""
+    mats = MATERIALS if materials is None else materials
+    lay = layout(fields)
+    p = lay.p
+    zone = p["zone_length"]
+    band = p["band_length"]
+    # Each gap carries field over both full zones (the wetted length covers them).
+    gl = np.concatenate([lay.gap_r_inner, lay.gap_r_inner], axis=1)
+    gu = np.concatenate([lay.gap_r_outer, lay.gap_r_outer], axis=1)
+    gm = np.concatenate([lay.gap_mask, lay.gap_mask], axis=1)
+    glen = np.broadcast_to(zone[:, None], gl.shape).copy()
+    # Steel drums crossed radially: output drums and input drums, in both zones.
+    dr0 = np.concatenate([lay.out_r0, lay.in_r0], axis=1)
+    dr1 = np.concatenate([lay.out_r1, lay.in_r1], axis=1)
+    dm = np.concatenate([lay.out_mask, lay.in_mask], axis=1)
+    dr0, dr1, dm = (np.concatenate([a, a], axis=1) for a in (dr0, dr1, dm))
+    dlen = np.broadcast_to(zone[:, None], dr0.shape).copy()
+    t = p["end_cap_thickness"]
+    pole_len = np.stack([lay.zA1 - t, lay.zs1 - lay.zB0], axis=1)
+    rp, rco, R = lay.pole_radius, lay.coil_outer_radius, lay.outer_radius
+    rc = lay.core_radius
+    gap_area = np.where(lay.gap_mask, np.pi * (lay.gap_r_outer**2 - lay.gap_r_inner**2), 0.0)
+    fluid_area = gap_area.sum(axis=1)
+    nonmag = np.pi * (rp**2 - rc**2) - fluid_area
+    window = np.pi * (rco**2 - rp**2)
+    mu_f = magnetic(FLUID, mats).mu_initial
+    zc = zone + band
+    return MagneticPath(
+        turns=p["coil_turns"].astype(float),
+        gap_r0=gl, gap_r1=gu, gap_len=glen, gap_mask=gm,
+        gap_label=tuple(f"gap{k % lay.gap_mask.shape[1]}_{'AB'[k // lay.gap_mask.shape[1]]}"
+                        for k in range(gl.shape[1])),
+        drum_r0=dr0, drum_r1=dr1, drum_len=dlen, drum_mask=dm,
+        pole_r0=np.stack([rp, rp], axis=1), pole_r1=np.stack([rco, rco], axis=1),
+        pole_len=pole_len,
+        core_area=np.pi * rc**2, core_len=zc,
+        back_area=np.pi * (R**2 - rco**2), back_len=zc,
+        leak_permeance=_leak_permeance(mu_f, band, fluid_area, nonmag, window),
+    )  # fmt: skip
+
+
+def _radial_mmf(
+    mat: Magnetic, phi: FloatArray, r0: FloatArray, r1: FloatArray, length: FloatArray, n: int
+) -> FloatArray:
+    """∫_{r0}^{r1} H(Φ/(2π r L)) dr by n-point Gauss–Legendre in u = ln r (dr = r du).
+
+    ``phi`` has shape (S, C); the geometry (S, K); result (S, C, K) summed over K by caller.
+    """
+    x, w = np.polynomial.legendre.leggauss(n)
+    u0, u1 = np.log(r0), np.log(r1)
+    total = 0.0
+    for xi, wi in zip(x, w, strict=True):
+        r = np.exp(0.5 * (u0 + u1) + 0.5 * (u1 - u0) * xi)  # (S, K)
+        b = phi[:, :, None] / (2 * np.pi * r * length)[:, None, :]
+        total = total + 0.5 * wi * (u1 - u0)[:, None, :] * r[:, None, :] * mat.h_of_b(b)
+    return total
+
+
+def _mmf(
+    path: MagneticPath, mats: Mapping[str, Magnetic], phi: FloatArray
+) -> dict[str, FloatArray]:
+    """MMF drops (A) of every element at gap flux ``phi`` (S, C)."""
+    steel, fluid = magnetic(path.steel, mats), magnetic(path.fluid, mats)
+    gaps = _radial_mmf(fluid, phi, path.gap_r0, path.gap_r1, path.gap_len, 1)
+    gaps = np.where(path.gap_mask[:, None, :], gaps, 0.0)
+    drums = _radial_mmf(steel, phi, path.drum_r0, path.drum_r1, path.drum_len, 1)
+    drums = np.where(path.drum_mask[:, None, :], drums, 0.0)
+    core = steel.h_of_b(phi / path.core_area[:, None]) * path.core_len[:, None]
+    stack = gaps.sum(-1) + drums.sum(-1) + core
+    phi_shell = phi + path.leak_permeance[:, None] * stack
+    poles = _radial_mmf(steel, phi_shell, path.pole_r0, path.pole_r1, path.pole_len, _POLE_POINTS)
+    back = steel.h_of_b(phi_shell / path.back_area[:, None]) * path.back_len[:, None]
+    return {"gaps": gaps, "drums": drums, "core": core, "stack": stack,
+            "phi_shell": phi_shell, "poles": poles, "back": back,
+            "total": stack + poles.sum(-1) + back}  # fmt: skip
+
+
+def solve_flux(
+    path: MagneticPath,
+    ampere_turns: ArrayLike,
+    materials: Mapping[str, Magnetic] | None = None,
+    rtol: float = 1e-12,
+    max_iter: int = 200,
+) -> FloatArray:
+    """Gap flux Φ (Wb), shape (S, C), solving N·I = F(Φ) for ``ampere_turns`` (S, C).
+
+    Bracketed Illinois iteration (Dowell & Jarratt 1971) on the strictly increasing F:
+    the bracket [lo, hi] always contains the root and shrinks every step, so it cannot
+    diverge. Negative N·I is solved by symmetry (|Φ| for |NI|, sign restored).
+    """
+    mats = MATERIALS if materials is None else materials
+    ni = np.atleast_2d(np.asarray(ampere_turns, dtype=float))
+    ni = np.broadcast_to(ni, (path.turns.size, ni.shape[-1])).copy()
+    if not np.all(np.isfinite(ni)):
+        raise ParameterError("current: must be finite")
+    sign, target = np.sign(ni), np.abs(ni)
+    f = lambda phi: _mmf(path, mats, phi)["total"] - target  # noqa: E731
+    # Initial upper guess: all the MMF over the fluid gaps at the fluid's initial μ.
+    r_gap = np.where(path.gap_mask, np.log(path.gap_r1 / path.gap_r0)
+                     / (2 * np.pi * path.gap_len), 0.0).sum(-1)  # fmt: skip
+    mu_f = magnetic(path.fluid, mats).mu_initial
+    hi = np.maximum(target * mu_f / r_gap[:, None], 1e-30)
+    lo = np.zeros_like(hi)
+    flo = -target
+    fhi = f(hi)
+    for _ in range(200):  # expand until bracketed (F grows at least like Φ)
+        short = fhi < 0
+        if not short.any():
+            break
+        lo = np.where(short, hi, lo)
+        flo = np.where(short, fhi, flo)
+        hi = np.where(short, 2 * hi, hi)
+        fhi = f(hi)
+    else:
+        raise ParameterError("circuit: could not bracket the flux (current too large?)")
+    side = np.zeros_like(hi)
+    for _ in range(max_iter):
+        done = (hi - lo) <= rtol * hi
+        if done.all():
+            break
+        denom = fhi - flo
+        secant = (lo * fhi - hi * flo) / np.where(denom > 0, denom, 1.0)
+        x = np.where(denom > 0, secant, 0.5 * (lo + hi))
+        x = np.clip(x, lo, hi)
+        fx = f(x)
+        right = fx > 0  # root in [lo, x]
+        # Illinois: halve the stale end's value when the same end is kept twice.
+        flo = np.where(right, np.where(side == -1, 0.5 * flo, flo), fx)
+        fhi = np.where(right, fx, np.where(side == 1, 0.5 * fhi, fhi))
+        lo = np.where(right, lo, x)
+        hi = np.where(right, x, hi)
+        side = np.where(right, -1, 1)
+        exact = fx == 0
+        lo, hi = np.where(exact, x, lo), np.where(exact, x, hi)
+    phi = 0.5 * (lo + hi)
+    return np.where(target == 0, 0.0, phi * sign)
+
+
+@dataclass(frozen=True)
+class CircuitResult:
+    """Solution of the loop for S designs × C currents (arrays (S, C) or (S, C, K))."""
+
+    current: FloatArray  # (S, C) A
+    flux: FloatArray  # gap flux (S, C) Wb
+    flux_shell: FloatArray  # back-iron flux incl. leakage (S, C) Wb
+    gap_label: tuple[str, ...]
+    gap_r_mid: FloatArray  # (S, K) m
+    gap_len: FloatArray  # (S, K) m
+    gap_b: FloatArray  # (S, C, K) T at mid-radius
+    gap_h: FloatArray  # (S, C, K) A/m
+    steel_b: Mapping[str, FloatArray]  # element -> |B| (S, C), T (largest along the element)
+    saturated: Mapping[str, NDArray[np.bool_]]  # element -> differential μr < 100
+
+
+def solve(
+    clutch: DrumClutch | Section,
+    currents: ArrayLike,
+    materials: Mapping[str, Magnetic] | None = None,
+) -> CircuitResult:
+    """Solve the circuit of one design for an array of currents (A)."""
+    section = clutch if isinstance(clutch, Section) else build_section(clutch)
+    path = path_from_section(section, materials)
+    return solve_path(path, np.atleast_1d(np.asarray(currents, dtype=float))[None, :], materials)
+
+
+def solve_path(
+    path: MagneticPath, currents: ArrayLike, materials: Mapping[str, Magnetic] | None = None
+) -> CircuitResult:
+    """Solve for currents of shape (S, C) (or broadcastable); everything reported."""
+    mats = MATERIALS if materials is None else materials
+    cur = np.asarray(currents, dtype=float)
+    cur = np.broadcast_to(cur.reshape(cur.shape[0] if cur.ndim == 2 else 1, -1),
+                          (path.turns.size, cur.shape[-1] if cur.ndim else 1))  # fmt: skip
+    phi = solve_flux(path, path.turns[:, None] * cur, mats)
+    parts = _mmf(path, mats, np.abs(phi))
+    rmid = path.gap_r_mid
+    b = np.abs(phi)[:, :, None] / (2 * np.pi * rmid * path.gap_len)[:, None, :]
+    b = np.where(path.gap_mask[:, None, :], b, 0.0)
+    h = magnetic(path.fluid, mats).h_of_b(b)
+    steel = magnetic(path.steel, mats)
+    shell = np.abs(parts["phi_shell"])
+    sb = {
+        "core": np.abs(phi) / path.core_area[:, None],
+        "drums": np.max(np.where(path.drum_mask[:, None, :], np.abs(phi)[:, :, None]
+                                 / (2 * np.pi * path.drum_r0 * path.drum_len)[:, None, :], 0.0),
+                        axis=-1, initial=0.0),
+        "pole_A": shell / (2 * np.pi * path.pole_r0[:, 0] * path.pole_len[:, 0])[:, None],
+        "pole_B": shell / (2 * np.pi * path.pole_r0[:, 1] * path.pole_len[:, 1])[:, None],
+        "back_iron": shell / path.back_area[:, None],
+    }  # fmt: skip
+    if isinstance(steel, BHCurve):
+        sat = {k: steel.mu_r_differential(v) < SATURATION_MU_R for k, v in sb.items()}
+    else:
+        sat = {k: np.zeros(v.shape, bool) for k, v in sb.items()}
+    return CircuitResult(np.array(cur), phi, parts["phi_shell"], path.gap_label, rmid,
+                         path.gap_len, b, h, sb, sat)  # fmt: skip

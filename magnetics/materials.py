@@ -1,0 +1,212 @@
+"""Magnetic and rheological material data, each table next to its source.
+
+Every magnetic material offers ``h_of_b(b)``, ``b_of_h(h)`` and ``dh_db(b)`` on floats or
+arrays (SI: T and A/m). Non-linear materials are B–H tables interpolated with a monotone
+cubic (PCHIP, Fritsch–Carlson) of H(B) through the origin, pre-sampled on a dense grid so
+that evaluation is a vectorised ``np.interp``; beyond the last point the curve continues
+with slope μ0 (the material's polarisation is saturated: dB/dH → μ0). The registry
+``MATERIALS`` is keyed by the material names that ``geometry.section`` writes on its
+regions; add a material by adding an entry (and a test of its table).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from geometry.validation import ParameterError, check_positive
+
+MU0 = 4e-7 * math.pi  # vacuum permeability, H/m (pre-2019 SI value; differs by 5e-10)
+FloatArray = NDArray[np.float64]
+_DENSE = 4096  # samples of the PCHIP curve used by np.interp
+
+
+@dataclass(frozen=True)
+class LinearMaterial:
+    """Constant relative permeability (air, copper, austenitic stainless; test materials)."""
+
+    name: str
+    mu_r: float
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        check_positive(f"{self.name}.mu_r", self.mu_r)
+
+    def h_of_b(self, b: ArrayLike) -> FloatArray:
+        return np.asarray(b, dtype=float) / (MU0 * self.mu_r)  # H = B/(μ0 μr)
+
+    def b_of_h(self, h: ArrayLike) -> FloatArray:
+        return np.asarray(h, dtype=float) * (MU0 * self.mu_r)
+
+    def dh_db(self, b: ArrayLike) -> FloatArray:
+        return np.full_like(np.asarray(b, dtype=float), 1.0 / (MU0 * self.mu_r))
+
+    @property
+    def mu_initial(self) -> float:
+        return MU0 * self.mu_r
+
+
+@dataclass(frozen=True)
+class BHCurve:
+    """A non-linear soft-magnetic material from a B–H table (B in T, H in A/m).
+
+    H(B) is PCHIP through (0, 0) and the table points, monotone by construction; beyond
+    the last point H grows with slope 1/μ0. Below the first point the PCHIP runs from the
+    origin (initial permeability ≈ B1/H1).
+    """
+
+    name: str
+    b_table: tuple[float, ...]
+    h_table: tuple[float, ...]
+    source: str
+    _b: FloatArray = field(init=False, repr=False, compare=False)
+    _h: FloatArray = field(init=False, repr=False, compare=False)
+    _dhdb: FloatArray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        b = np.asarray(self.b_table, dtype=float)
+        h = np.asarray(self.h_table, dtype=float)
+        if b.shape != h.shape or b.size < 2:
+            raise ParameterError(f"{self.name}: B and H tables need the same length ≥ 2")
+        if np.any(np.diff(b) <= 0) or np.any(np.diff(h) <= 0) or b[0] <= 0 or h[0] <= 0:
+            raise ParameterError(f"{self.name}: B–H table must be positive, strictly increasing")
+        if np.any(np.diff(b) / np.diff(h) < MU0 * (1 - 1e-9)):
+            raise ParameterError(f"{self.name}: B–H table has a slope below μ0 (unphysical)")
+        from scipy.interpolate import PchipInterpolator
+
+        bb = np.concatenate([[0.0], b])
+        hh = np.concatenate([[0.0], h])
+        p = PchipInterpolator(bb, hh)  # Fritsch–Carlson monotone cubic of H(B)
+        grid = np.linspace(0.0, b[-1], _DENSE)
+        object.__setattr__(self, "_b", grid)
+        object.__setattr__(self, "_h", np.maximum.accumulate(p(grid)))
+        object.__setattr__(self, "_dhdb", np.maximum(p.derivative()(grid), 0.0))
+
+    def h_of_b(self, b: ArrayLike) -> FloatArray:
+        """H(|B|)·sign(B), A/m; slope 1/μ0 beyond the table."""
+        b = np.asarray(b, dtype=float)
+        a = np.abs(b)
+        bl, hl = self._b[-1], self._h[-1]
+        h = np.where(a <= bl, np.interp(a, self._b, self._h), hl + (a - bl) / MU0)
+        return np.copysign(h, b)
+
+    def dh_db(self, b: ArrayLike) -> FloatArray:
+        a = np.abs(np.asarray(b, dtype=float))
+        return np.where(a <= self._b[-1], np.interp(a, self._b, self._dhdb), 1.0 / MU0)
+
+    def b_of_h(self, h: ArrayLike) -> FloatArray:
+        """Inverse of ``h_of_b`` (same dense table, so the pair is consistent)."""
+        h = np.asarray(h, dtype=float)
+        a = np.abs(h)
+        bl, hl = self._b[-1], self._h[-1]
+        b = np.where(a <= hl, np.interp(a, self._h, self._b), bl + MU0 * (a - hl))
+        return np.copysign(b, h)
+
+    @property
+    def mu_initial(self) -> float:
+        """Secant permeability at the first table point, H/m."""
+        return self.b_table[0] / self.h_table[0]
+
+    def mu_r_differential(self, b: ArrayLike) -> FloatArray:
+        """dB/dH / μ0 at |B| (≥ 1); ``< 100`` is what the circuit calls saturated."""
+        return 1.0 / (MU0 * np.maximum(self.dh_db(b), 1e-30))
+
+
+Magnetic = LinearMaterial | BHCurve
+
+# AISI 1018 steel. Source: FEMM 4.2 material library (matlib.dat, "1018 Steel"),
+# shared/reference/materials.md.
+STEEL_1018 = BHCurve(
+    "steel_1018",
+    (0.2503, 0.925, 1.25, 1.39, 1.525, 1.71, 1.87, 1.955, 2.02, 2.11, 2.225, 2.43),
+    (238.7, 795.8, 1591.6, 2387.3, 3978.9, 7957.8, 15915.5, 23873.0, 39789.0, 79578.0,
+     159155.0, 318310.0),
+    "FEMM 4.2 matlib.dat '1018 Steel'",
+)  # fmt: skip
+
+# LORD MRF-132DG. Source: manufacturer's B–H curve as digitised in the public FEMM
+# material "LORD MRF 132-DG" (shared/reference/materials.md); H converted kA/m → A/m.
+MRF_132DG_BH = BHCurve(
+    "mrf_132dg",
+    (0.103, 0.160, 0.229, 0.309, 0.372, 0.424, 0.481, 0.556, 0.607, 0.682, 0.722, 0.785,
+     0.831, 0.877, 0.917, 0.951, 0.974, 0.997),
+    tuple(1e3 * h for h in (12.1, 19.7, 30.2, 43.9, 57.5, 66.5, 80.2, 95.3, 116.4, 139.1,
+                            154.3, 178.4, 198.1, 222.3, 243.5, 263.1, 279.8, 290.4)),
+    "LORD MRF-132DG datasheet B–H, digitised (FEMM 'LORD MRF 132-DG')",
+)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class MRFluid:
+    """Rheology of an MR fluid: Carlson's yield-stress closed form and a Newtonian η."""
+
+    name: str
+    phi: float  # iron volume fraction
+    carrier_c: float  # Carlson's carrier coefficient (1.0 hydrocarbon)
+    viscosity: float  # Pa·s, off-state plastic viscosity
+    source: str
+
+    def __post_init__(self) -> None:
+        check_positive(f"{self.name}.phi", self.phi)
+        check_positive(f"{self.name}.viscosity", self.viscosity, " Pa·s")
+
+    @property
+    def tau_y_max(self) -> float:
+        # Carlson (LORD, "MR fluid devices"), τy,sat = C·271700·φ^1.5239 Pa
+        return self.carrier_c * 271700.0 * self.phi**1.5239
+
+    def tau_y(self, h: ArrayLike) -> FloatArray:
+        """Yield stress τy(|H|), Pa. Carlson: τy = C·271700·φ^1.5239·tanh(6.33e-6·H)."""
+        return self.tau_y_max * np.tanh(6.33e-6 * np.abs(np.asarray(h, dtype=float)))
+
+
+# MRF-132DG rheology. Source: Carlson closed form (LORD), φ = 0.32, C = 1.0
+# (hydrocarbon carrier); η = 0.112 Pa·s at 40 °C (LORD datasheet, slope 800–1200 1/s).
+# Chosen over interpolating the three datasheet points 4.64/13.77/23.47 kPa at
+# 18/46/80 kA/m because it saturates physically (~48 kPa) beyond the points; it is
+# +17 %, −1 %, −4.6 % off those points (tests/magnetics/test_materials.py).
+MRF_132DG = MRFluid("mrf_132dg", 0.32, 1.0, 0.112, "Carlson/LORD closed form; datasheet η")
+
+#: Datasheet yield stress of MRF-132DG (H in A/m, τy in Pa), for comparison only.
+MRF_132DG_DATASHEET_TAU = ((18e3, 4.64e3), (46e3, 13.77e3), (80e3, 23.47e3))
+
+AIR = LinearMaterial("air", 1.0, "vacuum")
+STAINLESS_304 = LinearMaterial("stainless_304", 1.0, "austenitic, μr≈1 (materials.md)")
+COIL = LinearMaterial("coil", 1.0, "copper + epoxy, μr≈1 (materials.md)")
+
+#: Magnetic materials keyed by the section's material names.
+MATERIALS: Mapping[str, Magnetic] = MappingProxyType(
+    {
+        "steel_1018": STEEL_1018,
+        "mrf_132dg": MRF_132DG_BH,
+        "stainless_304": STAINLESS_304,
+        "coil": COIL,
+        "air": AIR,
+    }
+)
+#: MR fluids' rheology keyed by the section's fluid material names.
+FLUIDS: Mapping[str, MRFluid] = MappingProxyType({"mrf_132dg": MRF_132DG})
+
+
+def magnetic(name: str, materials: Mapping[str, Magnetic] | None = None) -> Magnetic:
+    """Magnetic material by section name; ParameterError lists the known ones."""
+    table = MATERIALS if materials is None else materials
+    try:
+        return table[name]
+    except KeyError:
+        raise ParameterError(
+            f"material = {name!r}: no magnetic data; known: {', '.join(sorted(table))}"
+        ) from None
+
+
+def linear_materials(steel_mu_r: float, fluid_mu_r: float) -> Mapping[str, Magnetic]:
+    """The registry with linear steel and fluid (for closed-form tests)."""
+    d = dict(MATERIALS)
+    d["steel_1018"] = LinearMaterial("steel_1018", steel_mu_r, "linear test steel")
+    d["mrf_132dg"] = LinearMaterial("mrf_132dg", fluid_mu_r, "linear test fluid")
+    return MappingProxyType(d)
