@@ -1,0 +1,194 @@
+"""build123d solids from the section: each part revolved from its r–z regions, plus hub holes.
+
+build123d works in millimetres: the section (SI, metres) is converted at this edge only
+(``MM_PER_M``) and every shape this module returns is in mm. build123d takes seconds to
+import, so it is imported inside the functions, never at module level.
+
+Two granularities are built from the same rectangles of ``geometry.section``:
+
+* ``material_solids`` — one solid per (part, material): what the mass methods weigh
+  (a part may mix materials, e.g. the rotor's stainless hub and band with steel drums);
+* ``part_solids`` — one fused solid per part: what STEP/STL export and the assembly show.
+
+The non-axisymmetric hub holes (``DrumClutch.hub_holes``) are cut from the rotor hub here;
+this is the only place they exist.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from typing import TYPE_CHECKING, Any
+
+from geometry.section import PARTS, Region, Section, build_section
+
+if TYPE_CHECKING:  # pragma: no cover - typing only
+    from geometry.params import DrumClutch
+
+MM_PER_M = 1000.0
+
+#: Display colours (RGB 0..1) by material, shared by the STEP assembly and the 3-D view.
+MATERIAL_COLOURS: dict[str, tuple[float, float, float]] = {
+    "steel_1018": (0.45, 0.47, 0.52),
+    "stainless_304": (0.80, 0.82, 0.85),
+    "coil": (0.85, 0.45, 0.15),
+    "mrf_132dg": (0.15, 0.15, 0.18),
+}
+#: Colour of a part in the STEP assembly: its dominant material's colour.
+PART_MATERIAL: dict[str, str] = {
+    "rotor": "steel_1018",
+    "shaft": "stainless_304",
+    "input": "steel_1018",
+    "housing": "steel_1018",
+    "coil": "coil",
+    "fluid": "mrf_132dg",
+}
+
+
+def _profile(regions: Iterable[Region]) -> Any:
+    """2-D union (in the XZ plane, mm, x = r) of the regions' rectangles, internal edges removed."""
+    from build123d import Face, Vector, Wire
+
+    faces = []
+    for reg in regions:
+        r0, r1 = reg.r0 * MM_PER_M, reg.r1 * MM_PER_M
+        z0, z1 = reg.z0 * MM_PER_M, reg.z1 * MM_PER_M
+        pts = [Vector(r0, 0, z0), Vector(r1, 0, z0), Vector(r1, 0, z1), Vector(r0, 0, z1)]
+        faces.append(Face(Wire.make_polygon(pts, close=True)))
+    if len(faces) == 1:
+        return faces[0]
+    return faces[0].fuse(*faces[1:]).clean()
+
+
+def revolve_regions(regions: Iterable[Region], angle_deg: float = 360.0) -> Any:
+    """Solid (or compound of solids) swept by the regions about the z axis, mm."""
+    from build123d import Axis, Compound, Solid
+
+    profile = _profile(regions)
+    solids = [Solid.revolve(f, angle_deg, Axis.Z) for f in profile.faces()]
+    return solids[0] if len(solids) == 1 else Compound(solids)
+
+
+def hub_hole_tool(clutch: DrumClutch) -> Any | None:
+    """The hub holes as cylinders through the hub (mm), or None without holes."""
+    if not clutch.hub_holes:
+        return None
+    from build123d import Compound, Plane, Solid
+
+    s = build_section(clutch)
+    hub = s.region("hub")
+    # a little longer than the hub so the cut leaves no skin on either face
+    z0, z1 = hub.z0 * MM_PER_M - 0.1, hub.z1 * MM_PER_M + 0.1
+    r_h = clutch.hub_hole_pitch_radius * MM_PER_M
+    rad = clutch.hub_hole_diameter * MM_PER_M / 2
+    cyls = []
+    for k in range(clutch.hub_holes):
+        a = 2 * math.pi * (k + 0.5) / clutch.hub_holes  # off the revolve seam at angle 0
+        plane = Plane(origin=(r_h * math.cos(a), r_h * math.sin(a), z0), z_dir=(0, 0, 1))
+        cyls.append(Solid.make_cylinder(rad, z1 - z0, plane))
+    return Compound(cyls)
+
+
+def material_solids(
+    clutch: DrumClutch, section: Section | None = None, angle_deg: float = 360.0
+) -> dict[tuple[str, str], Any]:
+    """One solid per (part, material), mm, with the hub holes cut from the rotor hub."""
+    s = section if section is not None else build_section(clutch)
+    groups: dict[tuple[str, str], list[Region]] = {}
+    for reg in s.regions:
+        groups.setdefault((reg.part, reg.material), []).append(reg)
+    tool = hub_hole_tool(clutch)
+    hub_key = (s.region("hub").part, s.region("hub").material)
+    out: dict[tuple[str, str], Any] = {}
+    for key, regs in groups.items():
+        shape = revolve_regions(regs, angle_deg)
+        if tool is not None and key == hub_key:
+            shape = shape - tool
+        out[key] = shape
+    return out
+
+
+def part_solids(
+    clutch: DrumClutch, section: Section | None = None, angle_deg: float = 360.0
+) -> dict[str, Any]:
+    """One solid per part (all its materials fused), mm, hub holes cut; order of PARTS."""
+    s = section if section is not None else build_section(clutch)
+    tool = hub_hole_tool(clutch)
+    out: dict[str, Any] = {}
+    for part in PARTS:
+        regs = s.part(part)
+        if not regs:
+            continue
+        shape = revolve_regions(regs, angle_deg)
+        if tool is not None and part == s.region("hub").part:
+            shape = shape - tool
+        out[part] = shape
+    return out
+
+
+def assembly(clutch: DrumClutch, parts: dict[str, Any] | None = None) -> Any:
+    """A build123d Compound whose children are the parts, labelled and coloured."""
+    from build123d import Color, Compound
+
+    parts = parts if parts is not None else part_solids(clutch)
+    children = []
+    for name, shape in parts.items():
+        shape.label = name
+        shape.color = Color(*MATERIAL_COLOURS[PART_MATERIAL[name]])
+        children.append(shape)
+    return Compound(children=children, label="mr_drum_clutch")
+
+
+def brep_volume_mm3(shape: Any) -> float:
+    """Exact B-rep volume (mm³) by OpenCascade's volume integrals."""
+    from OCP.BRepGProp import BRepGProp
+    from OCP.GProp import GProp_GProps
+
+    props = GProp_GProps()
+    BRepGProp.VolumeProperties_s(shape.wrapped, props)
+    return float(props.Mass())
+
+
+def tessellate(shape: Any, tolerance_mm: float, angular_tolerance: float = 0.5) -> tuple:
+    """Triangulate ``shape`` with an ABSOLUTE chord height ``tolerance_mm`` (mm).
+
+    build123d's own ``tessellate``/``export_stl`` pass ``isRelative=True`` to BRepMesh (the
+    deflection then scales with each edge's size) and keep a triangulation computed earlier
+    at another tolerance; here any old triangulation is cleared first and the deflection is
+    absolute, so the chord-height theory applies. Returns (vertices (n, 3) mm, faces (m, 3)).
+    """
+    import numpy as np
+    from OCP.BRep import BRep_Tool
+    from OCP.BRepMesh import BRepMesh_IncrementalMesh
+    from OCP.BRepTools import BRepTools
+    from OCP.TopAbs import TopAbs_FACE, TopAbs_REVERSED
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopLoc import TopLoc_Location
+    from OCP.TopoDS import TopoDS
+
+    BRepTools.Clean_s(shape.wrapped)
+    BRepMesh_IncrementalMesh(shape.wrapped, tolerance_mm, False, angular_tolerance, True)
+    verts: list = []
+    tris: list = []
+    offset = 0
+    exp = TopExp_Explorer(shape.wrapped, TopAbs_FACE)
+    while exp.More():
+        face = TopoDS.Face(exp.Current())
+        exp.Next()
+        loc = TopLoc_Location()
+        poly = BRep_Tool.Triangulation_s(face, loc)
+        if poly is None:
+            continue
+        trsf = loc.Transformation()
+        n = poly.NbNodes()
+        pts = [poly.Node(i).Transformed(trsf) for i in range(1, n + 1)]
+        verts.append(np.array([(p.X(), p.Y(), p.Z()) for p in pts], dtype=float).reshape(-1, 3))
+        t = np.array([poly.Triangle(i).Get() for i in range(1, poly.NbTriangles() + 1)], int)
+        t = t.reshape(-1, 3) - 1 + offset
+        if face.Orientation() == TopAbs_REVERSED:
+            t = t[:, [0, 2, 1]]
+        tris.append(t)
+        offset += n
+    if not verts:
+        return np.zeros((0, 3)), np.zeros((0, 3), dtype=int)
+    return np.concatenate(verts), np.concatenate(tris)
