@@ -28,6 +28,8 @@ from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from geometry.validation import (
     ParameterError,
     check_int,
@@ -48,6 +50,71 @@ MAX_DIMENSION = 0.5
 #: Fraction of the coil window a layer-wound coil can fill with insulated wire cross-
 #: sections d_ins² (square packing fills 1.0; winding leads and layer steps lose ~10 %).
 COIL_PACKING = 0.9
+#: Hub holes keep this much steel to the shaft and to the first drum, and this web
+#: between neighbours (machinable with a 0.2 mm web in stainless; our choice).
+HUB_HOLE_MARGIN = 0.25e-3
+HUB_HOLE_WEB = 0.2e-3
+
+# ---- the validation rules, stated once --------------------------------------------------
+# ``DrumClutch.__post_init__`` turns them into ParameterErrors one design at a time;
+# ``geometry.batch.valid`` evaluates the same tables and functions on arrays of designs.
+#: Integer fields: (name, lo, hi), inclusive.
+INT_RANGES: tuple[tuple[str, int, int], ...] = (
+    ("n_drums", 1, 20),
+    ("coil_turns", 1, 100_000),
+    ("hub_holes", 0, 200),
+)
+#: Length fields: (name, lo, hi, lo_open) in metres.
+LENGTH_RANGES: tuple[tuple[str, float, float, bool], ...] = (
+    ("drum_thickness", MIN_DRUM_THICKNESS, 0.02, False),
+    ("input_drum_thickness", MIN_DRUM_THICKNESS, 0.02, False),
+    ("gap", MIN_GAP, 5e-3, False),
+    *(
+        (name, 0.0, MAX_DIMENSION, True)
+        for name in (
+            "drum_inner_diameter",
+            "zone_length",
+            "band_length",
+            "end_clearance",
+            "hub_thickness",
+            "end_cap_thickness",
+            "shell_thickness",
+            "sleeve_thickness",
+            "coil_depth",
+            "wire_diameter",
+            "shaft_radius",
+            "shaft_length",
+            "shaft_bore_clearance",
+        )
+    ),
+)
+NONNEGATIVE_FIELDS: tuple[str, ...] = ("wire_insulation",)
+POSITIVE_FIELDS: tuple[str, ...] = ("hub_hole_diameter", "hub_hole_pitch_radius")
+
+
+def coil_fits(turns: Any, wire_outer_diameter: Any, coil_depth: Any, band_length: Any) -> Any:
+    """turns · d_ins² ≤ packing · window area (layer winding, square packing of d_ins)."""
+    return turns * wire_outer_diameter**2 <= COIL_PACKING * coil_depth * band_length
+
+
+def wire_fits(wire_outer_diameter: Any, coil_depth: Any, band_length: Any) -> Any:
+    """One insulated wire fits the window in both directions."""
+    return (wire_outer_diameter <= coil_depth) & (wire_outer_diameter <= band_length)
+
+
+def hub_holes_inside(
+    pitch_radius: Any, hole_diameter: Any, shaft_radius: Any, first_drum_r0: Any
+) -> Any:
+    """Holes lie between the shaft + margin and the first drum − margin."""
+    lo = shaft_radius + HUB_HOLE_MARGIN
+    hi = first_drum_r0 - HUB_HOLE_MARGIN
+    return (pitch_radius - hole_diameter / 2 >= lo) & (pitch_radius + hole_diameter / 2 <= hi)
+
+
+def hub_holes_apart(n_holes: Any, pitch_radius: Any, hole_diameter: Any) -> Any:
+    """Neighbouring holes keep the web: chord between centres 2 r sin(π/n) ≥ d + web."""
+    chord = 2 * pitch_radius * np.sin(np.pi / np.maximum(n_holes, 1))
+    return (n_holes <= 1) | (chord >= hole_diameter + HUB_HOLE_WEB)
 
 
 @dataclass(frozen=True)
@@ -82,33 +149,14 @@ class DrumClutch:
     hub_hole_pitch_radius: float = 4.5e-3
 
     def __post_init__(self) -> None:
-        check_int("n_drums", self.n_drums, 1, 20)
-        check_range("drum_thickness", self.drum_thickness, MIN_DRUM_THICKNESS, 0.02, " m")
-        check_range(
-            "input_drum_thickness", self.input_drum_thickness, MIN_DRUM_THICKNESS, 0.02, " m"
-        )
-        check_range("gap", self.gap, MIN_GAP, 5e-3, " m")
-        for name in (
-            "drum_inner_diameter",
-            "zone_length",
-            "band_length",
-            "end_clearance",
-            "hub_thickness",
-            "end_cap_thickness",
-            "shell_thickness",
-            "sleeve_thickness",
-            "coil_depth",
-            "wire_diameter",
-            "shaft_radius",
-            "shaft_length",
-            "shaft_bore_clearance",
-        ):
-            check_range(name, getattr(self, name), 0.0, MAX_DIMENSION, " m", lo_open=True)
-        check_nonnegative("wire_insulation", self.wire_insulation, " m")
-        check_int("coil_turns", self.coil_turns, 1, 100_000)
-        check_int("hub_holes", self.hub_holes, 0, 200)
-        check_positive("hub_hole_diameter", self.hub_hole_diameter, " m")
-        check_positive("hub_hole_pitch_radius", self.hub_hole_pitch_radius, " m")
+        for name, ilo, ihi in INT_RANGES:
+            check_int(name, getattr(self, name), ilo, ihi)
+        for name, lo, hi, lo_open in LENGTH_RANGES:
+            check_range(name, getattr(self, name), lo, hi, " m", lo_open=lo_open)
+        for name in NONNEGATIVE_FIELDS:
+            check_nonnegative(name, getattr(self, name), " m")
+        for name in POSITIVE_FIELDS:
+            check_positive(name, getattr(self, name), " m")
 
         # Collisions. The core must keep a solid section inside the first gap.
         core_r = self.core_radius
@@ -123,16 +171,17 @@ class DrumClutch:
                 f"{self.hub_outer_radius:.6g} m"
             )
         # The coil must fit its window (turns · d_ins² ≤ packing · window area).
-        need = self.coil_turns * self.wire_outer_diameter**2
         have = COIL_PACKING * self.coil_window_area
-        if need > have:
+        if not coil_fits(
+            self.coil_turns, self.wire_outer_diameter, self.coil_depth, self.band_length
+        ):
             max_turns = math.floor(have / self.wire_outer_diameter**2)
             raise ParameterError(
                 f"coil_turns = {self.coil_turns}: does not fit the coil window "
                 f"{self.coil_depth * 1e3:.3g} × {self.band_length * 1e3:.3g} mm with "
                 f"{self.wire_outer_diameter * 1e3:.3g} mm wire; allowed range [1, {max_turns}]"
             )
-        if self.wire_outer_diameter > min(self.coil_depth, self.band_length):
+        if not wire_fits(self.wire_outer_diameter, self.coil_depth, self.band_length):
             raise ParameterError(
                 f"wire_diameter = {self.wire_diameter:.6g} m: the insulated wire must fit "
                 f"the coil window ({self.coil_depth:.6g} × {self.band_length:.6g} m)"
@@ -142,25 +191,22 @@ class DrumClutch:
 
     def _check_hub_holes(self) -> None:
         r_h, d_h = self.hub_hole_pitch_radius, self.hub_hole_diameter
-        lo = self.shaft_radius + 0.25e-3
-        hi = self.drum_radii_out[0][0] - 0.25e-3
-        if not (r_h - d_h / 2 >= lo and r_h + d_h / 2 <= hi):
+        lo = self.shaft_radius + HUB_HOLE_MARGIN
+        hi = self.drum_radii_out[0][0] - HUB_HOLE_MARGIN
+        if not hub_holes_inside(r_h, d_h, self.shaft_radius, self.drum_radii_out[0][0]):
             raise ParameterError(
                 f"hub_hole_pitch_radius = {r_h:.6g} m with hub_hole_diameter = {d_h:.6g} m: "
                 f"holes must lie between r = {lo:.6g} m (shaft + 0.25 mm) and "
                 f"r = {hi:.6g} m (first drum − 0.25 mm)"
             )
         # Neighbouring holes keep a 0.2 mm web: chord between centres ≥ d + 0.2 mm.
-        if self.hub_holes > 1:
-            chord = 2 * r_h * math.sin(math.pi / self.hub_holes)
-            if chord < d_h + 0.2e-3:
-                max_n = max(
-                    1, math.floor(math.pi / math.asin(min(1.0, (d_h + 0.2e-3) / (2 * r_h))))
-                )
-                raise ParameterError(
-                    f"hub_holes = {self.hub_holes}: holes of {d_h * 1e3:.3g} mm on a "
-                    f"{r_h * 1e3:.3g} mm pitch radius overlap; allowed range [0, {max_n}]"
-                )
+        if not hub_holes_apart(self.hub_holes, r_h, d_h):
+            sin_half = min(1.0, (d_h + HUB_HOLE_WEB) / (2 * r_h))
+            max_n = max(1, math.floor(math.pi / math.asin(sin_half)))
+            raise ParameterError(
+                f"hub_holes = {self.hub_holes}: holes of {d_h * 1e3:.3g} mm on a "
+                f"{r_h * 1e3:.3g} mm pitch radius overlap; allowed range [0, {max_n}]"
+            )
 
     # ---- derived radii (single place where the radial stack is laid out) ----------------
     @property
@@ -308,6 +354,11 @@ LENGTH_FIELDS = frozenset(n for n in FIELD_NAMES if n not in INTEGER_FIELDS)
 #: torque at 7 A with MRF-132DG match Table 1 and Fig. 2b.
 PRESETS: dict[str, DrumClutch] = {
     "paper": DrumClutch(),
+    # the paper's clutch with six Ø2 mm lightening holes in the output hub: the case where
+    # the analytic (axisymmetric) inertia and the mesh / B-rep inertias differ
+    "paper-holes": replace(
+        DrumClutch(), hub_holes=6, hub_hole_diameter=2.0e-3, hub_hole_pitch_radius=4.0e-3
+    ),
 }
 
 
