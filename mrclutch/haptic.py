@@ -1,0 +1,529 @@
+"""The 2-DOF haptic lever model (Lebel et al., Eq. 1–4): impedances, bandwidth, rendering
+area, passivity and stability. Pure functions on :class:`HapticParams`, SI units, angular
+frequencies ``w`` in rad/s, results in Hz where the name says ``_hz``.
+
+**Model** (paper Fig. 4b). Actuator mass m1 with grounded damper b1 and force F_a;
+transmission spring k and damper b between x1 and the lever x2; lever mass m2; the human
+pushes the lever with F_h::
+
+    m1 s² x1 = F_a − b1 s x1 − (b s + k)(x1 − x2)
+    m2 s² x2 = F_h + (b s + k)(x1 − x2)
+
+**Passive impedance** (F_a = 0). The first line gives x1 = (bs+k) x2 / D1 with
+D1 = m1 s² + (b1+b) s + k; substituting in the second, Z_h = F_h/(s x2) is Eq. 2::
+
+    Z_p = Num(s)/D1(s),  Num = m1 m2 s³ + (m2 b1 + m1 b + m2 b) s² + (b1 b + m1 k + m2 k) s + b1 k
+
+**Closed loop.** The controller renders a virtual spring K from the lever sensor x2:
+F_a = −K E(s) x2 with E(s) = e^{−sτ} H(s), the actuator's pure delay τ and, if a sample
+period T is given, the zero-order hold's frequency response H(jω) = (1 − e^{−jωT})/(jωT)
+(the fundamental of the sampled loop; aliasing is neglected). Then
+x1 = (bs + k − K E) x2 / D1 and::
+
+    Z_cl = m2 s + (bs + k)(m1 s² + b1 s + K E) / (s D1) = [s Num + K E (bs + k)] / (s D1)
+
+At K = 0 it is Eq. 2. It is evaluated exactly (no Padé). The free lever's characteristic
+quasi-polynomial is χ(s) = s Num(s) + K E(s)(bs + k).
+
+**Effective impedance** (the decomposition of Mehling, Colgate & Peshkin, the paper's
+[5]): with F/X = s Z at s = jω, effective stiffness k_eff = Re(jωZ) [N/m], effective
+damping b_eff = Re Z [N·s/m], effective mass m_eff = Im(Z)/ω = −k_eff/ω² [kg].
+
+**Rendering bandwidth.** Lumped: ω*_s = √(K/(m1+m2)) (Eq. 1). Full: the first frequency
+where k_eff crosses zero from positive (spring-like) to negative (mass-like), i.e. the
+anti-resonance of the closed loop, located by bracketing and Illinois regula falsi to a
+relative 1e-8.
+
+**Rendering area** [dB·decade]: over a stated band (default 1 Hz – 1 kHz), the area
+between 20 log10|Z_cl(K)| and 20 log10|Z_p| where the closed loop lies above the passive
+floor: A = ∫ max(0, 20 log10|Z_cl/Z_p|) d(log10 f), trapezoid rule on a log grid of
+``points_per_decade`` (default 25: within 0.01 dB·decade of the converged value).
+
+**Passivity.** Re Z_cl(jω) = Re Z_p(jω) + K g(ω) with g = Re[E (bs+k)/(s D1)] is affine in
+K and Re Z_p ≥ 0, so the passive K form the interval [0, K_p] with
+K_p = inf over {g < 0} of Re Z_p/(−g) (dense log grid + golden-section refinement).
+
+**Stability** (exact for a pure delay, D-subdivision). For K > 0 small, the roots of χ are
+those of s Num (left half-plane) with the rigid-body root moved from 0 to ≈ −K/b1. Roots
+reach the right half-plane only by crossing the imaginary axis (χ is retarded), at jω with
+K E(jω) = −jω Num(jω)/(k + jbω) =: K(ω)·E — i.e. where X(ω) = −jω Num/((k+jbω)E) is real
+and positive, with K_c = X. Every crossing frequency is found (polynomial roots when there
+is no delay; otherwise sign changes of Im X on a grid fine against the delay's phase
+period, refined by Brent, up to a frequency beyond which the lower bound
+ω|Num(jω)|/|k+jbω| ≤ K(ω), increasing there, exceeds the best K_c), with its crossing
+direction sign Re(ds/dK) = Re[−E (bs+k)/χ'(s)]. The number of right-half-plane roots at K
+is 2 Σ sign over crossings with K_c < K: stable iff it is 0. The largest stable K is the
+first K_c where that count turns positive.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from geometry.validation import ParameterError, check_nonnegative
+from mrclutch.actuator import HapticParams
+
+__all__ = [
+    "BAND_HZ",
+    "EffectiveImpedance",
+    "HapticParams",
+    "bandwidth",
+    "bandwidth_lumped",
+    "closed_loop_impedance",
+    "effective_impedance",
+    "is_passive",
+    "is_stable",
+    "max_passive_stiffness",
+    "max_stable_stiffness",
+    "metrics",
+    "metrics_batch",
+    "passive_impedance",
+    "rendering_area",
+    "resonance",
+]
+
+TWO_PI = 2.0 * math.pi
+BAND_HZ = (1.0, 1000.0)  # rendering-area band [Hz]
+METRIC_KEYS = (
+    "m1_kg",
+    "m2_kg",
+    "b1_N_s_per_m",
+    "k_N_per_m",
+    "b_N_s_per_m",
+    "K_N_per_m",
+    "delay_s",
+    "bandwidth_lumped_hz",
+    "bandwidth_hz",
+    "resonance_hz",
+    "passive",
+    "max_passive_K_N_per_m",
+    "max_stable_K_N_per_m",
+    "rendering_area_dB_decade",
+)
+
+
+def _check_K(K: Any) -> Any:
+    if np.ndim(K) == 0:
+        return check_nonnegative("K", float(K), " N/m")
+    a = np.asarray(K, dtype=float)
+    bad = ~np.isfinite(a) | (a < 0)
+    if bad.any():
+        raise ParameterError(f"K = {a[bad].flat[0]:.6g} N/m: must be finite and >= 0")
+    return a
+
+
+def _num_coeffs(p: HapticParams) -> tuple[Any, Any, Any, Any]:
+    """Eq. 2 numerator coefficients (s³, s², s¹, s⁰)."""
+    return (
+        p.m1 * p.m2,
+        p.m2 * p.b1 + p.m1 * p.b + p.m2 * p.b,
+        p.b1 * p.b + p.m1 * p.k + p.m2 * p.k,
+        p.b1 * p.k,
+    )
+
+
+def _hold(p: HapticParams, w: Any, sample_period: Any) -> Any:
+    """E(jω) = e^{−jωτ} H(jω): pure delay τ and zero-order hold of period T (0: none)."""
+    T = p.sample_period if sample_period is None else sample_period
+    E = np.exp(-1j * w * p.delay)
+    if np.any(np.asarray(T) > 0):
+        x = w * T
+        # ZOH: (1 − e^{−jωT})/(jωT) = e^{−jωT/2} sinc(ωT/2)  (Franklin, Powell & Workman)
+        E = E * np.exp(-0.5j * x) * np.sinc(x / TWO_PI)
+    return E
+
+
+def passive_impedance(p: HapticParams, w: Any) -> Any:
+    """Eq. 2: Z_h(jω) = F_h / ẋ2 of the backdriven device [N·s/m]. ``p`` fields and ``w``
+    [rad/s] broadcast (fields of shape (N, 1) and w of shape (M,) give N × M)."""
+    s = 1j * np.asarray(w, dtype=float)
+    a3, a2, a1, a0 = _num_coeffs(p)
+    num = ((a3 * s + a2) * s + a1) * s + a0  # Eq. 2 numerator (Horner)
+    den = (p.m1 * s + (p.b1 + p.b)) * s + p.k  # Eq. 2 denominator
+    return num / den
+
+
+def closed_loop_impedance(
+    p: HapticParams, K: Any, w: Any, sample_period: float | None = None
+) -> Any:
+    """Z_cl(jω) with the virtual spring K [N/m] on the sensor x2 (module docstring):
+    m2 s + (bs + k)(m1 s² + b1 s + K E)/(s D1), E = delay × optional zero-order hold."""
+    K = _check_K(K)
+    w = np.asarray(w, dtype=float)
+    s = 1j * w
+    E = _hold(p, w, sample_period)
+    d1 = (p.m1 * s + (p.b1 + p.b)) * s + p.k
+    return p.m2 * s + (p.b * s + p.k) * ((p.m1 * s + p.b1) * s + K * E) / (s * d1)
+
+
+@dataclass(frozen=True)
+class EffectiveImpedance:
+    """Effective stiffness [N/m], damping [N·s/m] and mass [kg] against frequency."""
+
+    stiffness: Any
+    damping: Any
+    mass: Any
+
+
+def effective_impedance(
+    p: HapticParams, K: Any, w: Any, sample_period: float | None = None
+) -> EffectiveImpedance:
+    """Mehling et al. decomposition of F/X = jωZ: k_eff = Re(jωZ), b_eff = Re Z,
+    m_eff = Im(Z)/ω = −k_eff/ω²."""
+    w = np.asarray(w, dtype=float)
+    z = closed_loop_impedance(p, K, w, sample_period)
+    k_eff = -w * z.imag
+    return EffectiveImpedance(stiffness=k_eff, damping=z.real, mass=z.imag / w)
+
+
+def _k_eff(m1, b1, k, b, m2, tau, K, w):  # type: ignore[no-untyped-def]
+    """k_eff = Re(jω Z_cl) in real arithmetic (fast path, pure delay only):
+    F/X = −m2ω² + (k + jbω)(P + jQ)/(R + jS), P + jQ = −m1ω² + jb1ω + K e^{−jωτ},
+    R + jS = k − m1ω² + j(b1+b)ω (module docstring)."""
+    w2 = w * w
+    th = w * tau
+    P = K * np.cos(th) - m1 * w2
+    Q = b1 * w - K * np.sin(th)
+    R = k - m1 * w2
+    S = (b1 + b) * w
+    bw = b * w
+    return ((k * P - bw * Q) * R + (k * Q + bw * P) * S) / (R * R + S * S) - m2 * w2
+
+
+def bandwidth_lumped(p: HapticParams, K: Any) -> Any:
+    """Eq. 1: ω*_s = √(K/(m1+m2)), returned in Hz."""
+    return np.sqrt(_check_K(K) / (p.m1 + p.m2)) / TWO_PI
+
+
+def _flat(p: HapticParams, K: Any) -> tuple[np.ndarray, ...]:
+    names = ("m1", "b1", "k", "b", "m2", "delay", "sample_period")
+    arrs = np.broadcast_arrays(*(np.asarray(getattr(p, n), float) for n in names), K)
+    return tuple(np.ravel(a) for a in arrs)
+
+
+def bandwidth(p: HapticParams, K: Any, *, rtol: float = 1e-8) -> Any:
+    """Full-model rendering bandwidth [Hz]: first + → − zero crossing of k_eff(ω).
+
+    Vectorised over designs: k_eff is sampled on a grid ω*_s·2^(−4…4) (half octaves, plus
+    a point at 1e-6 ω*_s), the first sign change brackets the root, and Illinois regula
+    falsi on all brackets at once refines it to ``rtol``. NaN where there is none (K = 0,
+    or no crossing below 16 ω*_s). A zero-order hold is included as its phase lag T/2.
+    """
+    K = _check_K(K)
+    shape = np.broadcast_shapes(p.shape, np.shape(K))
+    m1, b1, k, b, m2, tau, T, Kf = _flat(p, K)
+    tau = tau + 0.5 * T  # ZOH phase lag (magnitude sinc ≈ 1 below the bandwidth)
+    ws = np.sqrt(Kf / (m1 + m2))
+    out = np.full(ws.shape, np.nan)
+    grid = np.concatenate(([1e-6], 2.0 ** np.linspace(-4.0, 4.0, 17)))
+    W = ws[:, None] * grid[None, :]
+    args = (m1[:, None], b1[:, None], k[:, None], b[:, None], m2[:, None], tau[:, None])
+    F = _k_eff(*args, Kf[:, None], W)
+    change = (F[:, :-1] > 0) & (F[:, 1:] <= 0)
+    has = change.any(axis=1) & (Kf > 0)
+    j = np.argmax(change, axis=1)
+    idx = np.nonzero(has)[0]
+    if idx.size == 0:
+        return out.reshape(shape)
+    rows = idx
+    lo, hi = W[rows, j[rows]], W[rows, j[rows] + 1]
+    flo, fhi = F[rows, j[rows]], F[rows, j[rows] + 1]
+    pr = tuple(a[rows] for a in (m1, b1, k, b, m2, tau, Kf))
+    side = np.zeros(lo.shape)
+    act = np.arange(lo.size)  # brackets still wider than rtol
+    for _ in range(200):
+        lo_a, hi_a, flo_a, fhi_a, sd = lo[act], hi[act], flo[act], fhi[act], side[act]
+        # Illinois variant of regula falsi (Dowell & Jarratt 1971): superlinear, bracketed
+        x = hi_a - fhi_a * (hi_a - lo_a) / (fhi_a - flo_a)
+        x = np.where((x > lo_a) & (x < hi_a), x, 0.5 * (lo_a + hi_a))
+        fx = _k_eff(*(c[act] for c in pr), x)
+        left = fx > 0  # x replaces lo (flo > 0 ≥ fhi)
+        flo[act] = np.where(left, fx, np.where(sd == -1, 0.5 * flo_a, flo_a))
+        fhi[act] = np.where(left, np.where(sd == 1, 0.5 * fhi_a, fhi_a), fx)
+        lo[act] = np.where(left, x, lo_a)
+        hi[act] = np.where(left, hi_a, x)
+        side[act] = np.where(left, 1.0, -1.0)
+        act = act[hi[act] - lo[act] > rtol * hi[act]]
+        if act.size == 0:
+            break
+    out[idx] = 0.5 * (lo + hi) / TWO_PI
+    return out.reshape(shape)
+
+
+def resonance(p: HapticParams) -> Any:
+    """System resonance [Hz] of the backdriven device: |s| of the complex pair of zeros of
+    Eq. 2 (the free lever's poles: the masses oscillating on the transmission spring, not
+    in solid-body motion). NaN if the zeros are all real (overdamped)."""
+    shape = p.shape
+    a3, a2, a1, a0 = (np.ravel(np.broadcast_to(c, shape)) for c in _num_coeffs(p))
+    b_, c_, d_ = a2 / a3, a1 / a3, a0 / a3  # monic cubic s³ + b s² + c s + d
+    # discriminant of the cubic (Abramowitz & Stegun 3.8.2): < 0 ⇔ one real root + a pair
+    disc = 18 * b_ * c_ * d_ - 4 * b_**3 * d_ + b_**2 * c_**2 - 4 * c_**3 - 27 * d_**2
+    # Cardano on the depressed cubic t³ + P t + Q (s = t − b/3), then two Newton steps
+    P = c_ - b_**2 / 3.0
+    Q = 2.0 * b_**3 / 27.0 - b_ * c_ / 3.0 + d_
+    sq = np.sqrt(np.maximum(Q * Q / 4.0 + P**3 / 27.0, 0.0))
+    r = np.cbrt(-Q / 2.0 + sq) + np.cbrt(-Q / 2.0 - sq) - b_ / 3.0
+    for _ in range(2):
+        f = ((r + b_) * r + c_) * r + d_
+        r = r - f / ((3.0 * r + 2.0 * b_) * r + c_)
+    # product of the roots is −d: r |z|² = −d gives the pair's natural frequency |z|
+    mag = np.sqrt(np.abs(d_ / r))
+    out = np.where(disc < 0, mag / TWO_PI, np.nan)
+    return out.reshape(shape) if shape else float(out[0])
+
+
+def rendering_area(
+    p: HapticParams,
+    K: Any,
+    band: tuple[float, float] = BAND_HZ,
+    points_per_decade: int = 25,
+) -> Any:
+    """Rendering area [dB·decade] over ``band`` [Hz] (module docstring):
+    ∫ max(0, 20 log10|Z_cl/Z_p|) d(log10 f), with Z_cl/Z_p = 1 + K E (bs+k)/(s Num)."""
+    K = _check_K(K)
+    f_lo, f_hi = band
+    if not (0 < f_lo < f_hi and math.isfinite(f_hi)):
+        raise ParameterError(f"band = {band!r} Hz: need 0 < f_lo < f_hi < inf")
+    shape = np.broadcast_shapes(p.shape, np.shape(K))
+    m1, b1, k, b, m2, tau, T, Kf = _flat(p, K)
+    tau = tau + 0.5 * T  # ZOH phase lag
+    dec = math.log10(f_hi / f_lo)
+    n = max(math.ceil(dec * points_per_decade), 2) + 1
+    u = np.linspace(math.log10(f_lo), math.log10(f_hi), n)
+    w = TWO_PI * 10.0**u
+    w2 = w * w
+    out = np.empty(m1.size)
+    for a in range(0, m1.size, 1024):
+        sl = slice(a, a + 1024)
+        c3, c2, c1, c0 = (x[sl, None] for x in _num_coeffs(HapticParams(m1, b1, k, b, m2)))
+        kk, bb, KK, tt = k[sl, None], b[sl, None], Kf[sl, None], tau[sl, None]
+        # s Num(jω) = C + jD;  (bs + k) e^{−jωτ} = A + jB  (real arithmetic, Eq. 2 numerator)
+        C = (c3 * w2 - c1) * w2
+        D = (c0 - c2 * w2) * w
+        th = w * tt
+        cs, sn = np.cos(th), np.sin(th)
+        bw = bb * w
+        A = kk * cs + bw * sn
+        B = bw * cs - kk * sn
+        if np.any(T[sl] > 0):  # zero-order hold magnitude sinc(ωT/2); its phase is in τ
+            h = np.sinc(w * T[sl, None] / TWO_PI)
+            A, B = A * h, B * h
+        num2 = (C + KK * A) ** 2 + (D + KK * B) ** 2
+        db = np.maximum(10.0 * np.log10(num2 / (C * C + D * D)), 0.0)  # 20 log10|Z_cl/Z_p|
+        out[sl] = np.trapezoid(db, u, axis=1)
+    return out.reshape(shape) if shape else float(out[0])
+
+
+def _g_and_re(p: HapticParams, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    s = 1j * w
+    d1 = (p.m1 * s + (p.b1 + p.b)) * s + p.k
+    g = (_hold(p, w, None) * (p.b * s + p.k) / (s * d1)).real
+    return g, passive_impedance(p, w).real
+
+
+def max_passive_stiffness(p: HapticParams) -> Any:
+    """Largest K [N/m] with Re Z_cl(jω) ≥ 0 at every ω (module docstring): inf over g < 0
+    of Re Z_p/(−g), on a log grid 1e-3 Hz – 1 MHz (40 per decade) refined by golden
+    section around each design's minimum. inf if g ≥ 0 everywhere. Vectorised."""
+    shape = p.shape
+    cols = [np.ravel(np.broadcast_to(getattr(p, f), shape)) for f in ("m1", "b1", "k", "b", "m2")]
+    q = HapticParams(
+        *(c[:, None] for c in cols),
+        delay=np.ravel(np.broadcast_to(p.delay, shape))[:, None],
+        sample_period=np.ravel(np.broadcast_to(p.sample_period, shape))[:, None],
+    )
+    u = np.linspace(-3.0, 6.0, 361)
+    w = TWO_PI * 10.0**u
+
+    def ratio(ww: np.ndarray) -> np.ndarray:
+        g, re = _g_and_re(q, ww)
+        return np.where(g < 0, re / np.where(g < 0, -g, 1.0), np.inf)
+
+    r = ratio(w[None, :])
+    j = np.argmin(r, axis=1)
+    best = r[np.arange(r.shape[0]), j]
+    lo = u[np.maximum(j - 1, 0)]
+    hi = u[np.minimum(j + 1, u.size - 1)]
+    gr = (math.sqrt(5.0) - 1.0) / 2.0
+    for _ in range(60):  # golden section in log10 f on the bracket [j−1, j+1]
+        x1 = hi - gr * (hi - lo)
+        x2 = lo + gr * (hi - lo)
+        r1 = ratio(TWO_PI * 10.0 ** x1[:, None])[:, 0]
+        r2 = ratio(TWO_PI * 10.0 ** x2[:, None])[:, 0]
+        left = r1 < r2
+        hi = np.where(left, x2, hi)
+        lo = np.where(left, lo, x1)
+        best = np.minimum(best, np.minimum(r1, r2))
+    return best.reshape(shape) if shape else float(best[0])
+
+
+def is_passive(p: HapticParams, K: Any) -> Any:
+    """Whether the closed loop at K is passive (Re Z_cl ≥ 0 at every frequency)."""
+    return _check_K(K) <= max_passive_stiffness(p) * (1.0 + 1e-9)
+
+
+# --- stability (D-subdivision) -------------------------------------------------------
+
+
+def _scalar(p: HapticParams) -> HapticParams:
+    if p.shape:
+        raise ParameterError(f"design shape = {p.shape}: need one design (scalar fields)")
+    return p
+
+
+def _chi(p: HapticParams, K: float, s: complex) -> complex:
+    a3, a2, a1, a0 = _num_coeffs(p)
+    num = ((a3 * s + a2) * s + a1) * s + a0
+    E = np.exp(-s * p.delay)
+    if p.sample_period > 0:
+        E *= (1 - np.exp(-s * p.sample_period)) / (s * p.sample_period)
+    return complex(s * num + K * E * (p.b * s + p.k))
+
+
+def _crossings(p: HapticParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Imaginary-axis crossings of χ for one design: frequencies ω_c [rad/s], gains K_c
+    [N/m] and directions sign Re(ds/dK) (+1: into the right half-plane)."""
+    from scipy.optimize import brentq
+
+    a = _num_coeffs(p)
+    roots = np.roots(a)
+    w_a = float(np.max(np.abs(roots)))
+    tau = p.delay + 0.5 * p.sample_period
+
+    def X(w: Any) -> Any:  # K(ω)·e^{jφ}: crossing where X is real and > 0
+        s = 1j * np.asarray(w, dtype=float)
+        num = ((a[0] * s + a[1]) * s + a[2]) * s + a[3]
+        return -s * num / ((p.b * s + p.k) * _hold(p, np.asarray(w, float), None))
+
+    if tau == 0.0:
+        # Im[−jωNum(jω)(k − jbω)] is a polynomial in ω: its positive real roots, exactly.
+        from numpy.polynomial import polynomial as P
+
+        c = np.array(a[::-1], dtype=complex) * (1j ** np.arange(4))  # Num(jω) in ω
+        poly = P.polymul(P.polymul([0, -1j], c), [p.k, -1j * p.b])
+        rts = np.roots(poly.imag[::-1])
+        wc = np.sort(rts.real[(np.abs(rts.imag) < 1e-9 * np.abs(rts)) & (rts.real > 0)])
+    else:
+        w_hi = 20.0 * w_a + 16.0 * math.pi / tau
+        step = min(w_a / 50.0, math.pi / (16.0 * tau))
+        while True:
+            grid = np.concatenate(
+                (w_a * np.logspace(-4, 0, 400, endpoint=False), np.arange(w_a, w_hi, step))
+            )
+            xi = X(grid).imag
+            sc = np.nonzero(np.sign(xi[:-1]) * np.sign(xi[1:]) < 0)[0]
+            wc = np.array(
+                [
+                    brentq(lambda x: float(X(x).imag), grid[i], grid[i + 1], xtol=1e-14 * grid[i])
+                    for i in sc
+                ]
+            )
+            xv = X(wc) if wc.size else np.array([])
+            ok = (xv.real > 0) & (np.abs(xv.imag) <= 1e-6 * np.abs(xv))
+            best = float(np.min(xv.real[ok])) if ok.any() else math.inf
+            s_hi = 1j * w_hi
+            lower = abs(s_hi * np.polyval(a, s_hi)) / abs(p.k + p.b * s_hi)
+            if lower > best or w_hi > 1e4 * (w_a + 1.0 / tau):
+                break
+            w_hi *= 2.0
+    xv = X(wc) if wc.size else np.array([], dtype=complex)
+    ok = (xv.real > 0) & (np.abs(xv.imag) <= 1e-6 * np.abs(xv)) if wc.size else np.array([], bool)
+    wc, Kc = wc[ok], xv.real[ok]
+    dirs = np.empty(wc.size)
+    for i, (w, K) in enumerate(zip(wc, Kc, strict=True)):
+        s = 1j * w
+        h = 1e-6 * w
+        dchi = (_chi(p, K, s + h) - _chi(p, K, s - h)) / (2 * h)
+        dchi_dK = _chi(p, K + 1.0, s) - _chi(p, K, s)  # ∂χ/∂K = E (bs + k)
+        dirs[i] = np.sign((-dchi_dK / dchi).real)
+    order = np.argsort(Kc)
+    return wc[order], Kc[order], dirs[order]
+
+
+def max_stable_stiffness(p: HapticParams) -> Any:
+    """Largest K [N/m] such that the free closed loop is stable for every K in (0, K]:
+    the first crossing gain at which the count of right-half-plane roots turns positive
+    (module docstring; exact for a pure delay). inf if no crossing destabilises.
+    Vectorised fields are handled design by design (slower than the numeric metrics)."""
+    if p.shape:
+        n = int(np.prod(p.shape))
+        flat = HapticParams(
+            **{f: np.ravel(np.broadcast_to(getattr(p, f), p.shape)) for f in _FIELDS}
+        )
+        return np.array([max_stable_stiffness(flat.item(i)) for i in range(n)]).reshape(p.shape)
+    _, Kc, dirs = _crossings(p)
+    count = np.cumsum(2 * dirs)
+    bad = np.nonzero(count > 0)[0]
+    return float(Kc[bad[0]]) if bad.size else math.inf
+
+
+_FIELDS = ("m1", "b1", "k", "b", "m2", "delay", "f_max", "workspace", "sample_period")
+
+
+def is_stable(p: HapticParams, K: float) -> bool:
+    """Whether the free closed loop at K has no root with Re s ≥ 0 (D-subdivision count).
+    K = 0 is the backdriven device: marginally stable (rigid-body root at 0), reported True.
+    """
+    K = _check_K(K)
+    _scalar(p)
+    if K == 0:
+        return True
+    _, Kc, dirs = _crossings(p)
+    if np.any(np.isclose(Kc, K, rtol=1e-12)):
+        return False
+    return bool(np.sum(2 * dirs[Kc < K]) == 0)
+
+
+# --- metrics -------------------------------------------------------------------------
+
+
+def metrics_batch(
+    p: HapticParams, K: Any = None, *, limits: bool = True, band: tuple[float, float] = BAND_HZ
+) -> dict[str, np.ndarray]:
+    """All metrics for a vectorised set of designs, as arrays under the JSON keys of
+    :func:`metrics`. K defaults to K_max (Eq. 4). ``limits=False`` skips the passivity and
+    stability keys (``passive``, ``max_passive_K_N_per_m``, ``max_stable_K_N_per_m``):
+    the stability limit is computed design by design and is the slow part."""
+    K = p.k_max if K is None else K
+    K = _check_K(K)
+    shape = np.broadcast_shapes(p.shape, np.shape(K))
+
+    def full(x: Any) -> np.ndarray:
+        return np.broadcast_to(np.asarray(x, dtype=float), shape).copy()
+
+    out: dict[str, np.ndarray] = {
+        "m1_kg": full(p.m1),
+        "m2_kg": full(p.m2),
+        "b1_N_s_per_m": full(p.b1),
+        "k_N_per_m": full(p.k),
+        "b_N_s_per_m": full(p.b),
+        "K_N_per_m": full(K),
+        "delay_s": full(p.delay),
+        "bandwidth_lumped_hz": full(bandwidth_lumped(p, K)),
+        "bandwidth_hz": full(bandwidth(p, K)),
+        "resonance_hz": full(resonance(p)),
+    }
+    if limits:
+        kp = full(max_passive_stiffness(p))
+        out["passive"] = out["K_N_per_m"] <= kp * (1.0 + 1e-9)
+        out["max_passive_K_N_per_m"] = kp
+        out["max_stable_K_N_per_m"] = full(max_stable_stiffness(p))
+    out["rendering_area_dB_decade"] = full(rendering_area(p, K, band))
+    return out
+
+
+def metrics(p: HapticParams, K: float | None = None) -> dict[str, Any]:
+    """The metrics of one design at K (default K_max, Eq. 4) under the JSON keys of issue 2
+    (SI; NaN/inf mean "none"/"unbounded" and become null in JSON)."""
+    _scalar(p)
+    b = metrics_batch(p, K)
+    res: dict[str, Any] = {}
+    for key in METRIC_KEYS:
+        v = b[key].item()
+        res[key] = bool(v) if key == "passive" else float(v)
+    return res
