@@ -196,40 +196,75 @@ def path_from_fields(
     )  # fmt: skip
 
 
-def _radial_mmf(
-    mat: Magnetic, phi: FloatArray, r0: FloatArray, r1: FloatArray, length: FloatArray, n: int
-) -> FloatArray:
-    """∫_{r0}^{r1} H(Φ/(2π r L)) dr by n-point Gauss–Legendre in u = ln r (dr = r du).
+@dataclass(frozen=True)
+class _Kernels:
+    """Per-element factors: element MMF = Σ_points w·H(k·Φ); masked entries have w = 0."""
 
-    ``phi`` has shape (S, C); the geometry (S, K); result (S, C, K) summed over K by caller.
+    gap_k: FloatArray
+    gap_w: FloatArray
+    drum_k: FloatArray
+    drum_w: FloatArray
+    pole_k: FloatArray
+    pole_w: FloatArray
+    core_k: FloatArray
+    core_w: FloatArray
+    back_k: FloatArray
+    back_w: FloatArray
+    leak: FloatArray
+
+
+def _radial(r0: FloatArray, r1: FloatArray, length: FloatArray, n: int, mask=None):  # type: ignore[no-untyped-def]
+    """Gauss–Legendre in u = ln r of ∫ H(Φ/(2π r L)) dr = ∫ H(Φ/(2π e^u L)) e^u du.
+
+    Returns (k, w) of shape (S, K·n): B = k·Φ at each point, MMF = Σ w·H. Exact for a
+    linear material (the integrand is then constant in u).
     """
-    x, w = np.polynomial.legendre.leggauss(n)
+    x, wt = np.polynomial.legendre.leggauss(n)
     u0, u1 = np.log(r0), np.log(r1)
-    total = 0.0
-    for xi, wi in zip(x, w, strict=True):
-        r = np.exp(0.5 * (u0 + u1) + 0.5 * (u1 - u0) * xi)  # (S, K)
-        b = phi[:, :, None] / (2 * np.pi * r * length)[:, None, :]
-        total = total + 0.5 * wi * (u1 - u0)[:, None, :] * r[:, None, :] * mat.h_of_b(b)
-    return total
+    r = np.exp(0.5 * (u0 + u1)[..., None] + 0.5 * (u1 - u0)[..., None] * x)
+    k = 1.0 / (2 * np.pi * r * length[..., None])
+    w = 0.5 * wt * (u1 - u0)[..., None] * r
+    if mask is not None:
+        w = np.where(mask[..., None], w, 0.0)
+        k = np.where(mask[..., None], k, 0.0)
+    return k.reshape(k.shape[0], -1), w.reshape(w.shape[0], -1)
+
+
+def _kernels(path: MagneticPath) -> _Kernels:
+    gk, gw = _radial(path.gap_r0, path.gap_r1, path.gap_len, 1, path.gap_mask)
+    dk, dw = _radial(path.drum_r0, path.drum_r1, path.drum_len, 1, path.drum_mask)
+    pk, pw = _radial(path.pole_r0, path.pole_r1, path.pole_len, _POLE_POINTS)
+    col = lambda v: np.asarray(v, dtype=float)[:, None]  # noqa: E731
+    return _Kernels(gk, gw, dk, dw, pk, pw, col(1 / path.core_area), col(path.core_len),
+                    col(1 / path.back_area), col(path.back_len),
+                    col(path.leak_permeance))  # fmt: skip
+
+
+def _sum_h(mat: Magnetic, phi: FloatArray, k: FloatArray, w: FloatArray, deriv: bool):  # type: ignore[no-untyped-def]
+    """Σ_j w_j·H(k_j·Φ) for Φ (S, C), k, w (S, J); and its dΦ-derivative if ``deriv``."""
+    b = phi[:, :, None] * k[:, None, :]
+    f = (w[:, None, :] * mat.h_of_b(b)).sum(-1)
+    if not deriv:
+        return f, None
+    return f, (w[:, None, :] * k[:, None, :] * mat.dh_db(b)).sum(-1)
 
 
 def _mmf(
-    path: MagneticPath, mats: Mapping[str, Magnetic], phi: FloatArray
+    path: MagneticPath, mats: Mapping[str, Magnetic], phi: FloatArray, kern: _Kernels | None = None
 ) -> dict[str, FloatArray]:
-    """MMF drops (A) of every element at gap flux ``phi`` (S, C)."""
+    """MMF drops (A) at gap flux ``phi`` (S, C): stack, shell flux, total (and dF/dΦ)."""
+    kn = _kernels(path) if kern is None else kern
     steel, fluid = magnetic(path.steel, mats), magnetic(path.fluid, mats)
-    gaps = _radial_mmf(fluid, phi, path.gap_r0, path.gap_r1, path.gap_len, 1)
-    gaps = np.where(path.gap_mask[:, None, :], gaps, 0.0)
-    drums = _radial_mmf(steel, phi, path.drum_r0, path.drum_r1, path.drum_len, 1)
-    drums = np.where(path.drum_mask[:, None, :], drums, 0.0)
-    core = steel.h_of_b(phi / path.core_area[:, None]) * path.core_len[:, None]
-    stack = gaps.sum(-1) + drums.sum(-1) + core
-    phi_shell = phi + path.leak_permeance[:, None] * stack
-    poles = _radial_mmf(steel, phi_shell, path.pole_r0, path.pole_r1, path.pole_len, _POLE_POINTS)
-    back = steel.h_of_b(phi_shell / path.back_area[:, None]) * path.back_len[:, None]
-    return {"gaps": gaps, "drums": drums, "core": core, "stack": stack,
-            "phi_shell": phi_shell, "poles": poles, "back": back,
-            "total": stack + poles.sum(-1) + back}  # fmt: skip
+    g, dg = _sum_h(fluid, phi, kn.gap_k, kn.gap_w, True)
+    d, dd = _sum_h(steel, phi, kn.drum_k, kn.drum_w, True)
+    c, dc = _sum_h(steel, phi, kn.core_k, kn.core_w, True)
+    stack, dstack = g + d + c, dg + dd + dc
+    shell = phi + kn.leak * stack
+    dshell = 1.0 + kn.leak * dstack
+    p, dp = _sum_h(steel, shell, kn.pole_k, kn.pole_w, True)
+    b, db = _sum_h(steel, shell, kn.back_k, kn.back_w, True)
+    return {"gaps": g, "stack": stack, "phi_shell": shell, "total": stack + p + b,
+            "dtotal": dstack + (dp + db) * dshell}  # fmt: skip
 
 
 def solve_flux(
@@ -241,9 +276,10 @@ def solve_flux(
 ) -> FloatArray:
     """Gap flux Φ (Wb), shape (S, C), solving N·I = F(Φ) for ``ampere_turns`` (S, C).
 
-    Bracketed Illinois iteration (Dowell & Jarratt 1971) on the strictly increasing F:
-    the bracket [lo, hi] always contains the root and shrinks every step, so it cannot
-    diverge. Negative N·I is solved by symmetry (|Φ| for |NI|, sign restored).
+    Safeguarded Newton (Numerical Recipes §9.4 "rtsafe") on the strictly increasing F:
+    the bracket [lo, hi] always contains the root and shrinks every step; a Newton step
+    that would leave it is replaced by bisection, so it cannot diverge. Negative N·I is
+    solved by symmetry (|Φ| for |NI|, sign restored).
     """
     mats = MATERIALS if materials is None else materials
     ni = np.atleast_2d(np.asarray(ampere_turns, dtype=float))
@@ -251,46 +287,42 @@ def solve_flux(
     if not np.all(np.isfinite(ni)):
         raise ParameterError("current: must be finite")
     sign, target = np.sign(ni), np.abs(ni)
-    f = lambda phi: _mmf(path, mats, phi)["total"] - target  # noqa: E731
+    kn = _kernels(path)
+
+    def f(phi: FloatArray) -> tuple[FloatArray, FloatArray]:
+        m = _mmf(path, mats, phi, kn)
+        return m["total"] - target, m["dtotal"]
+
     # Initial upper guess: all the MMF over the fluid gaps at the fluid's initial μ.
-    r_gap = np.where(path.gap_mask, np.log(path.gap_r1 / path.gap_r0)
-                     / (2 * np.pi * path.gap_len), 0.0).sum(-1)  # fmt: skip
+    r_gap = (kn.gap_w * kn.gap_k).sum(-1)
     mu_f = magnetic(path.fluid, mats).mu_initial
     hi = np.maximum(target * mu_f / r_gap[:, None], 1e-30)
     lo = np.zeros_like(hi)
-    flo = -target
-    fhi = f(hi)
+    fhi, _ = f(hi)
     for _ in range(200):  # expand until bracketed (F grows at least like Φ)
         short = fhi < 0
         if not short.any():
             break
         lo = np.where(short, hi, lo)
-        flo = np.where(short, fhi, flo)
         hi = np.where(short, 2 * hi, hi)
-        fhi = f(hi)
+        fhi, _ = f(hi)
     else:
         raise ParameterError("circuit: could not bracket the flux (current too large?)")
-    side = np.zeros_like(hi)
+    x = 0.5 * (lo + hi)
     for _ in range(max_iter):
-        done = (hi - lo) <= rtol * hi
-        if done.all():
-            break
-        denom = fhi - flo
-        secant = (lo * fhi - hi * flo) / np.where(denom > 0, denom, 1.0)
-        x = np.where(denom > 0, secant, 0.5 * (lo + hi))
-        x = np.clip(x, lo, hi)
-        fx = f(x)
-        right = fx > 0  # root in [lo, x]
-        # Illinois: halve the stale end's value when the same end is kept twice.
-        flo = np.where(right, np.where(side == -1, 0.5 * flo, flo), fx)
-        fhi = np.where(right, fx, np.where(side == 1, 0.5 * fhi, fhi))
+        fx, dfx = f(x)
+        right = fx > 0
         lo = np.where(right, lo, x)
         hi = np.where(right, x, hi)
-        side = np.where(right, -1, 1)
-        exact = fx == 0
-        lo, hi = np.where(exact, x, lo), np.where(exact, x, hi)
-    phi = 0.5 * (lo + hi)
-    return np.where(target == 0, 0.0, phi * sign)
+        done = (np.abs(fx) <= rtol * target) | ((hi - lo) <= rtol * hi) | (target == 0)
+        if done.all():
+            break
+        newton = x - fx / np.where(dfx > 0, dfx, np.inf)
+        ok = (newton > lo) & (newton < hi) & (dfx > 0)
+        x = np.where(done, x, np.where(ok, newton, 0.5 * (lo + hi)))
+    else:
+        raise ParameterError(f"circuit: no convergence in {max_iter} iterations")
+    return np.where(target == 0, 0.0, x * sign)
 
 
 @dataclass(frozen=True)

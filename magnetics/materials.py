@@ -24,6 +24,7 @@ from geometry.validation import ParameterError, check_positive
 MU0 = 4e-7 * math.pi  # vacuum permeability, H/m (pre-2019 SI value; differs by 5e-10)
 FloatArray = NDArray[np.float64]
 _DENSE = 4096  # samples of the PCHIP curve used by np.interp
+_FAR_B = 1e6  # T: the μ0 extension point (no clutch field comes near)
 
 
 @dataclass(frozen=True)
@@ -83,29 +84,29 @@ class BHCurve:
         hh = np.concatenate([[0.0], h])
         p = PchipInterpolator(bb, hh)  # Fritsch–Carlson monotone cubic of H(B)
         grid = np.linspace(0.0, b[-1], _DENSE)
-        object.__setattr__(self, "_b", grid)
-        object.__setattr__(self, "_h", np.maximum.accumulate(p(grid)))
-        object.__setattr__(self, "_dhdb", np.maximum(p.derivative()(grid), 0.0))
+        hs = np.maximum.accumulate(p(grid))
+        dh = np.maximum(p.derivative()(grid), 0.0)
+        # One far point continues the curve with slope 1/μ0, so a single np.interp
+        # evaluates table and extrapolation alike (exact: the extension is linear).
+        object.__setattr__(self, "_b", np.append(grid, b[-1] + _FAR_B))
+        object.__setattr__(self, "_h", np.append(hs, hs[-1] + _FAR_B / MU0))
+        object.__setattr__(self, "_dhdb", np.append(dh, 1.0 / MU0))
 
     def h_of_b(self, b: ArrayLike) -> FloatArray:
         """H(|B|)·sign(B), A/m; slope 1/μ0 beyond the table."""
         b = np.asarray(b, dtype=float)
-        a = np.abs(b)
-        bl, hl = self._b[-1], self._h[-1]
-        h = np.where(a <= bl, np.interp(a, self._b, self._h), hl + (a - bl) / MU0)
-        return np.copysign(h, b)
+        h = np.interp(np.abs(b), self._b, self._h, right=np.inf)
+        return h if b.size and b.min(initial=0.0) >= 0 else np.copysign(h, b)
 
     def dh_db(self, b: ArrayLike) -> FloatArray:
         a = np.abs(np.asarray(b, dtype=float))
-        return np.where(a <= self._b[-1], np.interp(a, self._b, self._dhdb), 1.0 / MU0)
+        return np.where(a <= self._b[-2], np.interp(a, self._b, self._dhdb), 1.0 / MU0)
 
     def b_of_h(self, h: ArrayLike) -> FloatArray:
         """Inverse of ``h_of_b`` (same dense table, so the pair is consistent)."""
         h = np.asarray(h, dtype=float)
-        a = np.abs(h)
-        bl, hl = self._b[-1], self._h[-1]
-        b = np.where(a <= hl, np.interp(a, self._h, self._b), bl + MU0 * (a - hl))
-        return np.copysign(b, h)
+        b = np.interp(np.abs(h), self._h, self._b, right=np.inf)
+        return b if h.size and h.min(initial=0.0) >= 0 else np.copysign(b, h)
 
     @property
     def mu_initial(self) -> float:
