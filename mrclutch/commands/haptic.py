@@ -1,0 +1,177 @@
+"""``mrclutch haptic`` (one actuator on the lever → metrics) and ``mrclutch compare`` (the
+paper's equal-force comparison, Fig. 7c). Imports nothing heavy at module level."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from dataclasses import replace
+from typing import Any
+
+from geometry.validation import check_nonnegative, check_positive
+
+ACTUATOR_NAMES = ("mr-paper", "maxon-118890", "maxon-136206", "maxon-136209")
+
+
+def register(sub: Any) -> None:
+    p = sub.add_parser(
+        "haptic",
+        help="one actuator + transmission + virtual spring K → haptic metrics",
+        description="Reflect a catalogue actuator through the paper's bench transmission "
+        "(Eq. 3-4) and report the 2-DOF lever metrics at the virtual stiffness K.",
+    )
+    p.add_argument(
+        "--actuator",
+        default="mr-paper",
+        metavar="NAME",
+        help=f"catalogue actuator: {', '.join(ACTUATOR_NAMES)} (default mr-paper)",
+    )
+    p.add_argument("--lever-mm", type=float, default=170.0, help="lever length [mm] (170)")
+    p.add_argument("--gearing", type=float, default=1.0, help="gear factor G multiplying n (1)")
+    _common(p)
+    p.set_defaults(func=run_haptic)
+
+    c = sub.add_parser(
+        "compare",
+        help="the paper's equal-force comparison: MR pair vs Maxon 136206 (Fig. 7c)",
+        description="Table 2's identified MR set against the Maxon 136206 (Table 1 inertia "
+        "through the EM transmission), both at the same virtual stiffness K (default: the "
+        "smaller K_max, i.e. the force both can produce).",
+    )
+    _common(c)
+    c.add_argument("--plot", metavar="FILE.png", help="write Bode / effective impedance figure")
+    c.set_defaults(func=run_compare)
+
+
+def _common(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--stiffness", type=float, default=None, help="virtual stiffness K [N/m] (default K_max)"
+    )
+    p.add_argument(
+        "--delay-ms", type=float, default=None, help="actuator delay [ms] (default: catalogue)"
+    )
+    p.add_argument(
+        "--workspace-mm", type=float, default=50.0, help="workspace d for K_max [mm] (50)"
+    )
+    p.add_argument("--json", action="store_true", help="print JSON (SI keys)")
+
+
+def _edge(args: argparse.Namespace) -> tuple[float | None, float | None, float]:
+    """mm/ms at the edge → SI, validated with the option's own name."""
+    K = None if args.stiffness is None else check_positive("--stiffness", args.stiffness, " N/m")
+    delay = None
+    if args.delay_ms is not None:
+        delay = check_nonnegative("--delay-ms", args.delay_ms, " ms") * 1e-3
+    workspace = check_positive("--workspace-mm", args.workspace_mm, " mm") * 1e-3
+    return K, delay, workspace
+
+
+def run_haptic(args: argparse.Namespace) -> int:
+    from geometry.validation import check_choice
+    from mrclutch.actuator import actuator, reflect, transmission_for
+    from mrclutch.commands._common import print_json
+    from mrclutch.haptic import metrics
+
+    K, delay, workspace = _edge(args)
+    lever = check_positive("--lever-mm", args.lever_mm, " mm") * 1e-3
+    gearing = check_positive("--gearing", args.gearing)
+    act = actuator(check_choice("--actuator", args.actuator, ACTUATOR_NAMES))
+    if delay is not None:
+        act = replace(act, delay=delay)
+    tr = replace(transmission_for(act, lever), gearing=gearing, workspace=workspace)
+    m = metrics(reflect(act, tr), K)
+    if args.json:
+        print_json(m)
+    else:
+        print(f"{act.name} on a {lever * 1e3:g} mm lever, gearing {gearing:g}, n = {tr.ratio:.3f}")
+        _print_metrics(m)
+    return 0
+
+
+def compare_params(
+    K: float | None = None, delay: float | None = None, workspace: float = 0.05
+) -> tuple[Any, Any, float]:
+    """(MR params, EM params, K): Table 2 MR set vs the 136206 through the EM bench."""
+    from mrclutch.actuator import TABLE2_EM_136206, TABLE2_MR
+
+    mr = replace(TABLE2_MR, workspace=workspace)
+    em = replace(TABLE2_EM_136206, workspace=workspace)
+    if delay is not None:
+        mr = replace(mr, delay=delay)
+    if K is None:
+        K = float(min(mr.k_max, em.k_max))
+    return mr, em, K
+
+
+def compare_result(mr: Any, em: Any, K: float) -> dict[str, Any]:
+    """The ``compare --json`` object."""
+    from mrclutch.haptic import bandwidth, is_stable, metrics
+
+    m_mr, m_em = metrics(mr, K), metrics(em, K)
+    bw_nodelay = float(bandwidth(replace(mr, delay=0.0), K))
+    return {
+        "mr": m_mr,
+        "em": m_em,
+        "bandwidth_gain_lumped": m_mr["bandwidth_lumped_hz"] / m_em["bandwidth_lumped_hz"] - 1,
+        "bandwidth_gain": m_mr["bandwidth_hz"] / m_em["bandwidth_hz"] - 1,
+        "bandwidth_gain_mr_without_delay": bw_nodelay / m_em["bandwidth_hz"] - 1,
+        "damping_ratio_mr_over_em": m_mr["b1_N_s_per_m"] / m_em["b1_N_s_per_m"],
+        "stable": {"mr": is_stable(mr, K), "em": is_stable(em, K)},
+    }
+
+
+def run_compare(args: argparse.Namespace) -> int:
+    from mrclutch.commands._common import atomic_path, print_json
+
+    K, delay, workspace = _edge(args)
+    mr, em, K = compare_params(K, delay, workspace)
+    res = compare_result(mr, em, K)
+    if args.plot:
+        from mrclutch.plots.haptic import compare_figure
+
+        with atomic_path(args.plot) as tmp:
+            compare_figure({"MR pair (Table 2)": mr, "Maxon 136206": em}, K, tmp)
+    if args.json:
+        print_json(res)
+        return 0
+    for side, title in (("mr", "MR pair (Table 2 identified)"), ("em", "Maxon 136206")):
+        print(title)
+        _print_metrics(res[side])
+    g, g0 = res["bandwidth_gain"], res["bandwidth_gain_mr_without_delay"]
+    print(
+        f"At K = {K:.1f} N/m the MR lever renders {100 * res['bandwidth_gain_lumped']:.1f} % more "
+        f"lumped bandwidth (paper: 52.8 %), {100 * g:.1f} % on the full model with its "
+        f"{mr.delay * 1e3:g} ms delay ({100 * g0:.1f} % without); its damping b1 is "
+        f"{res['damping_ratio_mr_over_em']:.2f}× the motor's. MR: "
+        f"{_ps(res['mr']['passive'], res['stable']['mr'])}; EM: "
+        f"{_ps(res['em']['passive'], res['stable']['em'])}."
+    )
+    if args.plot:
+        print(f"figure: {args.plot}")
+    return 0
+
+
+def _ps(passive: bool, stable: bool) -> str:
+    return f"{'passive' if passive else 'NOT passive'}, {'stable' if stable else 'UNSTABLE'}"
+
+
+def _print_metrics(m: dict[str, Any]) -> None:
+    def f(v: float, scale: float = 1.0, unit: str = "") -> str:
+        return "none" if not math.isfinite(v) else f"{v * scale:.4g}{unit}"
+
+    print(
+        f"  m1 {f(m['m1_kg'], 1e3)} g  m2 {f(m['m2_kg'], 1e3)} g  b1 {f(m['b1_N_s_per_m'])} N·s/m"
+        f"  k {f(m['k_N_per_m'])} N/m  b {f(m['b_N_s_per_m'])} N·s/m"
+        f"  delay {f(m['delay_s'], 1e3)} ms"
+    )
+    print(
+        f"  K {f(m['K_N_per_m'])} N/m: bandwidth {f(m['bandwidth_hz'], unit=' Hz')}"
+        f" (lumped {f(m['bandwidth_lumped_hz'], unit=' Hz')}),"
+        f" resonance {f(m['resonance_hz'], unit=' Hz')},"
+        f" rendering area {f(m['rendering_area_dB_decade'])} dB·decade"
+    )
+    print(
+        f"  {'passive' if m['passive'] else 'NOT passive'} (up to "
+        f"{f(m['max_passive_K_N_per_m'], unit=' N/m')}), stable up to "
+        f"{f(m['max_stable_K_N_per_m'], unit=' N/m')}"
+    )

@@ -1,0 +1,70 @@
+"""Haptic figures: impedance Bode magnitude with rendering areas, effective stiffness and
+damping (matplotlib imported inside, Agg backend)."""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import numpy as np
+
+
+def compare_figure(
+    sides: dict[str, Any],
+    K: float,
+    path: str | os.PathLike[str],
+    band: tuple[float, float] | None = None,
+) -> None:
+    """Write a PNG comparing designs (label → HapticParams) rendering a spring K [N/m].
+
+    Top: |Z| of the closed loop (solid) and the passive device (dashed, Eq. 2) with the
+    rendering area shaded over the band and the full-model bandwidth marked. Bottom:
+    effective stiffness k_eff = Re(jωZ) and effective damping b_eff = Re Z.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from mrclutch.haptic import (
+        BAND_HZ,
+        bandwidth,
+        closed_loop_impedance,
+        effective_impedance,
+        passive_impedance,
+        rendering_area,
+    )
+
+    band = BAND_HZ if band is None else band
+    f = np.logspace(np.log10(band[0]), np.log10(band[1]), 1500)
+    w = 2 * np.pi * f
+    fig, axes = plt.subplots(3, 1, figsize=(8, 10), sharex=True, constrained_layout=True)
+    ax_z, ax_k, ax_b = axes
+    for (label, p), color in zip(sides.items(), ("tab:blue", "tab:red", "tab:green"), strict=False):
+        zc = np.abs(closed_loop_impedance(p, K, w))
+        zp = np.abs(passive_impedance(p, w))
+        area = rendering_area(p, K, band)
+        bw = float(bandwidth(p, K))
+        ax_z.loglog(f, zc, color=color, label=f"{label}: closed loop, area {area:.1f} dB·dec")
+        ax_z.loglog(f, zp, "--", color=color, label=f"{label}: passive (Eq. 2)")
+        ax_z.fill_between(f, zp, zc, where=zc > zp, color=color, alpha=0.15)
+        if np.isfinite(bw):
+            for ax in axes:
+                ax.axvline(bw, color=color, lw=0.8, ls=":")
+            ax_z.annotate(f"{bw:.1f} Hz", (bw, zc.min()), color=color, fontsize=8)
+        eff = effective_impedance(p, K, w)
+        ax_k.semilogx(f, eff.stiffness, color=color, label=label)
+        ax_b.semilogx(f, eff.damping, color=color, label=label)
+    ax_k.axhline(K, color="0.5", lw=0.8, label=f"K = {K:.0f} N/m")
+    ax_k.axhline(0.0, color="k", lw=0.5)
+    ax_z.set_ylabel("|Z| = |F/ẋ| [N·s/m]")
+    ax_z.set_title(f"Rendering a {K:.0f} N/m spring (dotted: full-model bandwidth)")
+    ax_k.set_ylabel("effective stiffness [N/m]")
+    ax_k.set_ylim(-2 * K, 2 * K)
+    ax_b.set_ylabel("effective damping [N·s/m]")
+    ax_b.set_xlabel("frequency [Hz]")
+    for ax in axes:
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.savefig(path, dpi=110, format="png")
+    plt.close(fig)
