@@ -70,15 +70,15 @@ _TABLE2_THEORETICAL: tuple[tuple[float, float], ...] = (
 )
 
 
-def pulley_ratio_from_table2(lever: float = LEVER_170) -> float:
-    """n = r_pulley / r_actuator fitted to Table 2's theoretical m1 values through Eq. 3.
+def pulley_ratio_from_table2() -> float:
+    """n = r_pulley / r_actuator fitted to Table 2's theoretical m1 (170 mm lever), Eq. 3.
 
     Eq. 3: m1 = I n² / l², so each pair (I, m1) gives n² = m1 l² / I. One n² is fitted to
     the three by least squares on the *relative* error, minimising Σ (n² a_i / m_i − 1)²
     with a_i = I_i / l², whose solution is n² = Σ(a_i/m_i) / Σ(a_i/m_i)². (The absolute
     least squares would be set by the 136209 alone.) Result: n² ≈ 53.4, n ≈ 7.31.
     """
-    q = np.array([i / lever**2 / m for i, m in _TABLE2_THEORETICAL])
+    q = np.array([i / LEVER_170**2 / m for i, m in _TABLE2_THEORETICAL])
     return math.sqrt(float(q.sum() / (q**2).sum()))
 
 
