@@ -15,6 +15,7 @@ residual norm; converged when ‖R‖ ≤ 1e-8·‖load‖, else FEMConvergenceE
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -37,7 +38,7 @@ def _axis(edges: list[float], lo: float, hi: float, size: float, inner: tuple[fl
     """Grid lines through every edge; cells ≤ size inside ``inner``, graded (×1.5) outside."""
     e = np.unique(np.round(np.array([lo, hi, *edges]), 12))
     out = [e[0]]
-    for a, b in zip(e[:-1], e[1:], strict=True):
+    for a, b in itertools.pairwise(e):
         if b <= inner[0] + 1e-12 or a >= inner[1] - 1e-12:  # air outside the clutch: grade
             n = max(1, math.ceil(math.log1p((b - a) / size * 0.5) / math.log(1.5)))
             n = min(n, 12)
