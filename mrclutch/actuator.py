@@ -267,9 +267,11 @@ class HapticParams:
         for name, unit in (("b", " N·s/m"), ("delay", " s"), ("sample_period", " s")):
             v = _check_pos_array(name, getattr(self, name), unit, allow_zero=True)
             object.__setattr__(self, name, v)
-        fm = self.f_max
-        if not (np.ndim(fm) == 0 and math.isinf(float(fm)) and float(fm) > 0):
-            object.__setattr__(self, "f_max", _check_pos_array("f_max", fm, " N"))
+        fm = np.asarray(self.f_max, dtype=float)  # +inf allowed: no force limit
+        bad = np.isnan(fm) | (fm <= 0)
+        if bad.any():
+            raise ParameterError(f"f_max = {fm[bad].flat[0]:.6g} N: must be > 0 (inf allowed)")
+        object.__setattr__(self, "f_max", float(fm) if fm.ndim == 0 else fm)
         np.broadcast_shapes(*(np.shape(getattr(self, f)) for f in _FIELDS))
 
     @property

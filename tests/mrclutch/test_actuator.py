@@ -95,6 +95,8 @@ def test_with_lever_scales_rotary_stiffness_and_keeps_m2():
         ({"b1": 0.0}, "b1"),
         ({"b": -1.0}, "b"),
         ({"delay": -1e-3}, "delay"),
+        ({"f_max": 0.0}, "f_max"),
+        ({"f_max": np.array([1.0, math.nan])}, "f_max"),
         ({"m1": np.array([1e-3, 0.0])}, "m1"),
         ({"k": np.array([1e3, math.inf])}, "k"),
     ],
@@ -117,5 +119,6 @@ def test_vector_fields_broadcast_and_item():
     p = HapticParams(m1=np.array([1e-3, 2e-3, 3e-3]), b1=1.0, k=4000.0, b=20.0, m2=14e-3)
     assert p.shape == (3,)
     assert p.item(1).m1 == 2e-3 and p.item(1).shape == ()
+    assert p.item(2).f_max == math.inf  # no force limit by default
     with pytest.raises(ValueError, match="broadcast"):
         HapticParams(m1=np.ones(3), b1=np.ones(2), k=1.0, b=0.0, m2=1.0)

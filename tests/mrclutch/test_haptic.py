@@ -275,3 +275,20 @@ def test_metrics_keys_and_defaults():
     assert m["K_N_per_m"] == pytest.approx(TABLE2_EM_136206.k_max)
     assert m["passive"] is True
     assert m["bandwidth_hz"] > 0 and m["rendering_area_dB_decade"] > 0
+
+
+def test_metrics_batch_limits_match_scalar():
+    p = HapticParams(
+        m1=np.array([1.5e-3, 22e-3, 38e-3]),
+        b1=np.array([1.0, 0.6, 1.1]),
+        k=4000.0,
+        b=20.0,
+        m2=0.014,
+        delay=np.array([1e-3, 0.0, 5e-4]),
+    )
+    K = np.array([300.0, 900.0, 2000.0])
+    b = metrics_batch(p, K)
+    for i in range(3):
+        m = metrics(p.item(i), K[i])
+        for key in METRIC_KEYS:
+            assert b[key][i] == pytest.approx(m[key], rel=1e-9, nan_ok=True)
