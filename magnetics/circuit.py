@@ -296,7 +296,7 @@ def solve_flux(
     # Initial upper guess: all the MMF over the fluid gaps at the fluid's initial μ.
     r_gap = (kn.gap_w * kn.gap_k).sum(-1)
     mu_f = magnetic(path.fluid, mats).mu_initial
-    hi = np.maximum(target * mu_f / r_gap[:, None], 1e-30)
+    hi = np.where(target > 0, target * mu_f / r_gap[:, None], 1.0)
     lo = np.zeros_like(hi)
     fhi, _ = f(hi)
     for _ in range(200):  # expand until bracketed (F grows at least like Φ)

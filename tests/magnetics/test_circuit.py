@@ -1,0 +1,86 @@
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from geometry.params import DrumClutch, preset
+from geometry.section import build_section
+from magnetics.circuit import path_from_fields, path_from_section, solve
+from magnetics.materials import MU0, linear_materials
+from magnetics.torque import max_torque_batch, torque_curve, torque_grid_batch
+
+PAPER = preset("paper")
+
+
+def _closed_form(c: DrumClutch, current: float, mu_r_fluid: float):
+    # Linear, infinitely permeable steel: Φ = μ N I 2π L / Σ ln(ro/ri) over the 2n·2 gaps
+    s = build_section(c)
+    lsum = 2 * sum(np.log(g.r_outer / g.r_inner) for g in s.gaps)
+    mu = MU0 * mu_r_fluid
+    return np.array([mu * c.coil_turns * current / (g.r_mean * lsum) for g in s.gaps] * 2)
+
+
+@settings(max_examples=25, deadline=None)
+@given(i=st.floats(0.01, 50), mu_f=st.floats(1, 10), gap_mm=st.floats(0.2, 1.5))
+def test_linear_limit_axisymmetric_closed_form(i, mu_f, gap_mm):
+    """Very permeable linear steel: gap B equals μ N I / (r Σ ln(ro/ri)) to 1e-6."""
+    c = replace(PAPER, gap=gap_mm * 1e-3)
+    mats = linear_materials(1e12, mu_f)
+    res = solve(c, [i], materials=mats)
+    expected = _closed_form(c, i, mu_f)
+    # leakage across the band needs no MMF from infinitely permeable steel: exact
+    np.testing.assert_allclose(res.gap_b[0, 0], expected, rtol=1e-6)
+
+
+def test_linear_limit_planar_formula_for_a_thin_large_radius_stack():
+    """μ0 μr N I / Σg within the geometric bound Δr/r of a stack at large radius."""
+    c = DrumClutch(n_drums=1, gap=0.1e-3, drum_thickness=0.02e-3, drum_inner_diameter=0.45,
+                   coil_turns=140)  # fmt: skip
+    mats = linear_materials(1e12, 5.0)
+    res = solve(c, [2.0], materials=mats)
+    planar = MU0 * 5.0 * 140 * 2.0 / (4 * c.gap)
+    spread = (c.drum_radii_out[0][1] + c.gap - c.core_radius) / c.core_radius
+    np.testing.assert_allclose(res.gap_b[0, 0], planar, rtol=spread)
+    assert spread < 1e-3
+
+
+def test_section_and_batch_paths_agree():
+    a, b = path_from_section(build_section(PAPER)), path_from_fields({})
+    for name in ("core_area", "core_len", "back_area", "leak_permeance", "pole_len"):
+        np.testing.assert_allclose(getattr(a, name), getattr(b, name), rtol=1e-12)
+    np.testing.assert_allclose(np.sort(a.gap_r0.ravel()), np.sort(b.gap_r0.ravel()))
+    t = torque_curve(PAPER, [0.5, 3.0, 7.0]).yield_torque
+    np.testing.assert_allclose(max_torque_batch({}, [0.5, 3.0, 7.0][2]), t[2], rtol=1e-8)
+    np.testing.assert_allclose(torque_grid_batch({}, [0.5, 3.0, 7.0])[0], t, rtol=1e-3)
+
+
+def test_robust_extreme_currents_finite_monotone():
+    tc = torque_curve(PAPER, [0.0, 1e-6, 1.0, 7.0, 100.0, 1000.0])
+    assert np.all(np.isfinite(tc.torque))
+    assert np.all(np.diff(tc.torque) >= 0)
+    assert tc.yield_torque[0] == 0.0
+    assert tc.torque[0] == pytest.approx(tc.viscous_torque)
+
+
+def test_saturation_is_reported_in_the_back_iron():
+    res = solve(PAPER, [0.5, 7.0])
+    assert not res.saturated["back_iron"][0, 0]
+    assert res.saturated["back_iron"][0, 1]
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.lists(st.floats(0, 200), min_size=2, max_size=8))
+def test_torque_monotone_in_current(currents):
+    i = np.sort(np.array(currents))
+    t = torque_curve(PAPER, i).yield_torque
+    assert np.all(np.diff(t) >= -1e-12 * t.max(initial=1.0))
+
+
+@settings(max_examples=20, deadline=None)
+@given(g1=st.floats(0.2, 1.4), dg=st.floats(0.01, 0.5))
+def test_torque_falls_with_gap_at_fixed_ampere_turns_below_saturation(g1, dg):
+    """Below saturation (1 A) a wider gap means less field and less torque (same NI)."""
+    t = max_torque_batch({"gap": np.array([g1, g1 + dg]) * 1e-3}, 1.0)
+    assert t[1] < t[0]
