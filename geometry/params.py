@@ -22,10 +22,8 @@ radius follows from it, the gaps and the thicknesses.
 from __future__ import annotations
 
 import math
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, fields, replace
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -370,23 +368,3 @@ def preset(name: str) -> DrumClutch:
         raise ParameterError(
             f"preset = {name!r}: unknown; known presets are {', '.join(sorted(PRESETS))}"
         ) from None
-
-
-def load_clutch_toml(path: str | Path) -> DrumClutch:
-    """Read a design file's ``[clutch]`` table into a DrumClutch.
-
-    ``base = "NAME"`` starts from a preset; every other key overrides it.
-    """
-    p = Path(path)
-    try:
-        data = tomllib.loads(p.read_text())
-    except FileNotFoundError:
-        raise ParameterError(f"design file {p}: not found") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ParameterError(f"design file {p}: not valid TOML ({exc})") from None
-    if "clutch" not in data or not isinstance(data["clutch"], dict):
-        raise ParameterError(f"design file {p}: missing the [clutch] table of dimensions")
-    table = dict(data["clutch"])
-    base_name = table.pop("base", None)
-    base = preset(base_name) if base_name is not None else None
-    return DrumClutch.from_mm(table, base=base, where=str(p))

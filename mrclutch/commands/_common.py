@@ -11,9 +11,17 @@ from typing import Any
 import numpy as np
 
 from geometry.atomic import atomic_path
-from geometry.params import DrumClutch, load_clutch_toml, preset
+from geometry.params import DrumClutch
+from mrclutch.design import ClutchDesign, design_preset, load_design
 
-__all__ = ["add_design_args", "atomic_path", "load_clutch", "print_json", "to_jsonable"]
+__all__ = [
+    "add_design_args",
+    "atomic_path",
+    "load_clutch",
+    "load_design_args",
+    "print_json",
+    "to_jsonable",
+]
 
 
 def add_design_args(p: argparse.ArgumentParser) -> None:
@@ -24,15 +32,20 @@ def add_design_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--preset", default=None, metavar="NAME", help="named preset (default: paper)")
 
 
-def load_clutch(args: argparse.Namespace) -> DrumClutch:
-    """The DrumClutch named by ``add_design_args`` options."""
+def load_design_args(args: argparse.Namespace) -> ClutchDesign:
+    """The ClutchDesign named by ``add_design_args`` options (default: the paper preset)."""
     if args.design is not None and args.preset is not None:
         from mrclutch.cli import CLIError
 
         raise CLIError("give either a design file or --preset, not both")
     if args.design is not None:
-        return load_clutch_toml(args.design)
-    return preset(args.preset or "paper")
+        return load_design(args.design)
+    return design_preset(args.preset or "paper")
+
+
+def load_clutch(args: argparse.Namespace) -> DrumClutch:
+    """The DrumClutch named by ``add_design_args`` options."""
+    return load_design_args(args).clutch
 
 
 def to_jsonable(obj: Any) -> Any:

@@ -1,0 +1,172 @@
+"""`ClutchDesign`: the clutch geometry, its operating limits and the transmission it drives.
+
+A design file (TOML) has three tables; lengths in mm with ``_mm`` keys, other units in
+the key name too::
+
+    [clutch]                 # DrumClutch dimensions (geometry/params.py)
+    base = "paper"           # start from a preset; every key below overrides it
+    gap_mm = 0.3
+    n_drums = 2
+
+    [operating]              # optional, defaults in `Operating`
+    max_current_A = 7.0
+    max_current_density_A_per_mm2 = 30.0
+    input_speed_rpm = 530
+    delay_ms = 1.0
+    coil_temperature_C = 20
+
+    [transmission]           # optional, defaults: the paper's MR bench (170 mm lever)
+    lever_mm = 170
+    gearing = 1.0
+    workspace_mm = 50
+
+Every key is checked: unknown keys, unit-less keys and wrong types are refused with a
+message naming the key.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+from geometry.params import DrumClutch, preset
+from geometry.validation import ParameterError, check_positive, check_range
+from mrclutch.actuator import MR_170, MR_DELAY, Transmission
+
+
+@dataclass(frozen=True)
+class Operating:
+    """Operating limits and conditions (SI; temperature in °C)."""
+
+    max_current: float = 7.0  # A: Fig. 2b's range
+    max_current_density: float = math.inf  # A/m² in the copper; inf = no limit
+    input_speed: float = 530 * 2 * math.pi / 60  # rad/s: Fig. 2b's 530 rpm
+    delay: float = MR_DELAY  # s: paper §IV-B, 1 ms for MR actuators
+    coil_temperature: float = 20.0  # °C
+
+    def __post_init__(self) -> None:
+        check_range("max_current", self.max_current, 0.0, 1e4, " A", lo_open=True)
+        if not (math.isinf(self.max_current_density) and self.max_current_density > 0):
+            check_positive("max_current_density", self.max_current_density, " A/m²")
+        check_range("input_speed", self.input_speed, 0.0, 1e5, " rad/s", lo_open=True)
+        check_range("delay", self.delay, 0.0, 1.0, " s")
+        check_range("coil_temperature", self.coil_temperature, -60.0, 250.0, " °C")
+
+    @property
+    def input_speed_rpm(self) -> float:
+        return self.input_speed * 60 / (2 * math.pi)
+
+
+@dataclass(frozen=True)
+class ClutchDesign:
+    """One MR clutch design: geometry + operating limits + the transmission to the hand."""
+
+    clutch: DrumClutch = field(default_factory=DrumClutch)
+    operating: Operating = field(default_factory=Operating)
+    transmission: Transmission = MR_170
+    name: str = "design"
+
+    @property
+    def current_limit(self) -> float:
+        """The largest current allowed: max_current, capped by the current-density limit."""
+        wire_area = math.pi * self.clutch.wire_diameter**2 / 4
+        return min(self.operating.max_current, self.operating.max_current_density * wire_area)
+
+
+#: Named designs. "paper": the paper's clutch on the paper's MR bench (170 mm lever).
+DESIGNS: dict[str, ClutchDesign] = {
+    "paper": ClutchDesign(clutch=preset("paper"), name="paper"),
+}
+
+
+def design_preset(name: str) -> ClutchDesign:
+    """A named design; geometry presets without a design of their own get the defaults."""
+    if name in DESIGNS:
+        return DESIGNS[name]
+    return ClutchDesign(clutch=preset(name), name=name)
+
+
+# ---- design files ----------------------------------------------------------------------
+
+# key in the file -> (field, factor to SI)
+_OPERATING_KEYS: dict[str, tuple[str, float]] = {
+    "max_current_A": ("max_current", 1.0),
+    "max_current_density_A_per_mm2": ("max_current_density", 1e6),
+    "input_speed_rpm": ("input_speed", 2 * math.pi / 60),
+    "delay_ms": ("delay", 1e-3),
+    "coil_temperature_C": ("coil_temperature", 1.0),
+}
+_TRANSMISSION_KEYS: dict[str, tuple[str, float]] = {
+    "ratio": ("ratio", 1.0),
+    "lever_mm": ("lever", 1e-3),
+    "gearing": ("gearing", 1.0),
+    "k_N_per_m": ("k", 1.0),
+    "b_N_s_per_m": ("b", 1.0),
+    "m2_g": ("m2", 1e-3),
+    "workspace_mm": ("workspace", 1e-3),
+}
+
+
+def _read_table(
+    table: Mapping[str, Any], keys: Mapping[str, tuple[str, float]], where: str
+) -> dict[str, float]:
+    out: dict[str, float] = {}
+    for key, value in table.items():
+        if key not in keys:
+            bare = {k.rsplit("_", 1)[0]: k for k in keys if "_" in k}
+            hint = f"; write {bare[key]}" if key in bare else ""
+            raise ParameterError(
+                f"{where}.{key}: unknown key{hint} (known: {', '.join(sorted(keys))})"
+            )
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ParameterError(f"{where}.{key} = {value!r}: must be a number")
+        name, factor = keys[key]
+        out[name] = float(value) * factor
+    return out
+
+
+def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> ClutchDesign:
+    """Build a design from a parsed design file (see the module docstring)."""
+    known = {"clutch", "operating", "transmission", "name"}
+    for key in data:
+        if key not in known and not isinstance(data[key], dict):
+            raise ParameterError(f"{where}: {key}: not in a table; dimensions go under [clutch]")
+        if key not in known:
+            raise ParameterError(
+                f"{where}: {key}: unknown table (known: {', '.join(sorted(known))})"
+            )
+    if "clutch" not in data or not isinstance(data["clutch"], dict):
+        raise ParameterError(f"{where}: missing the [clutch] table of dimensions")
+    table = dict(data["clutch"])
+    base_name = table.pop("base", None)
+    base = preset(base_name) if base_name is not None else None
+    clutch = DrumClutch.from_mm(table, base=base, where=f"{where}: clutch")
+    op_table = data["operating"] if "operating" in data else {}
+    tr_table = data["transmission"] if "transmission" in data else {}
+    for name, t in (("operating", op_table), ("transmission", tr_table)):
+        if not isinstance(t, dict):
+            raise ParameterError(f"{where}: [{name}] must be a table")
+    operating = Operating(**_read_table(op_table, _OPERATING_KEYS, f"{where}: operating"))
+    transmission = replace(
+        MR_170, **_read_table(tr_table, _TRANSMISSION_KEYS, f"{where}: transmission")
+    )
+    name = data["name"] if "name" in data else Path(where).stem
+    return ClutchDesign(clutch, operating, transmission, str(name))
+
+
+def load_design(path: str | Path) -> ClutchDesign:
+    """Read a design file; every error names the key and the file."""
+    p = Path(path)
+    try:
+        data = tomllib.loads(p.read_text())
+    except FileNotFoundError:
+        raise ParameterError(f"design file {p}: not found") from None
+    except IsADirectoryError:
+        raise ParameterError(f"design file {p}: is a directory") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ParameterError(f"design file {p}: not valid TOML ({exc})") from None
+    return design_from_mapping(data, str(p))

@@ -1,0 +1,283 @@
+"""From the drums to the hand: a ClutchDesign → clutch figures → Actuator → haptic metrics.
+
+Two fidelities (README "Speed against accuracy"):
+
+* ``fast`` — analytic inertia from the section, torque from the saturating magnetic
+  circuit, drag from the closed-form films. Milliseconds; the default for sweeps.
+* ``reference`` — inertia from the exact B-rep (build123d/OpenCascade), torque from the
+  axisymmetric FEM. Seconds; for the final check of a design.
+
+The MR actuator is the paper's antagonistic pair of clutches on the design's
+transmission. The motor it is compared with is the Maxon 136206 on the paper's EM bench
+with the same lever, geared (G = F_max,MR / F_max,EM) so both render the same force
+— the *equal-force* comparison of the paper's Fig. 7c made exact — at the same virtual
+stiffness K = K_max of the MR system.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from geometry.validation import check_choice
+from mrclutch.actuator import (
+    EM_170,
+    Actuator,
+    HapticParams,
+    Transmission,
+    actuator,
+    reflect,
+)
+from mrclutch.design import ClutchDesign
+
+FIDELITIES: tuple[str, ...] = ("fast", "reference")
+#: The motor of the paper's equal-force comparison (Fig. 7c).
+MOTOR = "maxon-136206"
+
+
+@dataclass(frozen=True)
+class ClutchFigures:
+    """What one clutch is (SI), and which method gave each figure."""
+
+    max_current: float  # A: the current limit of the design
+    max_torque: float  # N·m: yield + viscous torque at max_current and input speed
+    yield_torque: float  # N·m: field-dependent part at max_current
+    rotor_inertia: float  # kg·m²: output rotor + shaft
+    rotor_mass: float  # kg
+    clutch_mass: float  # kg: with fluid and coil
+    viscous_damping: float  # N·m·s: dT/dω of the off-state drag
+    off_state_torque: float  # N·m at the input speed, 0 A
+    coil_resistance: float  # Ω at the coil temperature
+    coil_power: float  # W at max_current
+    diameter: float  # m, envelope
+    length: float  # m, envelope
+    methods: Mapping[str, str]
+    notes: tuple[str, ...] = ()
+
+    @property
+    def torque_per_inertia(self) -> float:
+        return self.max_torque / self.rotor_inertia
+
+    def as_json(self) -> dict[str, Any]:
+        return {
+            "max_current_A": self.max_current,
+            "max_torque_N_m": self.max_torque,
+            "yield_torque_N_m": self.yield_torque,
+            "rotor_inertia_kg_m2": self.rotor_inertia,
+            "rotor_mass_kg": self.rotor_mass,
+            "clutch_mass_kg": self.clutch_mass,
+            "viscous_damping_N_m_s": self.viscous_damping,
+            "off_state_torque_N_m": self.off_state_torque,
+            "torque_per_inertia_N_m_per_kg_m2": self.torque_per_inertia,
+            "coil_resistance_ohm": self.coil_resistance,
+            "coil_power_W": self.coil_power,
+            "envelope_m": [self.diameter, self.length],
+            "methods": dict(self.methods),
+            "notes": list(self.notes),
+        }
+
+
+def clutch_figures(design: ClutchDesign, fidelity: str = "fast") -> ClutchFigures:
+    """Inertia, mass, torque at the current limit and drag of one design."""
+    from geometry.mass import analytic_mass
+    from geometry.section import build_section
+    from magnetics.torque import coil_properties, torque_curve, viscous_drag
+
+    check_choice("fidelity", fidelity, FIDELITIES)
+    c, op = design.clutch, design.operating
+    section = build_section(c)
+    if fidelity == "fast":
+        mass = analytic_mass(section)
+        torque_method = "circuit"
+    else:
+        from geometry.mass import brep_mass
+
+        mass = brep_mass(c)
+        torque_method = "fem"
+    i_max = design.current_limit
+    curve = torque_curve(c, [i_max], method=torque_method, speed_rpm=op.input_speed_rpm)
+    drag = viscous_drag(section, op.input_speed)
+    coil = coil_properties(c, i_max, op.coil_temperature)
+    d, length = section.envelope
+    return ClutchFigures(
+        max_current=i_max,
+        max_torque=float(curve.torque[0]),
+        yield_torque=float(curve.yield_torque[0]),
+        rotor_inertia=mass.rotor_inertia,
+        rotor_mass=mass.rotor_mass,
+        clutch_mass=mass.clutch_mass,
+        viscous_damping=drag.damping,
+        off_state_torque=drag.torque,
+        coil_resistance=coil.resistance,
+        coil_power=coil.power,
+        diameter=d,
+        length=length,
+        methods={"inertia": mass.method, "torque": torque_method, "drag": "couette"},
+        notes=tuple(mass.notes),
+    )
+
+
+def mr_actuator(design: ClutchDesign, figures: ClutchFigures) -> Actuator:
+    """The paper's antagonistic pair of this clutch (both rotors move with the lever)."""
+    return Actuator.mr_pair(
+        clutch_inertia=figures.rotor_inertia,
+        clutch_damping=figures.viscous_damping,
+        clutch_max_torque=figures.max_torque,
+        clutch_mass=figures.clutch_mass,
+        delay=design.operating.delay,
+        name=design.name,
+    )
+
+
+def motor_transmission(mr: HapticParams, mr_tr: Transmission, motor: Actuator) -> Transmission:
+    """The paper's EM bench on the MR design's lever and workspace, geared to equal force."""
+    em = EM_170.with_lever(mr_tr.lever) if mr_tr.lever != EM_170.lever else EM_170
+    em = replace(em, workspace=mr_tr.workspace)
+    base_force = motor.max_torque * em.reduction  # F = T nG/l (Eq. 4)
+    return replace(em, gearing=float(mr.f_max) / base_force)
+
+
+@dataclass(frozen=True)
+class Evaluation:
+    """A design evaluated: the clutch, the MR pair at the hand and the equal-force motor."""
+
+    design: ClutchDesign
+    fidelity: str
+    clutch: ClutchFigures
+    mr: HapticParams
+    motor: HapticParams
+    motor_gearing: float
+    haptic: Mapping[str, Any]  # metrics of the MR pair at K_max
+    motor_metrics: Mapping[str, Any]  # metrics of the motor at the same K
+
+    def as_json(self) -> dict[str, Any]:
+        mr_m, em_m = dict(self.haptic), dict(self.motor_metrics)
+        return {
+            "design": self.design.name,
+            "fidelity": self.fidelity,
+            "clutch": self.clutch.as_json(),
+            "haptic": mr_m,
+            "motor": {**em_m, "actuator": MOTOR, "gearing": self.motor_gearing},
+            "bandwidth_gain": _gain(mr_m["bandwidth_hz"], em_m["bandwidth_hz"]),
+            "bandwidth_gain_lumped": _gain(
+                mr_m["bandwidth_lumped_hz"], em_m["bandwidth_lumped_hz"]
+            ),
+        }
+
+
+def _gain(a: float | None, b: float | None) -> float | None:
+    if a is None or b is None or not np.isfinite(a) or not np.isfinite(b):
+        return None
+    return a / b - 1.0
+
+
+def evaluate(design: ClutchDesign, fidelity: str = "fast") -> Evaluation:
+    """The clutch figures and their haptic consequences, beside the equal-force motor."""
+    from mrclutch.haptic import metrics
+
+    fig = clutch_figures(design, fidelity)
+    mr = reflect(mr_actuator(design, fig), design.transmission)
+    motor = actuator(MOTOR)
+    em_tr = motor_transmission(mr, design.transmission, motor)
+    em = reflect(motor, em_tr)
+    k = float(mr.k_max)
+    return Evaluation(design, fidelity, fig, mr, em, em_tr.gearing, metrics(mr), metrics(em, K=k))
+
+
+# ---- the vectorised fast path for sweeps -----------------------------------------------
+
+#: Columns of a sweep row (SI, units in the names), in order.
+BATCH_OUTPUTS: tuple[str, ...] = (
+    "valid",
+    "rotor_inertia_kg_m2",
+    "rotor_mass_kg",
+    "clutch_mass_kg",
+    "diameter_m",
+    "length_m",
+    "max_torque_N_m",
+    "damping_N_m_s",
+    "off_state_torque_N_m",
+    "m1_kg",
+    "b1_N_s_per_m",
+    "K_max_N_per_m",
+    "bandwidth_lumped_hz",
+    "bandwidth_hz",
+    "resonance_hz",
+    "rendering_area_dB_decade",
+)
+
+
+@dataclass(frozen=True)
+class BatchEvaluator:
+    """Picklable fast-path evaluator of arrays of designs around a base ClutchDesign.
+
+    Fields a sweep does not vary come from ``base.clutch``; operating point and
+    transmission are the base design's. Invalid designs (DrumClutch validation fails) get
+    ``valid = 0`` and NaN outputs; they are computed on the base geometry meanwhile so no
+    invalid number ever reaches the solvers.
+    """
+
+    base: ClutchDesign
+
+    def __call__(self, fields: Mapping[str, ArrayLike]) -> dict[str, np.ndarray]:
+        return evaluate_batch(fields, self.base)
+
+
+def evaluate_batch(
+    fields: Mapping[str, ArrayLike], base: ClutchDesign | None = None
+) -> dict[str, np.ndarray]:
+    """The fast path for S designs at once; returns arrays under ``BATCH_OUTPUTS``."""
+    from geometry.batch import broadcast_fields, layout, valid
+    from geometry.mass import analytic_batch
+    from magnetics.torque import max_torque_batch, viscous_batch
+    from mrclutch.haptic import metrics_batch
+
+    base = base if base is not None else ClutchDesign()
+    p = broadcast_fields(fields, base.clutch)
+    ok = valid(layout(p))
+    if not ok.all():  # evaluate the invalid rows on the base geometry, then blank them
+        ref = broadcast_fields({}, base.clutch)
+        p = {k: np.where(ok, v, ref[k][0]) for k, v in p.items()}
+    op, tr = base.operating, base.transmission
+    mass = analytic_batch(p)
+    wire_area = np.pi * p["wire_diameter"] ** 2 / 4
+    current = np.minimum(op.max_current, op.max_current_density * wire_area)
+    off_torque, damping = viscous_batch(p, op.input_speed)
+    torque = max_torque_batch(p, current) + off_torque
+    r = tr.reduction  # Eq. 3/4 through the design's transmission
+    hp = HapticParams(
+        m1=2 * mass["rotor_inertia"] * r**2,  # the antagonistic pair: both rotors move
+        b1=2 * damping * r**2,
+        k=tr.k,
+        b=tr.b,
+        m2=tr.m2,
+        delay=op.delay,
+        f_max=torque * r,
+        workspace=tr.workspace,
+    )
+    hm = metrics_batch(hp, limits=False)
+    out = {
+        "valid": ok.astype(float),
+        "rotor_inertia_kg_m2": mass["rotor_inertia"],
+        "rotor_mass_kg": mass["rotor_mass"],
+        "clutch_mass_kg": mass["clutch_mass"],
+        "diameter_m": mass["diameter"],
+        "length_m": mass["length"],
+        "max_torque_N_m": torque,
+        "damping_N_m_s": damping,
+        "off_state_torque_N_m": off_torque,
+        "m1_kg": hm["m1_kg"],
+        "b1_N_s_per_m": hm["b1_N_s_per_m"],
+        "K_max_N_per_m": hm["K_N_per_m"],
+        "bandwidth_lumped_hz": hm["bandwidth_lumped_hz"],
+        "bandwidth_hz": hm["bandwidth_hz"],
+        "resonance_hz": hm["resonance_hz"],
+        "rendering_area_dB_decade": hm["rendering_area_dB_decade"],
+    }
+    for k in BATCH_OUTPUTS[1:]:
+        out[k] = np.where(ok, np.broadcast_to(out[k], ok.shape), np.nan)
+    return out

@@ -1,0 +1,90 @@
+"""The pipeline: batch fast path = per-design fast path; the haptic model fed by hand."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from geometry import preset
+from mrclutch.actuator import HapticParams
+from mrclutch.design import ClutchDesign, design_preset
+from mrclutch.haptic import metrics
+from mrclutch.pipeline import BATCH_OUTPUTS, evaluate, evaluate_batch
+
+DESIGNS = [
+    {},
+    {"gap": 0.5e-3, "n_drums": 3},
+    {"drum_thickness": 0.15e-3, "drum_inner_diameter": 10e-3},
+    {"n_drums": 1, "zone_length": 4e-3},
+]
+
+
+@pytest.fixture(scope="module")
+def batch():
+    base = design_preset("paper")
+    c0 = base.clutch
+    fields = {
+        k: np.array([d[k] if k in d else getattr(c0, k) for d in DESIGNS])
+        for k in ("gap", "n_drums", "drum_thickness", "drum_inner_diameter", "zone_length")
+    }
+    return evaluate_batch(fields, base)
+
+
+@pytest.mark.parametrize("i", range(len(DESIGNS)))
+def test_batch_equals_single_design_fast_path(batch, i):
+    d = ClutchDesign(clutch=replace(preset("paper"), **DESIGNS[i]))
+    ev = evaluate(d, "fast")
+    c, h = ev.clutch, ev.haptic
+    assert batch["valid"][i] == 1
+    pairs = {
+        "rotor_inertia_kg_m2": c.rotor_inertia,
+        "clutch_mass_kg": c.clutch_mass,
+        "max_torque_N_m": c.max_torque,
+        "damping_N_m_s": c.viscous_damping,
+        "off_state_torque_N_m": c.off_state_torque,
+        "m1_kg": h["m1_kg"],
+        "b1_N_s_per_m": h["b1_N_s_per_m"],
+        "K_max_N_per_m": h["K_N_per_m"],
+        "bandwidth_lumped_hz": h["bandwidth_lumped_hz"],
+        "bandwidth_hz": h["bandwidth_hz"],
+        "rendering_area_dB_decade": h["rendering_area_dB_decade"],
+    }
+    for key, single in pairs.items():
+        assert batch[key][i] == pytest.approx(single, rel=1e-6), key
+
+
+def test_invalid_rows_are_flagged_and_blank():
+    out = evaluate_batch({"gap": np.array([0.3e-3, 0.01e-3, np.nan]), "n_drums": 2})
+    assert out["valid"].tolist() == [1.0, 0.0, 0.0]
+    for key in BATCH_OUTPUTS[1:]:
+        assert np.isfinite(out[key][0]) or key == "resonance_hz", key
+        assert np.isnan(out[key][1:]).all(), key
+
+
+def test_evaluation_feeds_the_haptic_model_as_by_hand():
+    """The MR pair's metrics equal the haptic model fed by hand with the same m1, b1, k, b, m2."""
+    ev = evaluate(design_preset("paper"))
+    h = ev.haptic
+    tr = ev.design.transmission
+    r = tr.reduction
+    m1 = 2 * ev.clutch.rotor_inertia * r**2  # Eq. 3, both rotors of the pair
+    b1 = 2 * ev.clutch.viscous_damping * r**2
+    assert h["m1_kg"] == pytest.approx(m1, rel=1e-12)
+    assert h["b1_N_s_per_m"] == pytest.approx(b1, rel=1e-12)
+    by_hand = metrics(
+        HapticParams(m1=m1, b1=b1, k=tr.k, b=tr.b, m2=tr.m2, delay=1e-3),
+        K=h["K_N_per_m"],
+    )
+    for key, v in by_hand.items():
+        if isinstance(v, float) and np.isnan(v):
+            assert np.isnan(h[key]), key
+        else:
+            assert h[key] == pytest.approx(v, rel=1e-9), key
+
+
+def test_motor_is_geared_to_the_same_force_and_stiffness():
+    ev = evaluate(design_preset("paper"))
+    assert float(ev.motor.f_max) == pytest.approx(float(ev.mr.f_max), rel=1e-12)
+    assert ev.motor_metrics["K_N_per_m"] == pytest.approx(ev.haptic["K_N_per_m"], rel=1e-12)
+    # a heavier motor rotor: the motor's reflected mass dominates
+    assert ev.motor_metrics["m1_kg"] > 10 * ev.haptic["m1_kg"]
