@@ -1,0 +1,218 @@
+"""``export``, ``inertia`` and ``view``: the clutch as CAD, its mass and inertia, a 3-D view.
+
+Nothing heavy at module level (``mrclutch --help`` imports this): build123d, trimesh and
+pyvista are imported by the handlers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+from typing import Any
+
+from geometry.validation import ParameterError, check_positive
+from mrclutch.commands._common import add_design_args, load_clutch, print_json
+
+CAD_SUFFIXES = (".step", ".stp", ".stl")
+DEFAULT_TOLERANCE_MM = 0.01
+
+
+def register(sub: Any) -> None:
+    p = sub.add_parser("export", help="write clutch.step and one STL per part")
+    add_design_args(p)
+    p.add_argument("--out", required=True, metavar="DIR", help="output directory")
+    _tol(p)
+    p.set_defaults(func=cmd_export)
+
+    p = sub.add_parser(
+        "inertia",
+        help="rotor inertia and masses (analytic, mesh, brep), or weigh a STEP/STL file",
+        description="With a design (DESIGN.toml or --preset): the three methods compared. "
+        "With FILE.step|FILE.stl (mm): mass and inertia about an axis through the origin.",
+    )
+    add_design_args(p)
+    p.add_argument("--json", action="store_true", help="print JSON")
+    _tol(p)
+    p.add_argument("--axis", choices=("x", "y", "z"), default="z", help="CAD file: axis")
+    p.add_argument("--density", type=float, metavar="KG_M3", help="CAD file: one density")
+    p.add_argument(
+        "--part-density",
+        action="append",
+        default=[],
+        metavar="NAME=KG_M3",
+        help="CAD file: density of a named part (STEP labels; repeatable)",
+    )
+    p.set_defaults(func=cmd_inertia)
+
+    p = sub.add_parser("view", help="3-D view cut in half; --screenshot works headless")
+    add_design_args(p)
+    p.add_argument("--screenshot", metavar="FILE.png", help="render off screen into a PNG")
+    p.add_argument("--tolerance-mm", type=float, default=0.03, help="chord height of the view (mm)")
+    p.set_defaults(func=cmd_view)
+
+
+def _tol(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--tolerance-mm",
+        type=float,
+        default=DEFAULT_TOLERANCE_MM,
+        help=f"mesh chord height, mm (default {DEFAULT_TOLERANCE_MM})",
+    )
+
+
+def _tolerance(args: argparse.Namespace) -> float:
+    return check_positive("--tolerance-mm", args.tolerance_mm, " mm") * 1e-3
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    from geometry.export import export_clutch
+
+    clutch = load_clutch(args)
+    res = export_clutch(clutch, args.out, _tolerance(args))
+    print(f"{res.step}")
+    for name, path in res.stl.items():
+        print(f"{path}  ({res.stl_triangles[name]} triangles)")
+    return 0
+
+
+def _method(rep: Any) -> dict[str, Any]:
+    return {
+        "rotor_inertia_kg_m2": rep.rotor_inertia,
+        "rotor_mass_kg": rep.rotor_mass,
+        "clutch_mass_kg": rep.clutch_mass,
+        "parts": {
+            n: {"mass_kg": pm.mass, "inertia_kg_m2": pm.inertia} for n, pm in rep.parts.items()
+        },
+        "notes": list(rep.notes),
+    }
+
+
+def cmd_inertia(args: argparse.Namespace) -> int:
+    if args.design is not None and Path(args.design).suffix.lower() in CAD_SUFFIXES:
+        return _weigh_file(args)
+    if args.density is not None or args.part_density:
+        from mrclutch.cli import CLIError
+
+        raise CLIError("--density/--part-density apply to a STEP/STL file only")
+    from geometry.cad import material_solids
+    from geometry.mass import analytic_mass, brep_mass, mesh_mass
+    from geometry.section import build_section
+
+    clutch = load_clutch(args)
+    tol = _tolerance(args)
+    s = build_section(clutch)
+    solids = material_solids(clutch, s)
+    reps = {
+        "analytic": analytic_mass(s),
+        "mesh": mesh_mass(clutch, tol, solids=solids),
+        "brep": brep_mass(clutch, solids),
+    }
+    out: dict[str, Any] = {k: _method(r) for k, r in reps.items()}
+    out["clutch_mass_kg"] = reps["brep"].clutch_mass
+    out["envelope_m"] = list(s.envelope)
+    out["tolerance_mm"] = args.tolerance_mm
+    if args.json:
+        print_json(out)
+        return 0
+    print(f"{'method':<9} {'rotor inertia':>16} {'rotor mass':>11} {'clutch mass':>12}")
+    for k, r in reps.items():
+        print(
+            f"{k:<9} {r.rotor_inertia * 1e7:>11.5f} g·cm² {r.rotor_mass * 1e3:>8.3f} g "
+            f"{r.clutch_mass * 1e3:>9.3f} g"
+        )
+        for note in r.notes:
+            print(f"          note: {note}")
+    d, length = s.envelope
+    print(f"envelope: Ø {d * 1e3:.2f} mm × {length * 1e3:.2f} mm (rotor = output drums + shaft)")
+    return 0
+
+
+def _densities(args: argparse.Namespace, names: list[str]) -> dict[str, float]:
+    per: dict[str, float] = {}
+    for item in args.part_density:
+        name, sep, val = item.partition("=")
+        try:
+            rho = float(val)
+        except ValueError:
+            rho = math.nan
+        if not sep or not name:
+            raise ParameterError(f"--part-density {item!r}: expected NAME=KG_M3")
+        per[name] = check_positive(f"--part-density {name}", rho, " kg/m³")
+    unknown = sorted(set(per) - set(names))
+    if unknown:
+        raise ParameterError(
+            f"--part-density {unknown[0]}: no such part; the file has {', '.join(names)}"
+        )
+    out: dict[str, float] = {}
+    for n in names:
+        if n in per:
+            out[n] = per[n]
+        elif args.density is not None:
+            out[n] = check_positive("--density", args.density, " kg/m³")
+        else:
+            raise ParameterError(f"part {n}: no density; give --density or --part-density {n}=…")
+    return out
+
+
+def _weigh_file(args: argparse.Namespace) -> int:
+    from geometry.mass import check_mesh, weigh_mesh, weigh_shape
+
+    path = Path(args.design)
+    if args.preset is not None:
+        from mrclutch.cli import CLIError
+
+        raise CLIError("give either a CAD file or --preset, not both")
+    if not path.is_file():
+        raise ParameterError(f"{path}: not found")
+    results: dict[str, dict[str, Any]] = {}
+    if path.suffix.lower() == ".stl":
+        import trimesh
+
+        try:
+            mesh = trimesh.load_mesh(path, file_type="stl")
+        except Exception as exc:  # trimesh raises assorted errors on bad files
+            raise ParameterError(f"{path}: not a readable STL ({exc})") from None
+        name = path.stem
+        rho = _densities(args, [name])[name]
+        check_mesh(mesh, name)
+        pm = weigh_mesh(mesh, rho, args.axis)
+        results[name] = {"mass_kg": pm.mass, "inertia_kg_m2": pm.inertia, "density_kg_m3": rho}
+        method = "mesh"
+    else:
+        from geometry.export import read_step_parts
+
+        shapes = read_step_parts(path)
+        dens = _densities(args, list(shapes))
+        for name, shape in shapes.items():
+            pm = weigh_shape(shape, dens[name], args.axis)
+            results[name] = {
+                "mass_kg": pm.mass,
+                "inertia_kg_m2": pm.inertia,
+                "density_kg_m3": dens[name],
+            }
+        method = "brep"
+    total = {
+        "mass_kg": sum(r["mass_kg"] for r in results.values()),
+        "inertia_kg_m2": sum(r["inertia_kg_m2"] for r in results.values()),
+    }
+    out = {"file": str(path), "method": method, "axis": args.axis, "parts": results, "total": total}
+    if args.json:
+        print_json(out)
+        return 0
+    print(f"{path} ({method}, axis {args.axis} through the origin, lengths in mm)")
+    for name, r in [*results.items(), ("total", total)]:
+        print(f"  {name:<12} {r['mass_kg'] * 1e3:10.4f} g  {r['inertia_kg_m2'] * 1e7:12.5f} g·cm²")
+    return 0
+
+
+def cmd_view(args: argparse.Namespace) -> int:
+    from mrclutch.view import screenshot, show
+
+    clutch = load_clutch(args)
+    tol = _tolerance(args)
+    if args.screenshot:
+        print(screenshot(clutch, args.screenshot, tolerance=tol))
+    else:
+        show(clutch, tolerance=tol)
+    return 0
