@@ -136,7 +136,7 @@ def solve_fem(
         j_coil, 0.0,
     )  # fmt: skip
     mat_objs = [magnetic(n, mats) for n in names]
-    r_qp = basis.global_coordinates().value[0]
+    r_qp = np.asarray(basis.global_coordinates())[0]
     D = basis.get_dofs().all()
 
     def nu_terms(psi: FloatArray):  # type: ignore[no-untyped-def]

@@ -1,0 +1,44 @@
+import json
+import subprocess
+import sys
+
+import pytest
+
+from mrclutch.cli import main
+
+
+def test_torque_json_shape(capsys):
+    assert main(["torque", "--preset", "paper", "--current", "0:7:1", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert [p["current_A"] for p in out["points"]] == [0, 1, 2, 3, 4, 5, 6, 7]
+    t = [p["torque_N_m"] for p in out["points"]]
+    assert t == sorted(t) and t[0] == pytest.approx(out["viscous_torque_N_m"])
+    assert out["damping_N_m_s"] > 0 and out["speed_rpm"] == 530
+
+
+def test_torque_plot_and_field_plot(tmp_path, capsys):
+    png = tmp_path / "t.png"
+    assert main(["torque", "--current", "0,2,4", "--plot", str(png)]) == 0
+    assert png.stat().st_size > 1000
+    fld = tmp_path / "f.png"
+    assert main(["field", "--current", "4", "--size-mm", "0.5", "--plot", str(fld)]) == 0
+    assert fld.stat().st_size > 1000
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["torque", "--current", "7:0:1"],
+        ["torque", "--current", "0:7:0"],
+        ["torque", "--current", "nan"],
+        ["torque", "--current", "a:b"],
+        ["torque", "--method", "magic"],
+        ["field", "--current", "inf", "--plot", "x.png"],
+    ],
+)
+def test_bad_input_one_line_exit_2(args, tmp_path):
+    p = subprocess.run([sys.executable, "-m", "mrclutch", *args], capture_output=True,
+                       text=True, cwd=tmp_path)  # fmt: skip
+    assert p.returncode == 2
+    assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
+    assert not list(tmp_path.iterdir())
