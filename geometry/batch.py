@@ -180,7 +180,8 @@ def valid(lay: LayoutBatch) -> NDArray[np.bool_]:
         ok &= rules.coil_fits(p["coil_turns"], d_ins, p["coil_depth"], p["band_length"])
         ok &= rules.wire_fits(d_ins, p["coil_depth"], p["band_length"])
         r_h, d_h = p["hub_hole_pitch_radius"], p["hub_hole_diameter"]
-        holes_ok = rules.hub_holes_inside(r_h, d_h, p["shaft_radius"], lay.out_r0[:, 0])
+        first_r0 = drum_radii(p, 0)[0]
+        holes_ok = rules.hub_holes_inside(r_h, d_h, p["shaft_radius"], first_r0)
         holes_ok &= rules.hub_holes_apart(p["hub_holes"], r_h, d_h)
         ok &= (p["hub_holes"] == 0) | holes_ok
     return ok
@@ -188,5 +189,7 @@ def valid(lay: LayoutBatch) -> NDArray[np.bool_]:
 
 def hub_outer_radius(lay: LayoutBatch) -> FloatArray:
     """Outer radius of the outermost output drum (= the hub's outer radius), shape S."""
+    if lay.out_r1.shape[1] == 0:  # every design has n_drums = 0 (invalid)
+        return np.full(lay.size, np.nan)
     last = np.clip(lay.p["n_drums"] - 1, 0, lay.out_r1.shape[1] - 1)
     return lay.out_r1[np.arange(lay.size), last]
