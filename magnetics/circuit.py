@@ -296,11 +296,14 @@ def solve_flux(
     # Initial upper guess: all the MMF over the fluid gaps at the fluid's initial μ.
     r_gap = (kn.gap_w * kn.gap_k).sum(-1)
     mu_f = magnetic(path.fluid, mats).mu_initial
-    hi = np.where(target > 0, target * mu_f / r_gap[:, None], 1.0)
+    # |NI| < 1e-100 A (down to subnormals): the linear regime is exact to rounding.
+    tiny = target < 1e-100
+    x_tiny = target / f(np.zeros_like(target))[1]
+    hi = np.where(tiny, 1.0, target * mu_f / r_gap[:, None])
     lo = np.zeros_like(hi)
     fhi, _ = f(hi)
     for _ in range(200):  # expand until bracketed (F grows at least like Φ)
-        short = fhi < 0
+        short = (fhi < 0) & ~tiny
         if not short.any():
             break
         lo = np.where(short, hi, lo)
@@ -308,9 +311,6 @@ def solve_flux(
         fhi, _ = f(hi)
     else:
         raise ParameterError("circuit: could not bracket the flux (current too large?)")
-    # |NI| < 1e-100 A (down to subnormals): the linear regime is exact to rounding.
-    tiny = target < 1e-100
-    x_tiny = target / f(np.zeros_like(hi))[1]
     x = 0.5 * (lo + hi)
     for _ in range(max_iter):
         fx, dfx = f(x)
