@@ -1,0 +1,97 @@
+"""CLI end to end: export, inertia (design and CAD file), view, bad input."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from mrclutch.cli import main
+
+pytest.importorskip("build123d")
+
+
+@pytest.fixture(scope="module")
+def exported(tmp_path_factory):
+    out = tmp_path_factory.mktemp("cli")
+    assert main(["export", "--preset", "paper", "--out", str(out), "--tolerance-mm", "0.02"]) == 0
+    return out
+
+
+def test_export_writes_step_and_stls(exported):
+    names = {p.name for p in exported.iterdir()}
+    assert {"clutch.step", "rotor.stl", "shaft.stl", "housing.stl"} <= names
+    assert not [n for n in names if n.startswith(".")]  # no temp files left
+
+
+def test_inertia_json_three_methods(capsys):
+    assert main(["inertia", "--preset", "paper", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    ref = out["analytic"]["rotor_inertia_kg_m2"]
+    for m in ("analytic", "mesh", "brep"):
+        assert out[m]["rotor_inertia_kg_m2"] == pytest.approx(ref, rel=1e-2)
+        assert out[m]["rotor_mass_kg"] > 0
+    assert out["brep"]["rotor_inertia_kg_m2"] == pytest.approx(ref, rel=1e-6)
+    d, length = out["envelope_m"]
+    assert 0 < d <= 30e-3 and 0 < length <= 40e-3
+    assert out["clutch_mass_kg"] == pytest.approx(out["analytic"]["clutch_mass_kg"], rel=1e-6)
+
+
+def test_inertia_of_step_and_stl_files(exported, capsys):
+    assert main(["inertia", "--preset", "paper", "--json"]) == 0
+    ref = json.loads(capsys.readouterr().out)["brep"]["parts"]["shaft"]
+    step = exported / "clutch.step"
+    args = ["inertia", str(step), "--json", "--density", "1000", "--part-density", "shaft=8000"]
+    assert main(args) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["method"] == "brep"
+    assert out["parts"]["shaft"]["inertia_kg_m2"] == pytest.approx(ref["inertia_kg_m2"], rel=1e-9)
+    assert out["parts"]["shaft"]["mass_kg"] == pytest.approx(ref["mass_kg"], rel=1e-9)
+    stl = exported / "shaft.stl"
+    assert main(["inertia", str(stl), "--json", "--density", "8000"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["parts"]["shaft"]["inertia_kg_m2"] == pytest.approx(ref["inertia_kg_m2"], rel=2e-2)
+    # about x the shaft (long, on the axis) has a different, larger-lever inertia
+    assert main(["inertia", str(stl), "--json", "--density", "8000", "--axis", "x"]) == 0
+    out_x = json.loads(capsys.readouterr().out)
+    assert out_x["parts"]["shaft"]["inertia_kg_m2"] != pytest.approx(ref["inertia_kg_m2"], rel=0.1)
+
+
+@pytest.mark.parametrize(
+    ("argv", "fragment"),
+    [
+        (["inertia", "--preset", "paper", "--tolerance-mm", "nan"], "--tolerance-mm = nan"),
+        (["inertia", "--preset", "nope"], "preset = 'nope': unknown"),
+        (["inertia", "missing.step", "--density", "1"], "not found"),
+        (["inertia", "--preset", "paper", "--density", "1"], "STEP/STL file only"),
+        (["export", "--preset", "paper", "--out", "{tmp}", "--tolerance-mm", "-1"], "> 0"),
+    ],
+)
+def test_bad_input_one_line_exit_2(argv, fragment, tmp_path, capsys):
+    argv = [a.replace("{tmp}", str(tmp_path / "o")) for a in argv]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert fragment in err and "\n" not in err and "Traceback" not in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_part_density_errors(exported, capsys):
+    step = str(exported / "clutch.step")
+    assert main(["inertia", step]) == 2
+    assert "no density" in capsys.readouterr().err
+    assert main(["inertia", step, "--density", "1", "--part-density", "rotr=7"]) == 2
+    assert "rotr: no such part" in capsys.readouterr().err
+    assert main(["inertia", step, "--part-density", "rotor"]) == 2
+    assert "NAME=KG_M3" in capsys.readouterr().err
+
+
+def test_view_screenshot_subprocess(tmp_path):
+    png = tmp_path / "v.png"
+    r = subprocess.run(
+        [sys.executable, "-m", "mrclutch", "view", "--preset", "paper", "--screenshot", str(png)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert r.returncode == 0, r.stderr
+    assert png.stat().st_size > 10_000

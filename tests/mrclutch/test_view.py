@@ -1,0 +1,42 @@
+"""The 3-D view renders headless into a PNG that is not blank."""
+
+import numpy as np
+import pytest
+
+from geometry import ParameterError, preset
+
+pytest.importorskip("pyvista")
+pytest.importorskip("build123d")
+
+
+def test_screenshot_is_not_blank(tmp_path):
+    import matplotlib.image as mpimg
+
+    from mrclutch.view import screenshot
+
+    path = screenshot(preset("paper-holes"), tmp_path / "clutch.png", window_size=(400, 300))
+    img = mpimg.imread(path)[..., :3]
+    assert img.shape[:2] == (300, 400)
+    assert img.std() > 0.1  # not a uniform background
+    colours = np.unique((img * 255).astype(np.uint8).reshape(-1, 3), axis=0)
+    assert len(colours) > 20
+    # the coil's copper colour is on screen (the cut shows the inside)
+    r, g, b = img[..., 0], img[..., 1], img[..., 2]
+    assert ((r > g + 0.2) & (g > b + 0.05)).sum() > 100
+
+
+def test_scene_is_cut_in_half_and_coarse():
+    from mrclutch.view import scene_meshes
+
+    meshes = scene_meshes(preset("paper"))
+    rotor = [m for p, _, m in meshes if p == "rotor"]
+    ymin = min(m.bounds[2] for p, _, m in meshes)
+    assert ymin > -1e-6  # only y ≥ 0: the half-section
+    assert sum(m.n_cells for m in rotor) < 20_000  # the view does not over-tessellate
+
+
+def test_screenshot_needs_png(tmp_path):
+    from mrclutch.view import screenshot
+
+    with pytest.raises(ParameterError, match=r"\.png"):
+        screenshot(preset("paper"), tmp_path / "x.jpg")
