@@ -170,3 +170,26 @@ def load_design(path: str | Path) -> ClutchDesign:
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError(f"design file {p}: not valid TOML ({exc})") from None
     return design_from_mapping(data, str(p))
+
+
+def design_to_toml(design: ClutchDesign) -> str:
+    """A design file that ``load_design`` reads back to the same design."""
+    op, tr = design.operating, design.transmission
+    lines = [f"name = {_toml(design.name)}", "", "[clutch]"]
+    lines += [f"{k} = {_toml(v)}" for k, v in design.clutch.to_mm().items()]
+    lines += ["", "[operating]"]
+    for key, (name, factor) in _OPERATING_KEYS.items():
+        v = getattr(op, name) / factor
+        if math.isfinite(v):
+            lines.append(f"{key} = {_toml(v)}")
+    lines += ["", "[transmission]"]
+    lines += [f"{k} = {_toml(getattr(tr, n) / f)}" for k, (n, f) in _TRANSMISSION_KEYS.items()]
+    return "\n".join(lines) + "\n"
+
+
+def _toml(v: Any) -> str:
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, int):
+        return str(v)
+    return repr(float(v))

@@ -35,6 +35,13 @@ from mrclutch.actuator import (
 from mrclutch.design import ClutchDesign
 
 FIDELITIES: tuple[str, ...] = ("fast", "reference")
+#: Stated relative error of the fast path's rendering bandwidth against the reference
+#: fidelity. Bandwidth ∝ √(K_max/(m1+m2)) with K_max ∝ torque, so its error is about
+#: half the torque error (circuit vs FEM) plus half the reflected-mass error (analytic
+#: inertia is exact for the axisymmetric section). Measured by `mrclutch fidelity` and
+#: tests/mrclutch/test_fidelity.py; this bound holds for the designs tested there.
+FAST_BANDWIDTH_ERROR = 0.05
+
 #: The motor of the paper's equal-force comparison (Fig. 7c).
 MOTOR = "maxon-136206"
 
@@ -228,13 +235,14 @@ class BatchEvaluator:
 
 
 def evaluate_batch(
-    fields: Mapping[str, ArrayLike], base: ClutchDesign | None = None
+    fields: Mapping[str, ArrayLike], base: ClutchDesign | None = None, *, passivity: bool = False
 ) -> dict[str, np.ndarray]:
-    """The fast path for S designs at once; returns arrays under ``BATCH_OUTPUTS``."""
+    """The fast path for S designs at once; returns arrays under ``BATCH_OUTPUTS``
+    (and ``max_passive_K_N_per_m`` with ``passivity=True``)."""
     from geometry.batch import broadcast_fields, layout, valid
     from geometry.mass import analytic_batch
     from magnetics.torque import max_torque_batch, viscous_batch
-    from mrclutch.haptic import metrics_batch
+    from mrclutch.haptic import max_passive_stiffness, metrics_batch
 
     base = base if base is not None else ClutchDesign()
     p = broadcast_fields(fields, base.clutch)
@@ -278,6 +286,8 @@ def evaluate_batch(
         "resonance_hz": hm["resonance_hz"],
         "rendering_area_dB_decade": hm["rendering_area_dB_decade"],
     }
-    for k in BATCH_OUTPUTS[1:]:
+    if passivity:
+        out["max_passive_K_N_per_m"] = max_passive_stiffness(hp)
+    for k in list(out)[1:]:
         out[k] = np.where(ok, np.broadcast_to(out[k], ok.shape), np.nan)
     return out

@@ -75,3 +75,22 @@ def test_operating_validation_names_the_parameter():
 def test_mapping_without_operating_uses_defaults():
     d = design_from_mapping({"clutch": {"base": "paper"}}, "x")
     assert d.operating == Operating()
+
+
+def test_design_file_writer_round_trips(tmp_path):
+    from dataclasses import replace
+
+    from mrclutch.design import design_to_toml
+
+    d = ClutchDesign(
+        clutch=replace(preset("paper"), gap=0.43e-3, n_drums=3),
+        operating=Operating(max_current=5.5, delay=2e-3),
+        name="x y",
+    )
+    f = tmp_path / "d.toml"
+    f.write_text(design_to_toml(d))
+    back = load_design(f)
+    assert back.clutch == d.clutch and back.name == "x y"
+    assert back.operating.max_current == d.operating.max_current
+    assert back.operating.input_speed == pytest.approx(d.operating.input_speed, rel=1e-12)
+    assert back.transmission.ratio == pytest.approx(d.transmission.ratio, rel=1e-12)
