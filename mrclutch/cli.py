@@ -67,6 +67,3 @@ def _version() -> str:
 
     return f"mrclutch {__version__}"
 
-
-if __name__ == "__main__":
-    sys.exit(main())
