@@ -300,17 +300,22 @@ def analytic_batch(fields: Mapping[str, ArrayLike]) -> dict[str, np.ndarray]:
     size = p["n_drums"].size
     if size <= BATCH_CHUNK:
         return _analytic_chunk(p)
-    # Cache blocking: chunks whose temporaries stay in the CPU cache run ~2× faster than
-    # one pass over arrays of 10⁵ designs (measured in benchmarks/bench_geometry.py).
-    parts = [
-        _analytic_chunk({k: v[i : i + BATCH_CHUNK] for k, v in p.items()})
-        for i in range(0, size, BATCH_CHUNK)
-    ]
-    return {k: np.concatenate([q[k] for q in parts]) for k in parts[0]}
+    # Chunks of < 128 kB arrays: glibc recycles such temporaries from its heap, while each
+    # larger one is a fresh mmap whose pages fault in on first touch (the dominant cost on
+    # 10⁵ designs; measured in benchmarks/bench_geometry.py: ~70 ms unchunked, ~40 ms).
+    out: dict[str, np.ndarray] = {}
+    for i in range(0, size, BATCH_CHUNK):
+        part = _analytic_chunk({k: v[i : i + BATCH_CHUNK] for k, v in p.items()})
+        for k, v in part.items():
+            if k not in out:
+                out[k] = np.empty(size, dtype=v.dtype)
+            out[k][i : i + BATCH_CHUNK] = v
+    return out
 
 
-#: Designs per chunk of ``analytic_batch`` (temporaries of 8 kB·K fit in L2).
-BATCH_CHUNK = 4096
+#: Designs per chunk of ``analytic_batch``: 16000 float64 = 125 kB < glibc's 128 kB mmap
+#: threshold.
+BATCH_CHUNK = 16000
 
 
 def _analytic_chunk(p: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
