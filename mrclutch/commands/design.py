@@ -26,6 +26,21 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=_evaluate)
 
     p = sub.add_parser(
+        "report",
+        help="the full report of one design: CAD, views, torque curve, haptic plots, HTML",
+        description="Write clutch.step, <part>.stl, view.png, section.png, torque.png, "
+        "haptic.png, metrics.json and report.html into --out (built aside and moved in "
+        "only when complete).",
+    )
+    add_design_args(p)
+    p.add_argument("--out", required=True, metavar="DIR", help="folder to write")
+    p.add_argument(
+        "--fidelity", default="reference", help="reference (default) or fast, as for evaluate"
+    )
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=_report)
+
+    p = sub.add_parser(
         "sweep",
         help="evaluate a grid or random sample of designs on the fast path (CSV)",
         description="Sweep DrumClutch parameters given in SPEC.toml (ranges in mm); rows are "
@@ -128,6 +143,30 @@ def _num(v: float | None, f: float) -> str:
 
 def _pct(v: float | None) -> str:
     return "—" if v is None else f"{v * 100:+.1f} %"
+
+
+def _report(args: argparse.Namespace) -> int:
+    from geometry.validation import check_choice
+    from mrclutch.pipeline import FIDELITIES
+    from mrclutch.report import write_report
+
+    design = load_design_args(args)
+    check_choice("fidelity", args.fidelity, FIDELITIES)
+    steps = 7
+    if args.no_progress:
+        rep = write_report(design, args.out, fidelity=args.fidelity)
+    else:
+        from tqdm import tqdm
+
+        with tqdm(total=steps, unit="step", desc="report") as bar:
+
+            def tick(msg: str) -> None:
+                bar.set_postfix_str(msg)
+                bar.update(1)
+
+            rep = write_report(design, args.out, fidelity=args.fidelity, progress=tick)
+    print(f"report written to {rep.out_dir}/report.html ({len(rep.files)} files)")
+    return 0
 
 
 def _sweep(args: argparse.Namespace) -> int:

@@ -48,3 +48,52 @@ def pareto_plot(results: str | Path, out: str | Path) -> Path:
         fig.savefig(tmp, dpi=120, format="png")
     plt.close(fig)
     return Path(out)
+
+
+#: Colours by material for the section drawing (matches the 3D view's palette in spirit).
+MATERIAL_COLOURS = {
+    "steel_1018": "#6e7b8b",
+    "stainless_304": "#c9ced6",
+    "coil": "#c8792a",
+    "mrf_132dg": "#3b3b3b",
+}
+
+
+def section_figure(section: object, out: str | Path) -> Path:
+    """The r–z half-section: every region coloured by material, gaps and zones marked."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Patch, Rectangle
+
+    fig, ax = plt.subplots(figsize=(5.5, 7), constrained_layout=True)
+    for reg in section.regions:  # type: ignore[attr-defined]
+        colour = MATERIAL_COLOURS[reg.material]
+        ax.add_patch(
+            Rectangle((reg.r0 * 1e3, reg.z0 * 1e3), (reg.r1 - reg.r0) * 1e3,
+                      (reg.z1 - reg.z0) * 1e3, facecolor=colour, edgecolor="white", lw=0.3)
+        )  # fmt: skip
+    for zone in section.zones:  # type: ignore[attr-defined]
+        x0 = section.r_max * 1e3 * 1.005  # type: ignore[attr-defined]
+        ax.add_patch(Rectangle((x0, zone.z0 * 1e3), 0.6, zone.length * 1e3, color="gold"))
+        ax.text(x0 + 0.9, (zone.z0 + zone.z1) / 2 * 1e3, f"zone {zone.name}", va="center",
+                fontsize=8, rotation=90)  # fmt: skip
+    ax.set_xlim(0, section.r_max * 1e3 + 2.5)  # type: ignore[attr-defined]
+    ax.set_ylim(section.z_min * 1e3 - 1, section.z_max * 1e3 + 1)  # type: ignore[attr-defined]
+    ax.set_aspect("equal")
+    ax.set_xlabel("r (mm)")
+    ax.set_ylabel("z (mm)")
+    c = section.clutch  # type: ignore[attr-defined]
+    ax.set_title(
+        f"{c.n_drums} drums × {c.drum_thickness * 1e3:.3g} mm, gap {c.gap * 1e3:.3g} mm",
+        fontsize=10,
+    )
+    names = {"steel_1018": "steel 1018", "stainless_304": "stainless 304",
+             "coil": "coil (Cu + epoxy)", "mrf_132dg": "MRF-132DG"}  # fmt: skip
+    ax.legend(handles=[Patch(color=MATERIAL_COLOURS[m], label=n) for m, n in names.items()],
+              loc="lower right", fontsize=8)  # fmt: skip
+    with atomic_path(out) as tmp:
+        fig.savefig(tmp, dpi=130, format="png")
+    plt.close(fig)
+    return Path(out)

@@ -1,0 +1,248 @@
+"""The design report: every artefact a person needs to judge one clutch design, in one folder.
+
+``write_report(design, out_dir)`` writes
+
+* ``clutch.step`` and ``<part>.stl`` (CAD, mm),
+* ``view.png`` (3D, half-section cut) and ``section.png`` (r–z drawing),
+* ``torque.png`` (torque–current: circuit curve with FEM points),
+* ``haptic.png`` (Bode magnitude, effective stiffness and damping, rendering areas of
+  the MR pair against the equal-force motor),
+* ``metrics.json`` (exactly ``mrclutch evaluate --json`` at the same fidelity, plus the
+  torque curve and the artefact list),
+* ``report.html`` (one page, read first).
+
+Everything is built in a temporary folder beside ``out_dir`` and moved in only when all
+of it succeeded, so an error or Ctrl-C never leaves a half-written report.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+import shutil
+import tempfile
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mrclutch.design import ClutchDesign
+
+#: Currents of the report's torque curve (A): the paper's Fig. 2b range.
+CURVE_CURRENTS = np.linspace(0.0, 7.0, 29)
+#: Currents at which the FEM checks the circuit in the report (A).
+FEM_CHECK_CURRENTS = (1.0, 3.0, 5.0, 7.0)
+
+
+@dataclass(frozen=True)
+class Report:
+    out_dir: Path
+    files: tuple[str, ...]
+    metrics: dict[str, Any]
+
+
+def write_report(
+    design: ClutchDesign,
+    out_dir: str | Path,
+    *,
+    fidelity: str = "reference",
+    progress: Callable[[str], None] | None = None,
+) -> Report:
+    """Write the report of ``design`` into ``out_dir`` (see module docstring)."""
+    from mrclutch.commands._common import to_jsonable
+    from mrclutch.pipeline import evaluate
+
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        from geometry.validation import ParameterError
+
+        raise ParameterError(f"--out {out}: exists and is not a directory")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tick = progress if progress is not None else (lambda _msg: None)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}-partial-", dir=out.parent))
+    try:
+        tick("evaluating the design")
+        ev = evaluate(design, fidelity)
+        data = ev.as_json()
+        tick("CAD: STEP and STL")
+        cad = _cad(design, tmp)
+        tick("3D view")
+        _view(design, tmp / "view.png")
+        tick("section drawing")
+        from geometry.section import build_section
+        from mrclutch.plots.design import section_figure
+
+        section_figure(build_section(design.clutch), tmp / "section.png")
+        tick("torque–current curve (circuit and FEM)")
+        curve = _torque(design, tmp / "torque.png")
+        tick("haptic plots")
+        from mrclutch.plots.haptic import compare_figure
+
+        k = float(ev.mr.k_max)
+        compare_figure({"MR pair": ev.mr, "Maxon 136206 (equal force)": ev.motor}, k,
+                       tmp / "haptic.png")  # fmt: skip
+        metrics = {**data, "torque_curve": curve, "cad": cad}
+        (tmp / "metrics.json").write_text(json.dumps(to_jsonable(metrics), indent=2) + "\n")
+        tick("report.html")
+        (tmp / "report.html").write_text(render_html(metrics))
+        files = tuple(sorted(p.name for p in tmp.iterdir()))
+        out.mkdir(exist_ok=True)
+        for name in files:
+            (tmp / name).replace(out / name)
+        return Report(out, files, metrics)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _cad(design: ClutchDesign, folder: Path) -> dict[str, Any]:
+    from geometry.export import export_clutch
+
+    res = export_clutch(design.clutch, folder)
+    return {
+        "step": res.step.name,
+        "stl": {name: p.name for name, p in res.stl.items()},
+        "part_volumes_m3": {n: v * 1e-9 for n, v in res.volumes_mm3.items()},
+    }
+
+
+def _view(design: ClutchDesign, path: Path) -> None:
+    from mrclutch.view import screenshot
+
+    screenshot(design.clutch, path)
+
+
+def _torque(design: ClutchDesign, path: Path) -> dict[str, Any]:
+    from magnetics.torque import torque_curve
+    from mrclutch.plots.magnetics import plot_torque
+
+    rpm = design.operating.input_speed_rpm
+    circ = torque_curve(design.clutch, CURVE_CURRENTS, method="circuit", speed_rpm=rpm)
+    fem = torque_curve(design.clutch, FEM_CHECK_CURRENTS, method="fem", speed_rpm=rpm)
+    plot_torque([circ, fem], path, title=f"{design.name} at {rpm:.0f} rpm")
+    at = np.interp(fem.currents, circ.currents, circ.torque)
+    return {
+        "speed_rpm": rpm,
+        "circuit": {"current_A": circ.currents, "torque_N_m": circ.torque},
+        "fem": {"current_A": fem.currents, "torque_N_m": fem.torque},
+        "circuit_vs_fem_max_error_rel": float(np.max(np.abs(at / fem.torque - 1))),
+    }
+
+
+# ---- the one-page HTML -----------------------------------------------------------------
+
+
+def _fmt(v: Any, scale: float = 1.0, digits: int = 4) -> str:
+    if v is None or (isinstance(v, float) and not np.isfinite(v)):
+        return "—"
+    if isinstance(v, bool):
+        return "yes" if v else "no"
+    return f"{v * scale:.{digits}g}"
+
+
+def findings(m: dict[str, Any]) -> list[str]:
+    """Plain-language statements a designer should read first."""
+    h, e, c = m["haptic"], m["motor"], m["clutch"]
+    out = []
+    gain = m["bandwidth_gain"]
+    if gain is not None:
+        out.append(
+            f"At K = {h['K_N_per_m']:.0f} N/m (K_max of the MR pair) the MR pair renders the "
+            f"spring up to {h['bandwidth_hz']:.1f} Hz, the equal-force Maxon 136206 up to "
+            f"{e['bandwidth_hz']:.1f} Hz ({gain * 100:+.0f} %)."
+        )
+    if not h["passive"]:
+        out.append(
+            f"The MR pair is NOT passive at K_max: with its {h['delay_s'] * 1e3:.3g} ms delay "
+            f"and b1 = {h['b1_N_s_per_m']:.3g} N·s/m it stays passive only up to "
+            f"{h['max_passive_K_N_per_m']:.0f} N/m (stable up to "
+            f"{h['max_stable_K_N_per_m']:.0f} N/m). More drag (smaller gaps, more drums) or "
+            "less delay raises that limit."
+        )
+    out.append(
+        f"Reflected mass m1 = {h['m1_kg'] * 1e3:.3g} g against the motor's "
+        f"{e['m1_kg'] * 1e3:.3g} g; damping b1 = {h['b1_N_s_per_m']:.3g} against "
+        f"{e['b1_N_s_per_m']:.3g} N·s/m."
+    )
+    tc = m["torque_curve"]
+    out.append(
+        f"Torque at {c['max_current_A']:.3g} A: {c['max_torque_N_m']:.3g} N·m "
+        f"({c['methods']['torque']}); circuit vs FEM differ by at most "
+        f"{tc['circuit_vs_fem_max_error_rel'] * 100:.1f} % over the FEM check points."
+    )
+    out += [f"Note: {n}" for n in c["notes"]]
+    return out
+
+
+def render_html(m: dict[str, Any]) -> str:
+    """One page: findings, the clutch, the hand, the figures, the files."""
+    c, h, e = m["clutch"], m["haptic"], m["motor"]
+    e_ = html.escape
+    clutch_rows = [
+        ("max torque", _fmt(c["max_torque_N_m"]), f"N·m at {c['max_current_A']:.3g} A"),
+        ("rotor inertia", _fmt(c["rotor_inertia_kg_m2"], 1e7), "g·cm²"),
+        ("rotor mass", _fmt(c["rotor_mass_kg"], 1e3), "g"),
+        ("clutch mass (with fluid and coil)", _fmt(c["clutch_mass_kg"], 1e3), "g"),
+        ("envelope", f"Ø{c['envelope_m'][0] * 1e3:.3g} × {c['envelope_m'][1] * 1e3:.3g}", "mm"),
+        ("viscous damping", _fmt(c["viscous_damping_N_m_s"]), "N·m·s"),
+        ("off-state torque", _fmt(c["off_state_torque_N_m"], 1e3), "mN·m"),
+        ("torque / inertia", _fmt(c["torque_per_inertia_N_m_per_kg_m2"]), "N·m/(kg·m²)"),
+        ("coil", f"{_fmt(c['coil_resistance_ohm'], 1, 3)} Ω, "
+                 f"{_fmt(c['coil_power_W'], 1, 3)} W at max current", ""),
+    ]  # fmt: skip
+    hand_rows = [
+        ("m1 (g)", "m1_kg", 1e3),
+        ("b1 (N·s/m)", "b1_N_s_per_m", 1),
+        ("m2 (g)", "m2_kg", 1e3),
+        ("k (N/m)", "k_N_per_m", 1),
+        ("K rendered (N/m)", "K_N_per_m", 1),
+        ("bandwidth, lumped √(K/m) (Hz)", "bandwidth_lumped_hz", 1),
+        ("bandwidth, full response (Hz)", "bandwidth_hz", 1),
+        ("system resonance (Hz)", "resonance_hz", 1),
+        ("rendering area (dB·decade)", "rendering_area_dB_decade", 1),
+        ("passive at K", "passive", 1),
+        ("largest passive K (N/m)", "max_passive_K_N_per_m", 1),
+        ("largest stable K (N/m)", "max_stable_K_N_per_m", 1),
+    ]
+    rows1 = "".join(
+        f"<tr><td>{e_(a)}</td><td class=n>{e_(b)}</td><td>{e_(u)}</td></tr>"
+        for a, b, u in clutch_rows
+    )
+    rows2 = "".join(
+        f"<tr><td>{e_(label)}</td><td class=n>{_fmt(h[k], f)}</td>"
+        f"<td class=n>{_fmt(e[k], f)}</td></tr>"
+        for label, k, f in hand_rows
+    )
+    items = "".join(f"<li>{e_(s)}</li>" for s in findings(m))
+    stl = ", ".join(f'<a href="{e_(p)}">{e_(p)}</a>' for p in m["cad"]["stl"].values())
+    methods = ", ".join(f"{k}: {v}" for k, v in c["methods"].items())
+    return f"""<!doctype html>
+<html lang="en"><head><meta charset="utf-8"><title>mrclutch report: {e_(m["design"])}</title>
+<style>
+body{{font-family:system-ui,sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}}
+table{{border-collapse:collapse;margin:.5em 0 1.5em}}
+td,th{{padding:.2em .8em;border-bottom:1px solid #ddd}}
+td.n{{text-align:right;font-variant-numeric:tabular-nums}}
+img{{max-width:100%;border:1px solid #eee}}
+.grid{{display:grid;grid-template-columns:1fr 1fr;gap:1em}} .small{{color:#666;font-size:.9em}}
+</style></head><body>
+<h1>MR drum clutch design “{e_(m["design"])}”</h1>
+<p class=small>Fidelity <b>{e_(m["fidelity"])}</b> ({e_(methods)}). All figures SI unless marked.
+Generated by mrclutch; the numbers are in <a href="metrics.json">metrics.json</a>.</p>
+<h2>What the hand feels, in short</h2><ul>{items}</ul>
+<div class=grid>
+<div><h2>The clutch</h2><table>{rows1}</table></div>
+<div><h2>At the hand</h2><table>
+<tr><th></th><th>MR pair</th><th>Maxon 136206</th></tr>{rows2}</table>
+<p class=small>Motor geared ×{e["gearing"]:.3g} so both render the same maximum force; both
+render the same virtual spring K.</p></div></div>
+<h2>Impedance and rendering area</h2><img src="haptic.png" alt="Bode and effective impedance">
+<div class=grid>
+<div><h2>Torque against current</h2><img src="torque.png" alt="torque-current"></div>
+<div><h2>Section</h2><img src="section.png" alt="r-z section"></div></div>
+<h2>3D view</h2><img src="view.png" alt="3D view">
+<h2>Files</h2><p>CAD assembly: <a href="{e_(m["cad"]["step"])}">{e_(m["cad"]["step"])}</a>;
+parts (STL): {stl}.</p>
+</body></html>
+"""

@@ -1,0 +1,85 @@
+"""The main job: `mrclutch report` writes every artefact, consistently, or nothing."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from mrclutch.cli import main
+
+EXPECTED = {
+    "clutch.step", "rotor.stl", "shaft.stl", "input.stl", "housing.stl", "coil.stl",
+    "fluid.stl", "view.png", "section.png", "torque.png", "haptic.png", "metrics.json",
+    "report.html",
+}  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def report_dir(tmp_path_factory):
+    out = tmp_path_factory.mktemp("rep") / "paper"
+    assert main(["report", "--preset", "paper", "--out", str(out), "--no-progress"]) == 0
+    return out
+
+
+def test_every_file_is_written_and_not_empty(report_dir):
+    names = {p.name for p in report_dir.iterdir()}
+    assert names == EXPECTED
+    for p in report_dir.iterdir():
+        assert p.stat().st_size > 500, p.name
+    assert not list(report_dir.parent.glob(".*partial*"))  # the staging folder is gone
+
+
+def test_metrics_json_equals_evaluate_json(report_dir):
+    metrics = json.loads((report_dir / "metrics.json").read_text())
+    ev = subprocess.run(
+        [sys.executable, "-m", "mrclutch", "evaluate", "--preset", "paper", "--fidelity",
+         "reference", "--json"],
+        capture_output=True, text=True, check=True,
+    )  # fmt: skip
+    evaluated = json.loads(ev.stdout)
+    assert set(evaluated) <= set(metrics)
+    for block in ("clutch", "haptic", "motor"):
+        assert metrics[block].keys() == evaluated[block].keys()
+        for key, v in evaluated[block].items():
+            if isinstance(v, float):
+                assert metrics[block][key] == pytest.approx(v, rel=1e-9), (block, key)
+            else:
+                assert metrics[block][key] == v, (block, key)
+    for key in ("bandwidth_gain", "bandwidth_gain_lumped"):
+        assert metrics[key] == pytest.approx(evaluated[key], rel=1e-9), key
+    assert metrics["fidelity"] == "reference"
+
+
+def test_html_names_the_findings_and_links_every_figure(report_dir):
+    page = (report_dir / "report.html").read_text()
+    for name in ("haptic.png", "torque.png", "section.png", "view.png", "clutch.step",
+                 "rotor.stl", "metrics.json"):  # fmt: skip
+        assert f'"{name}"' in page, name
+    metrics = json.loads((report_dir / "metrics.json").read_text())
+    assert f"{metrics['haptic']['bandwidth_hz']:.1f} Hz" in page
+    assert ("NOT passive" in page) == (not metrics["haptic"]["passive"])
+
+
+def test_bad_design_file_leaves_nothing(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[clutch]\nbase = "paper"\ngap_mm = -1\n')
+    out = tmp_path / "out"
+    assert main(["report", str(bad), "--out", str(out), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "gap = -0.001 m" in err and "Traceback" not in err
+    assert not out.exists()
+    assert list(tmp_path.iterdir()) == [bad]
+
+
+def test_interrupted_report_leaves_nothing(tmp_path, monkeypatch, capsys):
+    import mrclutch.report as rep
+
+    def boom(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(rep, "_view", boom)
+    out = tmp_path / "out"
+    assert main(["report", "--out", str(out), "--fidelity", "fast", "--no-progress"]) == 130
+    assert "interrupted" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
