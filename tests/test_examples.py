@@ -1,0 +1,51 @@
+"""The examples a user starts from run, on tiny grids, and say something true."""
+
+import runpy
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from mrclutch.sweep import load_spec
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+
+
+def _load(name):
+    return runpy.run_path(str(EXAMPLES / name), run_name="example")
+
+
+def test_gap_vs_thickness(tmp_path):
+    r = _load("gap_vs_thickness.py")["main"](str(tmp_path), tiny=True)
+    assert (tmp_path / "gap_vs_thickness.png").stat().st_size > 1000
+    b1 = r["b1_N_s_per_m"].reshape(4, 4)
+    assert np.all(np.diff(b1, axis=0) < 0)  # a wider gap drags less (Couette ∝ 1/g)
+
+
+def test_drums_vs_diameter(tmp_path):
+    r = _load("drums_vs_diameter.py")["main"](str(tmp_path), tiny=True)
+    assert (tmp_path / "drums_vs_diameter.png").stat().st_size > 1000
+    inertia = r["rotor_inertia_kg_m2"].reshape(2, 3)
+    assert np.all(inertia[1] > inertia[0])  # a second drum adds inertia
+    assert np.all(np.diff(inertia, axis=1) > 0)  # so does a larger diameter
+
+
+def test_optimize_bandwidth_tiny():
+    res = _load("optimize_bandwidth.py")["main"](tiny=True, verify=False)
+    assert res["fast"]["clutch"]["max_torque_N_m"] >= 0.4 * (1 - 1e-9)
+
+
+def test_random_sweep_spec_is_valid_and_runs_as_cli(tmp_path):
+    spec, rest = load_spec(EXAMPLES / "random_sweep.toml")
+    assert spec.n_designs == 100_000 and set(rest) == {"operating", "transmission"}
+    small = tmp_path / "small.toml"
+    small.write_text((EXAMPLES / "random_sweep.toml").read_text().replace("100000", "300"))
+    out = tmp_path / "r.csv"
+    subprocess.run(
+        [sys.executable, "-m", "mrclutch", "sweep", str(small), "--out", str(out),
+         "--pareto", str(tmp_path / "p.png"), "--no-progress"],
+        check=True, capture_output=True,
+    )  # fmt: skip
+    assert len(out.read_text().splitlines()) == 301
+    assert (tmp_path / "p.png").stat().st_size > 1000
