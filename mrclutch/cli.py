@@ -21,6 +21,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "mrclutch.commands.geometry",
     "mrclutch.commands.magnetics",
     "mrclutch.commands.design",
+    "mrclutch.commands.scaling",
     "mrclutch.commands.fidelity",
 )
 
@@ -66,4 +67,3 @@ def _version() -> str:
     from mrclutch import __version__
 
     return f"mrclutch {__version__}"
-

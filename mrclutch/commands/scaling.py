@@ -1,0 +1,45 @@
+"""``mrclutch scale``: the paper's scaling study (Fig. 7b) with real geometry."""
+
+from __future__ import annotations
+
+import argparse
+
+from mrclutch.commands._common import add_design_args, load_design_args, print_json
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "scale",
+        help="reach k× torque by more drums, longer drums or a larger diameter (Fig. 7b)",
+        description="For each route to --factor × the design's torque: the change in rotor "
+        "inertia, total moving mass at the hand, damping b1 and clutch mass, beside the "
+        "paper's +14 % total reflected inertia for 2× scaling.",
+    )
+    add_design_args(p)
+    p.add_argument("--factor", type=float, default=2.0, help="torque factor (default 2)")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=_scale)
+
+
+def _scale(args: argparse.Namespace) -> int:
+    from mrclutch.scaling import PAPER_TOTAL_INERTIA_INCREASE_2X, as_json, scaling_study
+
+    design = load_design_args(args)
+    base, routes, notes = scaling_study(design, args.factor)
+    if args.json:
+        print_json(as_json(base, routes, notes, design))
+        return 0
+    print(f"{design.name}: {base['max_torque_N_m']:.3g} N·m → target "
+          f"{args.factor:g}× = {args.factor * base['max_torque_N_m']:.3g} N·m")  # fmt: skip
+    print(f"{'route':<17}{'value':>12}{'torque':>9}{'inertia':>10}{'m1+m2':>9}{'b1':>9}"
+          f"{'mass':>9}")  # fmt: skip
+    for r in routes:
+        v = f"{r.value:g}" if r.parameter == "n_drums" else f"{r.value * 1e3:.3g} mm"
+        keys = ("rotor_inertia", "total_moving_mass", "damping_b1", "clutch_mass")
+        cells = "".join(f"{r.changes[k] * 100:>+8.0f}%" for k in keys)
+        print(f"{r.name:<17}{v:>12}{r.torque_ratio:>8.2f}×{cells}")
+    print(f"paper (abstract 2× scaling): total reflected inertia "
+          f"+{PAPER_TOTAL_INERTIA_INCREASE_2X * 100:.0f} %")  # fmt: skip
+    for n in notes:
+        print(f"note: {n}")
+    return 0
