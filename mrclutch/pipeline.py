@@ -88,8 +88,14 @@ class ClutchFigures:
         }
 
 
-def clutch_figures(design: ClutchDesign, fidelity: str = "fast") -> ClutchFigures:
-    """Inertia, mass, torque at the current limit and drag of one design."""
+def clutch_figures(
+    design: ClutchDesign, fidelity: str = "fast", accuracy: float | None = None
+) -> ClutchFigures:
+    """Inertia, mass, torque at the current limit and drag of one design.
+
+    With ``accuracy`` (relative, e.g. 0.01) the methods are the cheapest that meet it
+    (mrclutch.fidelity.choose) and ``fidelity`` is ignored; the choice's notes (e.g. which
+    quantity needs an FEM) are added to the figures' notes."""
     from geometry.mass import analytic_mass
     from geometry.section import build_section
     from magnetics.torque import coil_properties, torque_curve, viscous_drag
@@ -97,16 +103,28 @@ def clutch_figures(design: ClutchDesign, fidelity: str = "fast") -> ClutchFigure
     check_choice("fidelity", fidelity, FIDELITIES)
     c, op = design.clutch, design.operating
     section = build_section(c)
-    if fidelity == "fast":
+    fem_size = None
+    extra: tuple[str, ...] = ()
+    if accuracy is not None:
+        from mrclutch.fidelity import choose
+
+        ch = choose(design, accuracy)
+        inertia_method, torque_method, fem_size, extra = (
+            ch.inertia, ch.torque, ch.fem_size, ch.notes
+        )
+    else:
+        inertia_method = "analytic" if fidelity == "fast" else "brep"
+        torque_method = "circuit" if fidelity == "fast" else "fem"
+    if inertia_method == "analytic":
         mass = analytic_mass(section)
-        torque_method = "circuit"
     else:
         from geometry.mass import brep_mass
 
         mass = brep_mass(c)
-        torque_method = "fem"
     i_max = design.current_limit
-    curve = torque_curve(c, [i_max], method=torque_method, speed_rpm=op.input_speed_rpm)
+    curve = torque_curve(
+        c, [i_max], method=torque_method, speed_rpm=op.input_speed_rpm, fem_size=fem_size
+    )
     drag = viscous_drag(section, op.input_speed)
     coil = coil_properties(c, i_max, op.coil_temperature)
     d, length = section.envelope
@@ -123,8 +141,12 @@ def clutch_figures(design: ClutchDesign, fidelity: str = "fast") -> ClutchFigure
         coil_power=coil.power,
         diameter=d,
         length=length,
-        methods={"inertia": mass.method, "torque": torque_method, "drag": "couette"},
-        notes=tuple(mass.notes),
+        methods={
+            "inertia": mass.method,
+            "torque": torque_method if fem_size is None else f"fem@{fem_size * 1e3:g}mm",
+            "drag": "couette",
+        },
+        notes=tuple(mass.notes) + extra,
     )
 
 
@@ -182,11 +204,17 @@ def _gain(a: float | None, b: float | None) -> float | None:
     return a / b - 1.0
 
 
-def evaluate(design: ClutchDesign, fidelity: str = "fast") -> Evaluation:
-    """The clutch figures and their haptic consequences, beside the equal-force motor."""
+def evaluate(
+    design: ClutchDesign, fidelity: str = "fast", accuracy: float | None = None
+) -> Evaluation:
+    """The clutch figures and their haptic consequences, beside the equal-force motor.
+    ``accuracy`` (relative): pick per quantity the cheapest method that meets it
+    (mrclutch.fidelity.choose); the Evaluation's fidelity then reads "accuracy=…"."""
     from mrclutch.haptic import metrics
 
-    fig = clutch_figures(design, fidelity)
+    fig = clutch_figures(design, fidelity, accuracy)
+    if accuracy is not None:
+        fidelity = f"accuracy={accuracy:g}"
     mr = reflect(mr_actuator(design, fig), design.transmission)
     motor = actuator(MOTOR)
     em_tr = motor_transmission(mr, design.transmission, motor)

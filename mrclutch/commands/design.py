@@ -22,6 +22,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="fast (analytic inertia, magnetic circuit) or reference (exact B-rep, FEM); "
         "default fast",
     )
+    p.add_argument(
+        "--accuracy",
+        type=float,
+        default=None,
+        metavar="REL",
+        help="relative accuracy target (e.g. 0.01): per quantity the cheapest method that "
+        "meets it (docs/fidelity.md); overrides --fidelity",
+    )
     p.add_argument("--json", action="store_true", help="print JSON (SI units in the key names)")
     p.set_defaults(func=_evaluate)
 
@@ -88,12 +96,18 @@ def _evaluate(args: argparse.Namespace) -> int:
     from mrclutch.pipeline import evaluate
 
     design = load_design_args(args)
-    ev = evaluate(design, args.fidelity)
+    if args.accuracy is not None and not 0 < args.accuracy < 1:
+        from mrclutch.cli import CLIError
+
+        raise CLIError(f"--accuracy = {args.accuracy}: need 0 < accuracy < 1 (relative)")
+    ev = evaluate(design, args.fidelity, accuracy=args.accuracy)
     data = ev.as_json()
     if args.json:
         print_json(data)
         return 0
     print(format_evaluation(data))
+    for note in data["clutch"]["notes"]:
+        print(f"note: {note}")
     return 0
 
 

@@ -1,0 +1,73 @@
+"""``mrclutch fidelity``: every method of every quantity on one design — time, error against
+the reference, the chart and the table. Imports nothing heavy at module level."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from mrclutch.commands._common import add_design_args, load_design_args
+
+
+def register(sub: Any) -> None:
+    p = sub.add_parser(
+        "fidelity",
+        help="speed against accuracy: time and error of every method (chart + table)",
+        description="Run every method of every quantity (inertia, torque at the current "
+        "limit, stability limit of the delayed loop, bandwidth) on a design; time each "
+        "(median of repeats) and compare it with the quantity's reference. Writes "
+        "DIR/fidelity.png, DIR/fidelity.csv and DIR/fidelity.json; progress on stderr.",
+    )
+    add_design_args(p)
+    p.add_argument("--out", required=True, metavar="DIR", help="output directory")
+    p.add_argument(
+        "--repeats", type=int, default=5, help="at most this many timed repeats per method (5)"
+    )
+    p.set_defaults(func=run)
+
+
+def rows_csv(rows: Any) -> str:
+    """The table as CSV (quantity, method, setting, time_s, value, unit, error_rel)."""
+    import csv
+    import io
+
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["quantity", "method", "setting", "time_s", "value", "unit", "error_rel"])
+    for r in rows:
+        j = r.as_json()
+        w.writerow([j["quantity"], j["method"], j["setting"], f"{r.time_s:.6g}",
+                    f"{r.value:.8g}", j["unit"], f"{r.error_rel:.4g}"])  # fmt: skip
+    return buf.getvalue()
+
+
+def run(args: argparse.Namespace) -> int:
+    import json
+    from pathlib import Path
+
+    from mrclutch.cli import CLIError
+    from mrclutch.commands._common import atomic_path, to_jsonable
+    from mrclutch.fidelity import measure, stderr_progress
+    from mrclutch.plots.fidelity import plot_fidelity
+
+    if args.repeats < 1:
+        raise CLIError(f"--repeats = {args.repeats}: must be >= 1")
+    design = load_design_args(args)
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise CLIError(f"--out {out}: exists and is not a directory")
+    rows = measure(design, repeats=args.repeats, progress=stderr_progress)
+    with atomic_path(out / "fidelity.csv") as tmp:
+        tmp.write_text(rows_csv(rows))
+    doc = {"design": design.name, "rows": [r.as_json() for r in rows]}
+    with atomic_path(out / "fidelity.json") as tmp:
+        tmp.write_text(json.dumps(to_jsonable(doc), indent=2) + "\n")
+    plot_fidelity(rows, out / "fidelity.png", title=f"speed against accuracy — {design.name}")
+    print(f"{'quantity':<10}{'method':<20}{'setting':<20}{'time (s)':>11}{'error':>11}")
+    for r in rows:
+        print(f"{r.quantity:<10}{r.method:<20}{r.setting:<20}{r.time_s:>11.3g}"
+              f"{r.error_rel:>11.2e}" + ("  (reference)" if r.reference else ""))  # fmt: skip
+        for w in r.warnings:
+            print(f"    warning: {w}")
+    print(f"wrote {out / 'fidelity.png'}, fidelity.csv, fidelity.json")
+    return 0

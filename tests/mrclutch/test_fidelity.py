@@ -1,0 +1,102 @@
+"""Speed against accuracy: the delay approximations against the exact stability limit,
+the registry and measure, the accuracy-target choice, and the fidelity command."""
+
+import json
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from mrclutch.actuator import TABLE2_MR
+from mrclutch.design import design_preset
+from mrclutch.haptic import max_stable_stiffness
+from mrclutch.methods import (
+    pade_coefficients,
+    pade_phase_error,
+    pade_stable_stiffness,
+    simulate_growth,
+    step_stable_stiffness,
+)
+
+
+@pytest.fixture(scope="module")
+def paper():
+    return design_preset("paper")
+
+
+def test_pade_converges_to_the_exact_limit_and_faster_with_order():
+    exact = max_stable_stiffness(TABLE2_MR)
+    errs = [abs(pade_stable_stiffness(TABLE2_MR, n) / exact - 1) for n in (1, 2, 4)]
+    assert errs[0] > errs[1] > errs[2]
+    assert errs[2] < 1e-8
+
+
+def test_pade_coefficients_match_the_exponential_series():
+    num, den = pade_coefficients(3)
+    x = 0.3
+    approx = np.polyval(num[::-1], x) / np.polyval(den[::-1], x)
+    assert approx == pytest.approx(math.exp(-x), rel=1e-7)  # error O(x^7)
+    assert pade_phase_error(1e-3, 2, 0.0) == pytest.approx(0.0, abs=1e-15)
+    # the approximant is all-pass: its phase lags less than ωτ at high frequency
+    assert pade_phase_error(1e-3, 1, 1e4) == pytest.approx(10 - 2 * math.atan(5), rel=1e-9)
+
+
+def test_time_stepping_converges_like_its_step_and_matches_a_simulation():
+    exact = max_stable_stiffness(TABLE2_MR)
+    e5 = abs(step_stable_stiffness(TABLE2_MR, 5) / exact - 1)
+    e20 = abs(step_stable_stiffness(TABLE2_MR, 20) / exact - 1)
+    assert e20 < e5 / 4  # at least first order in h (FOH: second order)
+    k = step_stable_stiffness(TABLE2_MR, 5)
+    assert simulate_growth(TABLE2_MR, 0.97 * k, 0.6, 5) < 0 < simulate_growth(
+        TABLE2_MR, 1.03 * k, 0.6, 5
+    )
+
+
+def test_measure_rows_and_reference(paper):
+    from mrclutch.fidelity import measure, registry
+
+    ms = [m for m in registry() if m.quantity in ("stability", "bandwidth")]
+    rows = measure(paper, ("stability", "bandwidth"), repeats=1, methods=ms)
+    assert [r.method for r in rows] == [m.name for m in ms]
+    for q in ("stability", "bandwidth"):
+        refs = [r for r in rows if r.quantity == q and r.reference]
+        assert len(refs) == 1 and refs[0].error_rel == 0.0
+    assert all(r.time_s > 0 and math.isfinite(r.value) for r in rows)
+    lumped = next(r for r in rows if r.method == "lumped")
+    assert 0 < lumped.error_rel < 0.05
+
+
+def test_choose_picks_cheapest_meeting_target(paper):
+    from mrclutch.fidelity import TORQUE_MAP, choose
+
+    loose = choose(paper, 0.1)
+    assert loose.inertia == "analytic" and loose.torque == "circuit"
+    tight = choose(paper, 0.01)
+    assert tight.torque == "fem" and tight.errors["torque"] <= 0.01
+    cheaper = [e for n, s, e, t in TORQUE_MAP if t < next(t2 for n2, s2, e2, t2 in TORQUE_MAP
+                                                          if s2 == tight.fem_size)]
+    assert all(e > 0.01 for e in cheaper)
+    assert any("needs the FEM" in n for n in tight.notes)
+    holes = replace(paper, clutch=replace(paper.clutch, hub_holes=6))
+    from mrclutch.fidelity import inertia_bound
+
+    assert inertia_bound(paper) == 0.0 and inertia_bound(holes) > 0.0
+
+
+def test_cli_fidelity_rejects_bad_input(tmp_path):
+    from mrclutch.cli import main
+
+    assert main(["fidelity", "--preset", "paper", "--out", str(tmp_path), "--repeats", "0"]) == 2
+    assert main(["evaluate", "--accuracy", "0"]) == 2
+
+
+def test_fidelity_table_writer(tmp_path):
+    from mrclutch.commands.fidelity import rows_csv
+    from mrclutch.fidelity import Row
+
+    rows = [Row("torque", "fem", "size 1 mm", 0.1, 0.44, 0.04, False)]
+    text = rows_csv(rows)
+    assert text.splitlines()[0].startswith("quantity,method,setting,time_s")
+    assert "torque,fem,size 1 mm,0.1,0.44,N·m,0.04" in text
+    assert json.loads(json.dumps(rows[0].as_json()))["error_rel"] == 0.04
