@@ -1,0 +1,120 @@
+"""The failure map: sweep each method into the region where it stops being trustworthy and
+check that the tool warns (FidelityWarning) or refuses there — never a silent wrong
+number — and that the default methods stay trusted on the paper preset."""
+
+import math
+import warnings
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from geometry.validation import ParameterError
+from mrclutch.actuator import TABLE2_MR
+from mrclutch.design import design_preset
+from mrclutch.fidelity import (
+    CIRCUIT_TORQUE_TRUST,
+    FidelityWarning,
+    circuit_fringing_trust,
+    circuit_torque,
+    fem_torque,
+    linear_circuit_trust,
+    linear_torque,
+    lumped_trust,
+    mesh_trust,
+    pade_trust,
+)
+from mrclutch.haptic import bandwidth, bandwidth_lumped, max_stable_stiffness
+from mrclutch.methods import pade_stable_stiffness
+
+
+@pytest.fixture(scope="module")
+def paper():
+    return design_preset("paper")
+
+
+def _value_and_warned(fn, *a):
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always", FidelityWarning)
+        v = fn(*a)
+    return v, any(issubclass(x.category, FidelityWarning) for x in w)
+
+
+def test_linear_circuit_past_the_knee_warns(paper):
+    errs, warned = [], []
+    for i in (0.2, 0.5, 1.0, 2.0, 4.0, 7.0):
+        d = replace(paper, operating=replace(paper.operating, max_current=i))
+        lin, w = _value_and_warned(linear_torque, d)
+        sat, _ = _value_and_warned(circuit_torque, d)
+        errs.append(abs(lin / sat - 1))
+        warned.append(w)
+    assert not warned[0] and errs[0] < 0.05  # trusted at low current and right there
+    assert warned[-1] and errs[-1] > 0.2  # past the knee: wrong, and it says so
+    for e, w in zip(errs, warned, strict=True):
+        assert w or e < 0.05, (errs, warned)  # never silently > 5 % off
+
+
+def test_circuit_where_fringing_matters_warns(paper):
+    """Short zones / large gaps: the circuit against coarse FEM; every design with error
+    above CIRCUIT_TORQUE_TRUST is flagged."""
+    cases = [(6.5e-3, 0.8e-3), (2.5e-3, 0.8e-3), (1.0e-3, 1.2e-3)]
+    flagged = []
+    for zl, gap in cases:
+        d = replace(paper, clutch=replace(paper.clutch, zone_length=zl, gap=gap))
+        circ, warned = _value_and_warned(circuit_torque, d)
+        err = abs(circ / fem_torque(d, 0.5e-3) - 1)
+        assert warned or err < CIRCUIT_TORQUE_TRUST, (zl, gap, err)
+        flagged.append(warned)
+    assert flagged[-1] and not flagged[0]
+
+
+def test_mesh_below_drum_thickness_is_refined_or_refused(paper):
+    from geometry.mass import brep_mass, mesh_mass, thinnest_feature
+
+    thin = replace(paper.clutch, drum_thickness=0.15e-3, input_drum_thickness=0.15e-3)
+    tol = 0.2e-3  # coarser than the drum walls
+    assert tol > thinnest_feature(thin) / 2 and mesh_trust(thin, tol)
+    assert not mesh_trust(paper.clutch, 0.01e-3)
+    try:
+        rep = mesh_mass(thin, tolerance=tol, max_refinements=3)
+    except ParameterError as exc:  # refused
+        assert "not converged" in str(exc) or "watertight" in str(exc)
+    else:  # refined, said so, and right
+        assert any("refined" in n for n in rep.notes)
+        assert rep.rotor_inertia == pytest.approx(brep_mass(thin).rotor_inertia, rel=5e-3)
+
+
+def test_pade_at_high_K_tau_warns():
+    flagged, errs = [], []
+    for tau in (0.2e-3, 1e-3, 5e-3, 20e-3):
+        p = replace(TABLE2_MR, delay=tau)
+        k = pade_stable_stiffness(p, 1)
+        errs.append(abs(k / max_stable_stiffness(p) - 1))
+        flagged.append(bool(pade_trust(p, k, 1)))
+    for e, f in zip(errs, flagged, strict=True):
+        assert f or e < 0.01, (errs, flagged)
+    assert any(flagged) and not all(flagged)
+
+
+def test_lumped_bandwidth_near_the_transmission_mode_warns():
+    K = 300.0
+    flagged, errs = [], []
+    for k in (4000.0, 200.0, 50.0, 20.0, 10.0):
+        p = replace(TABLE2_MR, k=k, b=0.1)
+        errs.append(abs(bandwidth_lumped(p, K) / bandwidth(p, K) - 1))
+        flagged.append(bool(lumped_trust(p, K)))
+    assert not flagged[0] and errs[0] < 0.05
+    for e, f in zip(errs, flagged, strict=True):
+        assert f or e < 0.05 or math.isnan(e), (errs, flagged)
+    assert flagged[-1]
+
+
+def test_default_methods_are_trusted_on_the_paper_preset(paper):
+    from mrclutch.fidelity import haptic_params
+
+    assert not circuit_fringing_trust(paper.clutch)  # fast path's torque method
+    assert linear_circuit_trust(paper.clutch, 0.2) == ()
+    p, k = haptic_params(paper)
+    assert not lumped_trust(p, k)
+    assert not pade_trust(p, max_stable_stiffness(p), 2)
+    assert np.isfinite(bandwidth(p, k))
