@@ -6,6 +6,11 @@ One flux loop: core (axial) → zone A (every gap and steel drum wall radially) 
 exact for a linear material, whose reluctance is ln(r1/r0)/(2π μ L) — Roters, *Electro-
 magnetic Devices*, 1941, ch. 5) and ``H(Φ/A)·l`` for axial ones.
 
+Gap length: a gap carries the zone's flux where its two steel walls face each other (the
+overlap of the walls' steel, inside the gap's wetted length). For the outermost gap in
+zone A that is the zone plus the end clearance, because the pole and the outer drum both
+reach the hub.
+
 Leakage: the flux that leaves pole A and returns to pole B without crossing the zones
 (through the sleeve and coil window, μ0, and through the stainless bands and the fluid
 between the drums over the band) is a parallel permeance ``P_leak`` across the stack's MMF
@@ -15,10 +20,19 @@ between the drums over the band) is a parallel permeance ``P_leak`` across the s
 
 stays a single equation, strictly increasing in the gap flux Φ (a composition and sum of
 increasing functions), so a bracket [0, Φ_hi] with F(Φ_hi) ≥ N·I always exists (every H(B)
-grows at least like B/μ0 past saturation) and the Illinois method inside it cannot
-diverge. The band's fluid counts with half its permeance because the magnetic potential
-between the zones falls roughly linearly from the pole to the core across the stack; the
-FEM (magnetics.fem) measures what this first-order estimate misses.
+grows at least like B/μ0 past saturation) and safeguarded Newton inside it cannot diverge.
+
+Band field (torque only): over the non-magnetic band the magnetic potential between the
+core and the pole radius falls linearly from the zone's radial MMF ``F_r`` at the zone's
+end to 0 at the band's centre (the coil is a uniform current sheet between the poles, and
+the band's centre is the plane of antisymmetry). This is Roters' linear-potential
+assumption for the leakage between the pole faces of a distributed winding (Roters 1941,
+ch. 5 "leakage flux", the field of a uniformly wound coil; also Hanselman, *Brushless
+Permanent Magnet Motor Design*, §2.6 for the same 1-D treatment). Radially the band stack
+is a series of fluid gaps and stainless drum walls, so a gap at radius r sees
+``B(x) = F_r·(1 − 2x/b)/(r·S_b)`` with ``S_b = Σ ln(ro/ri)/μ`` over the band's layers (fluid
+at its initial μ); that field's yield stress adds torque over the band (the FEM shows it is
+~10 % of the total). It is not fed back into the loop (its flux is part of the leakage).
 """
 
 from __future__ import annotations
@@ -38,6 +52,7 @@ from magnetics.materials import MATERIALS, MU0, BHCurve, Magnetic, magnetic
 FloatArray = NDArray[np.float64]
 STEEL, FLUID = "steel_1018", "mrf_132dg"
 _POLE_POINTS = 3  # Gauss points in ln r for the thick pole rings
+_BAND_POINTS = 3  # Gauss points along the half band (linear potential fall)
 #: A steel element is reported saturated where its differential μr falls below this.
 SATURATION_MU_R = 100.0
 
@@ -47,9 +62,10 @@ class MagneticPath:
     """The loop's elements for S designs (arrays with leading axis S).
 
     ``gap_*`` (S, K): the field-carrying part of each sheared gap in each zone (K = both
-    zones), radii and length; ``drum_*`` (S, D): steel drum walls radially crossed in the
-    zones; ``pole_*`` (S, 2); ``core_*``/``back_*`` (S,): axial area and length;
-    ``leak_permeance`` (S,) H; ``turns`` (S,).
+    zones), radii and length (steel-wall overlap); ``drum_*`` (S, D): steel drum walls
+    radially crossed in the zones; ``pole_*`` (S, 2); ``core_*``/``back_*`` (S,): axial area
+    and length; ``leak_permeance`` (S,) H; ``turns`` (S,); ``band_len`` (S,) m and
+    ``band_reluctance`` (S,) m/H·rad (``S_b`` of the module docstring).
     """
 
     turns: FloatArray
@@ -70,6 +86,8 @@ class MagneticPath:
     back_area: FloatArray
     back_len: FloatArray
     leak_permeance: FloatArray
+    band_len: FloatArray
+    band_reluctance: FloatArray
     steel: str = STEEL
     fluid: str = FLUID
 
@@ -102,10 +120,18 @@ def path_from_section(
     back = section.region("shell_back")
     steel = core.material
     fluid = section.region(f"gap{section.gaps[0].index}").material
+    steels = [r for r in section.regions if r.material == steel]
     gap_r0, gap_r1, gap_len, labels = [], [], [], []
     for zone in (za, zb):
         for g in section.gaps:
-            length = _overlap(g.z0, g.z1, zone.z0, zone.z1)
+            inner = [r for r in steels if abs(r.r1 - g.r_inner) < 1e-12]
+            outer = [r for r in steels if abs(r.r0 - g.r_outer) < 1e-12]
+            length = 0.0
+            for a in inner:
+                for b in outer:
+                    lo, hi = max(a.z0, b.z0, g.z0), min(a.z1, b.z1, g.z1)
+                    if hi > lo and _overlap(lo, hi, zone.z0, zone.z1) > 0:
+                        length += hi - lo  # facing steel walls that carry this zone
             if length > 0:
                 gap_r0.append(g.r_inner)
                 gap_r1.append(g.r_outer)
@@ -120,20 +146,23 @@ def path_from_section(
                     drum_r0.append(r.r0)
                     drum_r1.append(r.r1)
                     drum_len.append(length)
-    # Leakage over the band (za.z1..zb.z0): what lies between core and back iron there.
+    # Leakage over the band (za.z1..zb.z0): what lies between core and back iron there;
+    # the band's radial series reluctance S_b from the core to the pole radius.
     band = zb.z0 - za.z1
-    fluid_area = nonmag = window = 0.0
+    mu_f = magnetic(fluid, mats).mu_initial
+    fluid_area = nonmag = window = s_band = 0.0
     for r in section.regions:
         if r.z0 <= za.z1 + 1e-12 and r.z1 >= zb.z0 - 1e-12 and r.r0 >= core.r1 - 1e-12:
             area = np.pi * (r.r1**2 - r.r0**2)
             if r.r1 <= pole_a.r0 + 1e-12:
+                mu = mu_f if r.material == fluid else magnetic(r.material, mats).mu_initial
+                s_band += np.log(r.r1 / r.r0) / mu  # series layers: Σ ln(ro/ri)/μ
                 if r.material == fluid:
                     fluid_area += area
                 elif r.material != steel:
                     nonmag += area
             elif r.r1 <= back.r0 + 1e-12:
                 window += area
-    mu_f = magnetic(fluid, mats).mu_initial
     one = lambda v: np.asarray([v], dtype=float)  # noqa: E731
     row = lambda v: np.asarray([v], dtype=float).reshape(1, -1)  # noqa: E731
     zc = 0.5 * (za.z0 + za.z1), 0.5 * (zb.z0 + zb.z1)
@@ -148,6 +177,7 @@ def path_from_section(
         core_area=one(np.pi * core.r1**2), core_len=one(zc[1] - zc[0]),
         back_area=one(np.pi * (back.r1**2 - back.r0**2)), back_len=one(zc[1] - zc[0]),
         leak_permeance=one(_leak_permeance(mu_f, band, fluid_area, nonmag, window)),
+        band_len=one(band), band_reluctance=one(s_band),
         steel=steel, fluid=fluid,
     )  # fmt: skip
 
@@ -161,11 +191,15 @@ def path_from_fields(
     p = lay.p
     zone = p["zone_length"]
     band = p["band_length"]
-    # Each gap carries field over both full zones (the wetted length covers them).
+    n = p["n_drums"]
+    # Each gap carries field over both zones; in zone A the outermost gap's walls (outer
+    # drum and pole) also face each other over the end clearance.
     gl = np.concatenate([lay.gap_r_inner, lay.gap_r_inner], axis=1)
     gu = np.concatenate([lay.gap_r_outer, lay.gap_r_outer], axis=1)
     gm = np.concatenate([lay.gap_mask, lay.gap_mask], axis=1)
-    glen = np.broadcast_to(zone[:, None], gl.shape).copy()
+    kk = lay.gap_mask.shape[1]
+    last_a = np.arange(2 * kk)[None, :] == (2 * n - 1)[:, None]
+    glen = zone[:, None] + np.where(last_a, p["end_clearance"][:, None], 0.0)
     # Steel drums crossed radially: output drums and input drums, in both zones.
     dr0 = np.concatenate([lay.out_r0, lay.in_r0], axis=1)
     dr1 = np.concatenate([lay.out_r1, lay.in_r1], axis=1)
@@ -181,40 +215,49 @@ def path_from_fields(
     nonmag = np.pi * (rp**2 - rc**2) - fluid_area
     window = np.pi * (rco**2 - rp**2)
     mu_f = magnetic(FLUID, mats).mu_initial
+    mu_s = magnetic("stainless_304", mats).mu_initial
+    ln_gaps = np.where(lay.gap_mask, np.log(lay.gap_r_outer / lay.gap_r_inner), 0.0).sum(1)
+    # Band layers from core to pole radius: fluid gaps and stainless drum walls in series.
+    s_band = ln_gaps / mu_f + (np.log(rp / rc) - ln_gaps) / mu_s
     zc = zone + band
     return MagneticPath(
         turns=p["coil_turns"].astype(float),
         gap_r0=gl, gap_r1=gu, gap_len=glen, gap_mask=gm,
-        gap_label=tuple(f"gap{k % lay.gap_mask.shape[1]}_{'AB'[k // lay.gap_mask.shape[1]]}"
-                        for k in range(gl.shape[1])),
+        gap_label=tuple(f"gap{k % kk}_{'AB'[k // kk]}" for k in range(gl.shape[1])),
         drum_r0=dr0, drum_r1=dr1, drum_len=dlen, drum_mask=dm,
         pole_r0=np.stack([rp, rp], axis=1), pole_r1=np.stack([rco, rco], axis=1),
         pole_len=pole_len,
         core_area=np.pi * rc**2, core_len=zc,
         back_area=np.pi * (R**2 - rco**2), back_len=zc,
         leak_permeance=_leak_permeance(mu_f, band, fluid_area, nonmag, window),
+        band_len=band, band_reluctance=s_band,
     )  # fmt: skip
 
 
 @dataclass(frozen=True)
 class _Kernels:
-    """Per-element factors: element MMF = Σ_points w·H(k·Φ); masked entries have w = 0."""
+    """Element MMF = Σ_points w·H(k·Φ) (masked entries have w = k = 0); ``wk`` = w·k.
+
+    ``gap``: fluid at the gap flux; ``drum``: steel drum walls (stack radial MMF);
+    ``core``: axial core; ``shell``: poles and back iron at the shell flux.
+    """
 
     gap_k: FloatArray
     gap_w: FloatArray
+    gap_wk: FloatArray
     drum_k: FloatArray
     drum_w: FloatArray
-    pole_k: FloatArray
-    pole_w: FloatArray
+    drum_wk: FloatArray
     core_k: FloatArray
     core_w: FloatArray
-    back_k: FloatArray
-    back_w: FloatArray
+    shell_k: FloatArray
+    shell_w: FloatArray
+    shell_wk: FloatArray
     leak: FloatArray
 
 
 def _radial(r0: FloatArray, r1: FloatArray, length: FloatArray, n: int, mask=None):  # type: ignore[no-untyped-def]
-    """Gauss–Legendre in u = ln r of ∫ H(Φ/(2π r L)) dr = ∫ H(Φ/(2π e^u L)) e^u du.
+    """Gauss–Legendre in u = ln r of ∫ H(Φ/(2π e^u L)) e^u du.
 
     Returns (k, w) of shape (S, K·n): B = k·Φ at each point, MMF = Σ w·H. Exact for a
     linear material (the integrand is then constant in u).
@@ -235,36 +278,38 @@ def _kernels(path: MagneticPath) -> _Kernels:
     dk, dw = _radial(path.drum_r0, path.drum_r1, path.drum_len, 1, path.drum_mask)
     pk, pw = _radial(path.pole_r0, path.pole_r1, path.pole_len, _POLE_POINTS)
     col = lambda v: np.asarray(v, dtype=float)[:, None]  # noqa: E731
-    return _Kernels(gk, gw, dk, dw, pk, pw, col(1 / path.core_area), col(path.core_len),
-                    col(1 / path.back_area), col(path.back_len),
-                    col(path.leak_permeance))  # fmt: skip
+    sk = np.concatenate([pk, col(1 / path.back_area)], axis=1)
+    sw = np.concatenate([pw, col(path.back_len)], axis=1)
+    return _Kernels(gk, gw, gk * gw, dk, dw, dk * dw, col(1 / path.core_area),
+                    col(path.core_len), sk, sw, sk * sw, col(path.leak_permeance))  # fmt: skip
 
 
-def _sum_h(mat: Magnetic, phi: FloatArray, k: FloatArray, w: FloatArray, deriv: bool):  # type: ignore[no-untyped-def]
-    """Σ_j w_j·H(k_j·Φ) for Φ (S, C), k, w (S, J); and its dΦ-derivative if ``deriv``."""
-    b = phi[:, :, None] * k[:, None, :]
-    f = (w[:, None, :] * mat.h_of_b(b)).sum(-1)
-    if not deriv:
-        return f, None
-    return f, (w[:, None, :] * k[:, None, :] * mat.dh_db(b)).sum(-1)
+def _sum_h(mat: Magnetic, phi: FloatArray, k: FloatArray, w: FloatArray, wk: FloatArray):  # type: ignore[no-untyped-def]
+    """Σ_j w_j·H(k_j·Φ) and its Φ-derivative Σ_j w_j·k_j·H'(k_j·Φ); Φ ≥ 0 (S, C), k (S, J)."""
+    if phi.shape[1] == 1:  # one current per design: stay 2-D (S, J)
+        h, dh = mat.h_dh(phi * k)
+        return (w * h).sum(-1)[:, None], (wk * dh).sum(-1)[:, None]
+    h, dh = mat.h_dh(phi[:, :, None] * k[:, None, :])
+    return (w[:, None, :] * h).sum(-1), (wk[:, None, :] * dh).sum(-1)
 
 
 def _mmf(
     path: MagneticPath, mats: Mapping[str, Magnetic], phi: FloatArray, kern: _Kernels | None = None
 ) -> dict[str, FloatArray]:
-    """MMF drops (A) at gap flux ``phi`` (S, C): stack, shell flux, total (and dF/dΦ)."""
+    """MMF drops (A) at gap flux ``phi`` ≥ 0 (S, C): radial (gaps + drums, both zones),
+    stack, shell flux, total and dF/dΦ."""
     kn = _kernels(path) if kern is None else kern
     steel, fluid = magnetic(path.steel, mats), magnetic(path.fluid, mats)
-    g, dg = _sum_h(fluid, phi, kn.gap_k, kn.gap_w, True)
-    d, dd = _sum_h(steel, phi, kn.drum_k, kn.drum_w, True)
-    c, dc = _sum_h(steel, phi, kn.core_k, kn.core_w, True)
-    stack, dstack = g + d + c, dg + dd + dc
+    g, dg = _sum_h(fluid, phi, kn.gap_k, kn.gap_w, kn.gap_wk)
+    d, dd = _sum_h(steel, phi, kn.drum_k, kn.drum_w, kn.drum_wk)
+    hc, dhc = steel.h_dh(phi * kn.core_k)
+    radial = g + d
+    stack = radial + kn.core_w * hc
+    dstack = dg + dd + kn.core_w * kn.core_k * dhc
     shell = phi + kn.leak * stack
-    dshell = 1.0 + kn.leak * dstack
-    p, dp = _sum_h(steel, shell, kn.pole_k, kn.pole_w, True)
-    b, db = _sum_h(steel, shell, kn.back_k, kn.back_w, True)
-    return {"gaps": g, "stack": stack, "phi_shell": shell, "total": stack + p + b,
-            "dtotal": dstack + (dp + db) * dshell}  # fmt: skip
+    s, ds = _sum_h(steel, shell, kn.shell_k, kn.shell_w, kn.shell_wk)
+    return {"gaps": g, "radial": radial, "stack": stack, "phi_shell": shell,
+            "total": stack + s, "dtotal": dstack + ds * (1.0 + kn.leak * dstack)}  # fmt: skip
 
 
 def solve_flux(
@@ -276,14 +321,14 @@ def solve_flux(
 ) -> FloatArray:
     """Gap flux Φ (Wb), shape (S, C), solving N·I = F(Φ) for ``ampere_turns`` (S, C).
 
-    Safeguarded Newton (Numerical Recipes §9.4 "rtsafe") on the strictly increasing F:
-    the bracket [lo, hi] always contains the root and shrinks every step; a Newton step
-    that would leave it is replaced by bisection, so it cannot diverge. Negative N·I is
-    solved by symmetry (|Φ| for |NI|, sign restored).
+    Safeguarded Newton (Numerical Recipes §9.4 "rtsafe") on the strictly increasing F,
+    started at the linear (unsaturated) circuit's flux: the bracket [lo, hi] always
+    contains the root and shrinks every step; a Newton step that would leave it is
+    replaced by bisection, so it cannot diverge. Negative N·I is solved by symmetry.
     """
     mats = MATERIALS if materials is None else materials
     ni = np.atleast_2d(np.asarray(ampere_turns, dtype=float))
-    ni = np.broadcast_to(ni, (path.turns.size, ni.shape[-1])).copy()
+    ni = np.broadcast_to(ni, (path.turns.size, ni.shape[-1]))
     if not np.all(np.isfinite(ni)):
         raise ParameterError("current: must be finite")
     sign, target = np.sign(ni), np.abs(ni)
@@ -293,39 +338,30 @@ def solve_flux(
         m = _mmf(path, mats, phi, kn)
         return m["total"] - target, m["dtotal"]
 
-    # Initial upper guess: all the MMF over the fluid gaps at the fluid's initial μ.
-    r_gap = (kn.gap_w * kn.gap_k).sum(-1)
-    mu_f = magnetic(path.fluid, mats).mu_initial
+    # Linear (unsaturated) circuit: Φ = N·I / F'(0). Exact below the tables' first
+    # segment, and the first Newton iterate otherwise.
+    slope0 = f(np.zeros((target.shape[0], 1)))[1]
+    x = target / slope0
     # |NI| < 1e-100 A (down to subnormals): the linear regime is exact to rounding.
     tiny = target < 1e-100
-    x_tiny = target / f(np.zeros_like(target))[1]
-    hi = np.where(tiny, 1.0, target * mu_f / r_gap[:, None])
-    lo = np.zeros_like(hi)
-    fhi, _ = f(hi)
-    for _ in range(200):  # expand until bracketed (F grows at least like Φ)
-        short = (fhi < 0) & ~tiny
-        if not short.any():
-            break
-        lo = np.where(short, hi, lo)
-        hi = np.where(short, 2 * hi, hi)
-        fhi, _ = f(hi)
-    else:
-        raise ParameterError("circuit: could not bracket the flux (current too large?)")
-    x = 0.5 * (lo + hi)
+    lo, hi = np.zeros_like(x), np.full_like(x, np.inf)
     for _ in range(max_iter):
         fx, dfx = f(x)
-        right = fx > 0
+        right = fx >= 0
         lo = np.where(right, lo, x)
         hi = np.where(right, x, hi)
-        done = (np.abs(fx) <= rtol * target) | ((hi - lo) <= rtol * hi) | tiny
+        closed = np.isfinite(hi) & ((hi - lo) <= rtol * hi)
+        done = (np.abs(fx) <= rtol * target) | closed | tiny
         if done.all():
             break
         newton = x - fx / np.where(dfx > 0, dfx, np.inf)
         ok = (newton > lo) & (newton < hi) & (dfx > 0)
-        x = np.where(done, x, np.where(ok, newton, 0.5 * (lo + hi)))
+        # no upper bound yet: double (F grows at least like Φ/μ0, so this brackets)
+        fallback = np.where(np.isinf(hi), 2 * x, 0.5 * (lo + hi))
+        x = np.where(done, x, np.where(ok, newton, fallback))
     else:
         raise ParameterError(f"circuit: no convergence in {max_iter} iterations")
-    return np.where(tiny, x_tiny, x) * sign
+    return x * sign
 
 
 @dataclass(frozen=True)
@@ -340,6 +376,7 @@ class CircuitResult:
     gap_len: FloatArray  # (S, K) m
     gap_b: FloatArray  # (S, C, K) T at mid-radius
     gap_h: FloatArray  # (S, C, K) A/m
+    radial_mmf: FloatArray  # (S, C) A, radial MMF across the stack of one zone
     steel_b: Mapping[str, FloatArray]  # element -> |B| (S, C), T (largest along the element)
     saturated: Mapping[str, NDArray[np.bool_]]  # element -> differential μr < 100
 
@@ -385,4 +422,15 @@ def solve_path(
     else:
         sat = {k: np.zeros(v.shape, bool) for k, v in sb.items()}
     return CircuitResult(np.array(cur), phi, parts["phi_shell"], path.gap_label, rmid,
-                         path.gap_len, b, h, sb, sat)  # fmt: skip
+                         path.gap_len, b, h, 0.5 * parts["radial"], sb, sat)  # fmt: skip
+
+
+def band_h(path: MagneticPath, radial_mmf: FloatArray, mats: Mapping[str, Magnetic]):  # type: ignore[no-untyped-def]
+    """Radial H (S, C, K, P) in each gap entry's half band at the Gauss points, and the
+    points' weights·(b/2) (P,)·(S,1,1,1): B(u) = F_r·u/(r·S_b), u = 1 − 2x/b ∈ (0, 1)."""
+    x, wt = np.polynomial.legendre.leggauss(_BAND_POINTS)
+    u, wu = 0.5 * (x + 1), 0.5 * wt
+    q = radial_mmf[:, :, None] / (path.gap_r_mid * path.band_reluctance[:, None])[:, None, :]
+    b = q[..., None] * u
+    h = magnetic(path.fluid, mats).h_of_b(b)
+    return h, (0.5 * path.band_len)[:, None, None, None] * wu

@@ -47,6 +47,11 @@ class LinearMaterial:
     def dh_db(self, b: ArrayLike) -> FloatArray:
         return np.full_like(np.asarray(b, dtype=float), 1.0 / (MU0 * self.mu_r))
 
+    def h_dh(self, b: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """(H, dH/dB) at B ≥ 0 (the circuit's fast path)."""
+        nu = 1.0 / (MU0 * self.mu_r)
+        return b * nu, np.full_like(b, nu)
+
     @property
     def mu_initial(self) -> float:
         return MU0 * self.mu_r
@@ -68,6 +73,9 @@ class BHCurve:
     _b: FloatArray = field(init=False, repr=False, compare=False)
     _h: FloatArray = field(init=False, repr=False, compare=False)
     _dhdb: FloatArray = field(init=False, repr=False, compare=False)
+    _inv_step: float = field(init=False, repr=False, compare=False)
+    _hu: FloatArray = field(init=False, repr=False, compare=False)
+    _slope: FloatArray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         b = np.asarray(self.b_table, dtype=float)
@@ -91,6 +99,14 @@ class BHCurve:
         object.__setattr__(self, "_b", np.append(grid, b[-1] + _FAR_B))
         object.__setattr__(self, "_h", np.append(hs, hs[-1] + _FAR_B / MU0))
         object.__setattr__(self, "_dhdb", np.append(dh, 1.0 / MU0))
+        # Uniform-grid copy for O(1) lookup (the circuit's hot loop): the same nodes plus
+        # one step beyond the table with slope exactly 1/μ0, so clamping the index to the
+        # last segment extrapolates the μ0 extension exactly.
+        step = grid[1] - grid[0]
+        hu = np.append(hs, hs[-1] + step / MU0)
+        object.__setattr__(self, "_inv_step", 1.0 / step)
+        object.__setattr__(self, "_hu", hu)
+        object.__setattr__(self, "_slope", np.diff(hu) / step)
 
     def h_of_b(self, b: ArrayLike) -> FloatArray:
         """H(|B|)·sign(B), A/m; slope 1/μ0 beyond the table."""
@@ -101,6 +117,17 @@ class BHCurve:
     def dh_db(self, b: ArrayLike) -> FloatArray:
         a = np.abs(np.asarray(b, dtype=float))
         return np.where(a <= self._b[-2], np.interp(a, self._b, self._dhdb), 1.0 / MU0)
+
+    def h_dh(self, b: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """(H, dH/dB) at B ≥ 0 by direct index into the uniform table (no search).
+
+        The same piecewise-linear H(B) as ``h_of_b``; dH/dB is its exact (segment) slope,
+        so Newton on a sum of these sees a consistent derivative.
+        """
+        t = b * self._inv_step
+        i = np.minimum(t.astype(np.intp), self._slope.size - 1)
+        s = self._slope[i]
+        return self._hu[i] + (t - i) * (s / self._inv_step), s
 
     def b_of_h(self, h: ArrayLike) -> FloatArray:
         """Inverse of ``h_of_b`` (same dense table, so the pair is consistent)."""

@@ -21,7 +21,14 @@ from geometry.batch import layout
 from geometry.params import DrumClutch
 from geometry.section import Section, build_section
 from geometry.validation import ParameterError, check_choice, check_finite, check_range
-from magnetics.circuit import path_from_fields, path_from_section, solve_flux, solve_path
+from magnetics.circuit import (
+    _mmf,
+    band_h,
+    path_from_fields,
+    path_from_section,
+    solve_flux,
+    solve_path,
+)
 from magnetics.materials import FLUIDS, MATERIALS, Magnetic, MRFluid, magnetic
 
 FloatArray = NDArray[np.float64]
@@ -135,8 +142,9 @@ def torque_curve(
     section = build_section(clutch)
     fluid = _fluid(section, None)
     if method == "circuit":
-        res = solve_path(path_from_section(section, materials), cur[None, :], materials)
-        per = yield_torque_from_h(res.gap_r_mid[0], res.gap_len[0], res.gap_h[0], fluid)
+        path = path_from_section(section, materials)
+        res = solve_path(path, cur[None, :], materials)
+        per = _gap_torque(path, np.abs(res.flux), res.radial_mmf, materials, fluid)[0]
         labels = res.gap_label
     else:
         from magnetics.fem import solve_fem
@@ -160,10 +168,12 @@ def max_torque_batch(
     fluid: MRFluid | None = None,
 ) -> FloatArray:
     """Yield torque (N·m, shape S) of S designs, each at its current (broadcast to S)."""
-    path = path_from_fields(fields, materials)
+    mats = MATERIALS if materials is None else materials
+    path = path_from_fields(fields, mats)
     cur = np.broadcast_to(np.asarray(current, dtype=float), path.turns.shape)
-    phi = np.abs(solve_flux(path, (path.turns * cur)[:, None], materials, rtol=1e-9))[:, 0]
-    return _yield_from_flux(path, phi[:, None], materials, fluid)[:, 0]
+    phi = np.abs(solve_flux(path, (path.turns * cur)[:, None], mats, rtol=1e-9))
+    radial = 0.5 * _mmf(path, mats, phi)["radial"]
+    return _gap_torque(path, phi, radial, mats, fluid).sum(-1)[:, 0]
 
 
 def torque_grid_batch(
@@ -178,10 +188,8 @@ def torque_grid_batch(
     Tabulate-and-invert: the loop's MMF F(Φ) is strictly increasing, so it is tabulated
     on ``n_table`` fluxes per design (0 … the flux at the largest |N·I|, bracketed
     exactly) and inverted by monotone linear interpolation (one batched searchsorted).
-    Relative error in Φ ≲ 1e-3 at 192 points (tests/magnetics/test_batch.py).
+    Relative error in torque ≲ 1e-3 at 192 points (tests/magnetics/test_circuit.py).
     """
-    from magnetics.circuit import _mmf
-
     mats = MATERIALS if materials is None else materials
     path = path_from_fields(fields, mats)
     cur = np.abs(np.asarray(currents, dtype=float).ravel())
@@ -189,8 +197,9 @@ def torque_grid_batch(
     ni_max = path.turns * max(float(cur.max(initial=0.0)), 1e-12)
     phi_max = solve_flux(path, ni_max[:, None], mats)[:, 0] * (1 + 1e-9)
     grid = np.linspace(0.0, 1.0, n_table)[None, :] ** 1.5 * phi_max[:, None]  # (S, M)
-    table = _mmf(path, mats, grid)["total"]  # (S, M), increasing in each row
-    ty = _yield_from_flux(path, grid, mats, fluid)  # (S, M) yield torque on the table
+    parts = _mmf(path, mats, grid)
+    table = parts["total"]  # (S, M), increasing in each row
+    ty = _gap_torque(path, grid, 0.5 * parts["radial"], mats, fluid).sum(-1)  # (S, M)
     ni = path.turns[:, None] * cur[None, :]  # (S, C)
     span = table[:, -1:] + ni.max(axis=1, keepdims=True) + 1.0
     offs = np.cumsum(np.concatenate([[0.0], span[:-1, 0]]))[:, None]
@@ -203,14 +212,17 @@ def torque_grid_batch(
     return t0 + u * (np.take_along_axis(ty, j, 1) - t0)
 
 
-def _yield_from_flux(path, phi, materials, fluid) -> FloatArray:  # type: ignore[no-untyped-def]
+def _gap_torque(path, phi, radial, materials, fluid) -> FloatArray:  # type: ignore[no-untyped-def]
+    """Yield torque (S, C, K) of every gap entry at gap flux ``phi`` ≥ 0 (S, C): the zone
+    (uniform H over the steel overlap) plus the half band next to it (circuit docstring)."""
     mats = MATERIALS if materials is None else materials
     fl = FLUIDS[path.fluid] if fluid is None else fluid
-    rmid = path.gap_r_mid
-    area = (2 * np.pi * rmid * path.gap_len)[:, None, :]
-    h = magnetic(path.fluid, mats).h_of_b(phi[:, :, None] / area)
-    t = yield_torque_from_h(rmid[:, None, :], path.gap_len[:, None, :], h, fl)
-    return np.where(path.gap_mask[:, None, :], t, 0.0).sum(-1)
+    rmid = path.gap_r_mid[:, None, :]
+    length = path.gap_len[:, None, :]
+    h = magnetic(path.fluid, mats).h_of_b(phi[:, :, None] / (2 * np.pi * rmid * length))
+    hb, wb = band_h(path, radial, mats)
+    tau = fl.tau_y(h) * length + (fl.tau_y(hb) * wb).sum(-1)  # ∫ τy dz, Pa·m
+    return np.where(path.gap_mask[:, None, :], 2 * np.pi * rmid**2 * tau, 0.0)
 
 
 def viscous_batch(

@@ -15,17 +15,22 @@ PAPER = preset("paper")
 
 
 def _closed_form(c: DrumClutch, current: float, mu_r_fluid: float):
-    # Linear, infinitely permeable steel: Φ = μ N I 2π L / Σ ln(ro/ri) over the 2n·2 gaps
+    # Linear, infinitely permeable steel: Φ = 2π μ N I / Σ_k ln(ro/ri)/L_k over the 2n gaps
+    # of both zones; the steel walls face each other over the zone, and over the zone plus
+    # the end clearance for the outermost gap in zone A (drum and pole both reach the hub).
     s = build_section(c)
-    lsum = 2 * sum(np.log(g.r_outer / g.r_inner) for g in s.gaps)
-    mu = MU0 * mu_r_fluid
-    return np.array([mu * c.coil_turns * current / (g.r_mean * lsum) for g in s.gaps] * 2)
+    lengths = [c.zone_length] * (2 * len(s.gaps))
+    lengths[len(s.gaps) - 1] += c.end_clearance
+    gaps = list(s.gaps) * 2
+    rsum = sum(np.log(g.r_outer / g.r_inner) / L for g, L in zip(gaps, lengths, strict=True))
+    phi = 2 * np.pi * MU0 * mu_r_fluid * c.coil_turns * current / rsum
+    return np.array([phi / (2 * np.pi * g.r_mean * L) for g, L in zip(gaps, lengths, strict=True)])
 
 
 @settings(max_examples=25, deadline=None)
 @given(i=st.floats(0.01, 50), mu_f=st.floats(1, 10), gap_mm=st.floats(0.2, 1.5))
 def test_linear_limit_axisymmetric_closed_form(i, mu_f, gap_mm):
-    """Very permeable linear steel: gap B equals μ N I / (r Σ ln(ro/ri)) to 1e-6."""
+    """Very permeable linear steel: gap B equals Φ/(2π r L), Φ = 2π μ N I / Σ ln(ro/ri)/L."""
     c = replace(PAPER, gap=gap_mm * 1e-3)
     mats = linear_materials(1e12, mu_f)
     res = solve(c, [i], materials=mats)
@@ -35,12 +40,14 @@ def test_linear_limit_axisymmetric_closed_form(i, mu_f, gap_mm):
 
 
 def test_linear_limit_planar_formula_for_a_thin_large_radius_stack():
-    """μ0 μr N I / Σg within the geometric bound Δr/r of a stack at large radius."""
+    """μ0 μr N I / (L Σ g/L) within the geometric bound Δr/r of a stack at large radius."""
     c = DrumClutch(n_drums=1, gap=0.1e-3, drum_thickness=0.02e-3, drum_inner_diameter=0.45,
                    coil_turns=140)  # fmt: skip
     mats = linear_materials(1e12, 5.0)
     res = solve(c, [2.0], materials=mats)
-    planar = MU0 * 5.0 * 140 * 2.0 / (4 * c.gap)
+    # planar series of the four gap entries: B_k = μ N I / (L_k Σ_j g/L_j)
+    lengths = np.array([1, 1, 1, 1]) * c.zone_length + np.array([0, 1, 0, 0]) * c.end_clearance
+    planar = MU0 * 5.0 * 140 * 2.0 / (lengths * np.sum(c.gap / lengths))
     spread = (c.drum_radii_out[0][1] + c.gap - c.core_radius) / c.core_radius
     np.testing.assert_allclose(res.gap_b[0, 0], planar, rtol=spread)
     assert spread < 1e-3
