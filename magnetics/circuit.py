@@ -238,6 +238,8 @@ def path_from_fields(
 class _Kernels:
     """Element MMF = Σ_points w·H(k·Φ) (masked entries have w = k = 0); ``wk`` = w·k.
 
+    Arrays are (J, S), points first, so the sums over points add whole rows (fast).
+
     ``gap``: fluid at the gap flux; ``drum``: steel drum walls (stack radial MMF);
     ``core``: axial core; ``shell``: poles and back iron at the shell flux.
     """
@@ -250,6 +252,7 @@ class _Kernels:
     drum_wk: FloatArray
     core_k: FloatArray
     core_w: FloatArray
+    core_wk: FloatArray
     shell_k: FloatArray
     shell_w: FloatArray
     shell_wk: FloatArray
@@ -280,17 +283,18 @@ def _kernels(path: MagneticPath) -> _Kernels:
     col = lambda v: np.asarray(v, dtype=float)[:, None]  # noqa: E731
     sk = np.concatenate([pk, col(1 / path.back_area)], axis=1)
     sw = np.concatenate([pw, col(path.back_len)], axis=1)
-    return _Kernels(gk, gw, gk * gw, dk, dw, dk * dw, col(1 / path.core_area),
-                    col(path.core_len), sk, sw, sk * sw, col(path.leak_permeance))  # fmt: skip
+    ck, cw = col(1 / path.core_area), col(path.core_len)
+    t = lambda a: np.ascontiguousarray(a.T)[:, :, None]  # noqa: E731  (J, S, 1)
+    return _Kernels(t(gk), t(gw), t(gk * gw), t(dk), t(dw), t(dk * dw), t(ck), t(cw), t(ck * cw),
+                    t(sk), t(sw), t(sk * sw), col(path.leak_permeance))  # fmt: skip
 
 
 def _sum_h(mat: Magnetic, phi: FloatArray, k: FloatArray, w: FloatArray, wk: FloatArray):  # type: ignore[no-untyped-def]
-    """Σ_j w_j·H(k_j·Φ) and its Φ-derivative Σ_j w_j·k_j·H'(k_j·Φ); Φ ≥ 0 (S, C), k (S, J)."""
-    if phi.shape[1] == 1:  # one current per design: stay 2-D (S, J)
-        h, dh = mat.h_dh(phi * k)
-        return (w * h).sum(-1)[:, None], (wk * dh).sum(-1)[:, None]
-    h, dh = mat.h_dh(phi[:, :, None] * k[:, None, :])
-    return (w[:, None, :] * h).sum(-1), (wk[:, None, :] * dh).sum(-1)
+    """Σ_j w_j·H(k_j·Φ) and its Φ-derivative Σ_j w_j·k_j·H'(k_j·Φ); Φ ≥ 0 (S, C), k (J, S, 1)."""
+    h, dh = mat.h_dh(k * phi)
+    h *= w
+    dh *= wk
+    return h.sum(0), dh.sum(0)
 
 
 def _mmf(
@@ -302,10 +306,10 @@ def _mmf(
     steel, fluid = magnetic(path.steel, mats), magnetic(path.fluid, mats)
     g, dg = _sum_h(fluid, phi, kn.gap_k, kn.gap_w, kn.gap_wk)
     d, dd = _sum_h(steel, phi, kn.drum_k, kn.drum_w, kn.drum_wk)
-    hc, dhc = steel.h_dh(phi * kn.core_k)
+    c, dc = _sum_h(steel, phi, kn.core_k, kn.core_w, kn.core_wk)
     radial = g + d
-    stack = radial + kn.core_w * hc
-    dstack = dg + dd + kn.core_w * kn.core_k * dhc
+    stack = radial + c
+    dstack = dg + dd + dc
     shell = phi + kn.leak * stack
     s, ds = _sum_h(steel, shell, kn.shell_k, kn.shell_w, kn.shell_wk)
     return {"gaps": g, "radial": radial, "stack": stack, "phi_shell": shell,
@@ -318,6 +322,7 @@ def solve_flux(
     materials: Mapping[str, Magnetic] | None = None,
     rtol: float = 1e-12,
     max_iter: int = 200,
+    kernels: _Kernels | None = None,
 ) -> FloatArray:
     """Gap flux Φ (Wb), shape (S, C), solving N·I = F(Φ) for ``ampere_turns`` (S, C).
 
@@ -332,7 +337,7 @@ def solve_flux(
     if not np.all(np.isfinite(ni)):
         raise ParameterError("current: must be finite")
     sign, target = np.sign(ni), np.abs(ni)
-    kn = _kernels(path)
+    kn = _kernels(path) if kernels is None else kernels
 
     def f(phi: FloatArray) -> tuple[FloatArray, FloatArray]:
         m = _mmf(path, mats, phi, kn)
@@ -432,5 +437,5 @@ def band_h(path: MagneticPath, radial_mmf: FloatArray, mats: Mapping[str, Magnet
     u, wu = 0.5 * (x + 1), 0.5 * wt
     q = radial_mmf[:, :, None] / (path.gap_r_mid * path.band_reluctance[:, None])[:, None, :]
     b = q[..., None] * u
-    h = magnetic(path.fluid, mats).h_of_b(b)
+    h = magnetic(path.fluid, mats).h_dh(np.abs(b))[0]
     return h, (0.5 * path.band_len)[:, None, None, None] * wu

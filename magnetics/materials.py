@@ -76,6 +76,7 @@ class BHCurve:
     _inv_step: float = field(init=False, repr=False, compare=False)
     _hu: FloatArray = field(init=False, repr=False, compare=False)
     _slope: FloatArray = field(init=False, repr=False, compare=False)
+    _icpt: FloatArray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         b = np.asarray(self.b_table, dtype=float)
@@ -106,7 +107,9 @@ class BHCurve:
         hu = np.append(hs, hs[-1] + step / MU0)
         object.__setattr__(self, "_inv_step", 1.0 / step)
         object.__setattr__(self, "_hu", hu)
-        object.__setattr__(self, "_slope", np.diff(hu) / step)
+        slope = np.diff(hu) / step
+        object.__setattr__(self, "_slope", slope)
+        object.__setattr__(self, "_icpt", hu[:-1] - slope * grid)  # H = icpt + slope·B
 
     def h_of_b(self, b: ArrayLike) -> FloatArray:
         """H(|B|)·sign(B), A/m; slope 1/μ0 beyond the table."""
@@ -125,9 +128,10 @@ class BHCurve:
         so Newton on a sum of these sees a consistent derivative.
         """
         t = b * self._inv_step
-        i = np.minimum(t.astype(np.intp), self._slope.size - 1)
+        np.minimum(t, self._slope.size - 1, out=t)
+        i = t.astype(np.intp)
         s = self._slope[i]
-        return self._hu[i] + (t - i) * (s / self._inv_step), s
+        return self._icpt[i] + s * b, s
 
     def b_of_h(self, h: ArrayLike) -> FloatArray:
         """Inverse of ``h_of_b`` (same dense table, so the pair is consistent)."""

@@ -22,6 +22,7 @@ from geometry.params import DrumClutch
 from geometry.section import Section, build_section
 from geometry.validation import ParameterError, check_choice, check_finite, check_range
 from magnetics.circuit import (
+    _kernels,
     _mmf,
     band_h,
     path_from_fields,
@@ -171,8 +172,9 @@ def max_torque_batch(
     mats = MATERIALS if materials is None else materials
     path = path_from_fields(fields, mats)
     cur = np.broadcast_to(np.asarray(current, dtype=float), path.turns.shape)
-    phi = np.abs(solve_flux(path, (path.turns * cur)[:, None], mats, rtol=1e-9))
-    radial = 0.5 * _mmf(path, mats, phi)["radial"]
+    kern = _kernels(path)
+    phi = np.abs(solve_flux(path, (path.turns * cur)[:, None], mats, rtol=1e-7, kernels=kern))
+    radial = 0.5 * _mmf(path, mats, phi, kern)["radial"]
     return _gap_torque(path, phi, radial, mats, fluid).sum(-1)[:, 0]
 
 
@@ -219,7 +221,8 @@ def _gap_torque(path, phi, radial, materials, fluid) -> FloatArray:  # type: ign
     fl = FLUIDS[path.fluid] if fluid is None else fluid
     rmid = path.gap_r_mid[:, None, :]
     length = path.gap_len[:, None, :]
-    h = magnetic(path.fluid, mats).h_of_b(phi[:, :, None] / (2 * np.pi * rmid * length))
+    b = np.abs(phi[:, :, None] / (2 * np.pi * rmid * length))
+    h = magnetic(path.fluid, mats).h_dh(b)[0]
     hb, wb = band_h(path, radial, mats)
     tau = fl.tau_y(h) * length + (fl.tau_y(hb) * wb).sum(-1)  # ∫ τy dz, Pa·m
     return np.where(path.gap_mask[:, None, :], 2 * np.pi * rmid**2 * tau, 0.0)
