@@ -322,14 +322,12 @@ def run_sweep(
         bar = tqdm(total=spec.n_designs, initial=start_rows, unit="design", desc="sweep")
     try:
         with _sigterm_as_interrupt(), out.open("a") as f:
-            for ids, fields, res in _results(spec, evaluate, first_chunk, executor, max_pending):
-                cols = [_display(p.name, fields[p.name]) for p in spec.params]
-                cols += [res[name] for name in outputs]
-                f.write(_format_chunk(ids, cols))
+            for n, text in _results(spec, evaluate, outputs, first_chunk, executor, max_pending):
+                f.write(text)
                 f.flush()
-                rows += ids.size
+                rows += n
                 if bar is not None:
-                    bar.update(ids.size)
+                    bar.update(n)
     except KeyboardInterrupt:
         return SweepResult(out, rows, False, start_rows)
     finally:
@@ -338,31 +336,41 @@ def run_sweep(
     return SweepResult(out, rows, True, start_rows)
 
 
+def chunk_rows(
+    spec: SweepSpec, evaluate: Evaluator, outputs: Sequence[str], k: int
+) -> tuple[int, str]:
+    """Chunk k evaluated and formatted as CSV rows (runs in a worker: only text returns)."""
+    ids, fields = spec.chunk(k)
+    res = evaluate(fields)
+    cols = [_display(p.name, fields[p.name]) for p in spec.params]
+    cols += [res[name] for name in outputs]
+    return ids.size, _format_chunk(ids, cols)
+
+
 def _results(
     spec: SweepSpec,
     evaluate: Evaluator,
+    outputs: Sequence[str],
     first: int,
     executor: Executor | None,
     max_pending: int,
-) -> Iterator[tuple[np.ndarray, dict[str, np.ndarray], dict[str, np.ndarray]]]:
-    """Chunk results in chunk order, evaluated in-process or on ``executor``."""
+) -> Iterator[tuple[int, str]]:
+    """(rows, CSV text) of every chunk from ``first`` on, in chunk order, evaluated
+    in-process or on ``executor``."""
     if executor is None:
         for k in range(first, spec.n_chunks):
-            ids, fields = spec.chunk(k)
-            yield ids, fields, evaluate(fields)
+            yield chunk_rows(spec, evaluate, outputs, k)
         return
-    pending: dict[int, tuple[np.ndarray, dict[str, np.ndarray], Future]] = {}
+    pending: dict[int, Future] = {}
     nxt = first
     try:
         for k in range(first, spec.n_chunks):
-            ids, fields = spec.chunk(k)
-            pending[k] = (ids, fields, executor.submit(evaluate, fields))
+            pending[k] = executor.submit(chunk_rows, spec, evaluate, tuple(outputs), k)
             while pending and (len(pending) >= max_pending or k == spec.n_chunks - 1):
-                ids_n, fields_n, fut = pending.pop(nxt)
-                yield ids_n, fields_n, fut.result()
+                yield pending.pop(nxt).result()
                 nxt += 1
     finally:  # interrupted: drop the work not yet written
-        for _, _, fut in pending.values():
+        for fut in pending.values():
             fut.cancel()
 
 
