@@ -124,11 +124,11 @@ class DrumClutch:
     """
 
     n_drums: int = 2
-    drum_thickness: float = 0.25e-3
+    drum_thickness: float = 0.3e-3
     input_drum_thickness: float = 0.25e-3
-    gap: float = 0.8e-3
-    drum_inner_diameter: float = 12.0e-3
-    zone_length: float = 6.5e-3
+    gap: float = 0.7e-3
+    drum_inner_diameter: float = 11.5e-3
+    zone_length: float = 6.0e-3
     band_length: float = 8.5e-3
     end_clearance: float = 0.5e-3
     hub_thickness: float = 0.8e-3
