@@ -37,9 +37,10 @@ from mrclutch.design import ClutchDesign
 FIDELITIES: tuple[str, ...] = ("fast", "reference")
 #: Stated relative error of the fast path's rendering bandwidth against the reference
 #: fidelity. Bandwidth ∝ √(K_max/(m1+m2)) with K_max ∝ torque, so its error is about
-#: half the torque error (circuit vs FEM) plus half the reflected-mass error (analytic
-#: inertia is exact for the axisymmetric section). Measured by `mrclutch fidelity` and
-#: tests/mrclutch/test_fidelity.py; this bound holds for the designs tested there.
+#: half the torque error (circuit vs FEM: within 7 % for 2-drum designs, up to 15 % for
+#: 1 or 3 drums, docs/magnetics.md) plus half the reflected-mass error (analytic inertia
+#: is exact for the axisymmetric section). Checked on the paper preset, variants and the
+#: optimiser's optimum in tests/mrclutch/test_pipeline.py.
 FAST_BANDWIDTH_ERROR = 0.05
 
 #: The motor of the paper's equal-force comparison (Fig. 7c).

@@ -88,3 +88,23 @@ def test_motor_is_geared_to_the_same_force_and_stiffness():
     assert ev.motor_metrics["K_N_per_m"] == pytest.approx(ev.haptic["K_N_per_m"], rel=1e-12)
     # a heavier motor rotor: the motor's reflected mass dominates
     assert ev.motor_metrics["m1_kg"] > 10 * ev.haptic["m1_kg"]
+
+
+@pytest.mark.parametrize(
+    "change",
+    [
+        {},
+        {"gap": 0.5e-3},
+        {"zone_length": 5e-3, "n_drums": 2},
+        # the optimum `mrclutch optimize` finds (4 drums at the bounds of the search box)
+        {"n_drums": 4, "gap": 0.2008e-3, "drum_thickness": 0.1014e-3,
+         "drum_inner_diameter": 16.45e-3, "zone_length": 3.964e-3},
+    ],
+)  # fmt: skip
+def test_fast_bandwidth_within_its_stated_error_of_reference(change):
+    from mrclutch.pipeline import FAST_BANDWIDTH_ERROR
+
+    d = ClutchDesign(clutch=replace(preset("paper"), **change))
+    fast = evaluate(d, "fast").haptic["bandwidth_hz"]
+    ref = evaluate(d, "reference").haptic["bandwidth_hz"]
+    assert abs(fast / ref - 1) <= FAST_BANDWIDTH_ERROR
