@@ -39,7 +39,12 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p = sub.add_parser("torque", help="torque against coil current (circuit or FEM)")
     add_design_args(p)
     p.add_argument("--current", default="0:7:0.5", help="A, A,B,C or START:STOP:STEP (A)")
-    p.add_argument("--method", default="circuit", help="circuit (default) or fem")
+    p.add_argument(
+        "--method",
+        default="circuit",
+        help="circuit (default), fem, or both (the circuit checked against the FEM: both "
+        "curves, and the largest relative difference)",
+    )
     p.add_argument("--speed-rpm", type=float, default=530.0, help="slip speed (rpm)")
     p.add_argument("--json", action="store_true", help="JSON on stdout")
     p.add_argument("--plot", metavar="FILE.png", help="write a torque-current chart")
@@ -54,17 +59,21 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def _torque(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from geometry.validation import ParameterError, check_choice, check_range
     from magnetics.fem import FEMConvergenceError
     from magnetics.torque import torque_curve
     from mrclutch.cli import CLIError
 
-    check_choice("--method", args.method, ("circuit", "fem"))
+    check_choice("--method", args.method, ("circuit", "fem", "both"))
     check_range("--speed-rpm", args.speed_rpm, 0.0, 1e5, " rpm")
     currents = _parse_currents(args.current)
     clutch = load_clutch(args)
+    methods = ("circuit", "fem") if args.method == "both" else (args.method,)
     try:
-        tc = torque_curve(clutch, currents, method=args.method, speed_rpm=args.speed_rpm)
+        curves = [torque_curve(clutch, currents, method=m, speed_rpm=args.speed_rpm)
+                  for m in methods]  # fmt: skip
     except FEMConvergenceError as exc:
         raise CLIError(str(exc)) from None
     except FloatingPointError as exc:  # pragma: no cover - defensive
@@ -73,27 +82,42 @@ def _torque(args: argparse.Namespace) -> int:
         from mrclutch.plots.magnetics import plot_torque
 
         with atomic_path(args.plot) as tmp:
-            plot_torque([tc], tmp)
+            plot_torque(curves, tmp)
+    # largest relative circuit-vs-FEM difference where the FEM torque is not ~0 (0 A)
+    err = None
+    if len(curves) == 2:
+        c, f = curves[0].torque, curves[1].torque
+        keep = f > 10 * curves[1].viscous_torque
+        err = float(np.max(np.abs(c[keep] / f[keep] - 1))) if keep.any() else 0.0
     if args.json:
-        print_json(
-            {
-                "method": tc.method,
-                "speed_rpm": tc.speed_rpm,
-                "points": [
-                    {"current_A": float(i), "torque_N_m": float(t)}
-                    for i, t in zip(tc.currents, tc.torque, strict=True)
-                ],
-                "viscous_torque_N_m": tc.viscous_torque,
-                "damping_N_m_s": tc.damping,
-            }
-        )
-    else:
+        data = {**_curve_json(curves[0])}
+        if err is not None:
+            data = {"circuit": _curve_json(curves[0]), "fem": _curve_json(curves[1]),
+                    "max_torque_error_rel": err}  # fmt: skip
+        print_json(data)
+        return 0
+    for tc in curves:
         print(f"method {tc.method}, {tc.speed_rpm:g} rpm: viscous {tc.viscous_torque:.4g} N·m, "
               f"damping {tc.damping:.4g} N·m·s")  # fmt: skip
-        print("current_A  torque_N_m")
-        for i, t in zip(tc.currents, tc.torque, strict=True):
-            print(f"{i:9.4g}  {t:.5g}")
+    print("current_A  " + "  ".join(f"{tc.method}_N_m" for tc in curves))
+    for k, i in enumerate(curves[0].currents):
+        print(f"{i:9.4g}  " + "  ".join(f"{tc.torque[k]:.5g}" for tc in curves))
+    if err is not None:
+        print(f"largest circuit-vs-FEM difference: {err * 100:.2f} %")
     return 0
+
+
+def _curve_json(tc) -> dict:  # type: ignore[no-untyped-def]
+    return {
+        "method": tc.method,
+        "speed_rpm": tc.speed_rpm,
+        "points": [
+            {"current_A": float(i), "torque_N_m": float(t)}
+            for i, t in zip(tc.currents, tc.torque, strict=True)
+        ],
+        "viscous_torque_N_m": tc.viscous_torque,
+        "damping_N_m_s": tc.damping,
+    }
 
 
 def _field(args: argparse.Namespace) -> int:

@@ -42,3 +42,21 @@ def test_bad_input_one_line_exit_2(args, tmp_path):
     assert p.returncode == 2
     assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
     assert not list(tmp_path.iterdir())
+
+
+def test_torque_both_methods_chart_and_error(tmp_path, capsys):
+    """Issue 4: circuit against FEM on the paper preset, 0-7 A, chart and largest error."""
+    import json
+
+    from mrclutch.cli import main
+
+    png = tmp_path / "both.png"
+    args = ["torque", "--method", "both", "--current", "0,2,4,7", "--plot", str(png), "--json"]
+    assert main(args) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert [p["current_A"] for p in data["fem"]["points"]] == [0.0, 2.0, 4.0, 7.0]
+    c = [p["torque_N_m"] for p in data["circuit"]["points"]]
+    f = [p["torque_N_m"] for p in data["fem"]["points"]]
+    assert data["max_torque_error_rel"] == max(abs(a / b - 1) for a, b in zip(c[1:], f[1:]))
+    assert data["max_torque_error_rel"] <= 0.10  # issue 4's aim
+    assert png.stat().st_size > 1000
