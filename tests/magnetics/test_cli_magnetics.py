@@ -57,6 +57,8 @@ def test_torque_both_methods_chart_and_error(tmp_path, capsys):
     assert [p["current_A"] for p in data["fem"]["points"]] == [0.0, 2.0, 4.0, 7.0]
     c = [p["torque_N_m"] for p in data["circuit"]["points"]]
     f = [p["torque_N_m"] for p in data["fem"]["points"]]
-    assert data["max_torque_error_rel"] == max(abs(a / b - 1) for a, b in zip(c[1:], f[1:]))
+    assert data["max_torque_error_rel"] == max(
+        abs(a / b - 1) for a, b in zip(c[1:], f[1:], strict=True)
+    )
     assert data["max_torque_error_rel"] <= 0.10  # issue 4's aim
     assert png.stat().st_size > 1000
