@@ -111,7 +111,10 @@ def clutch_figures(
 
         ch = choose(design, accuracy)
         inertia_method, torque_method, fem_size, extra = (
-            ch.inertia, ch.torque, ch.fem_size, ch.notes
+            ch.inertia,
+            ch.torque,
+            ch.fem_size,
+            ch.notes,
         )
     else:
         inertia_method = "analytic" if fidelity == "fast" else "brep"
@@ -169,6 +172,24 @@ def motor_transmission(mr: HapticParams, mr_tr: Transmission, motor: Actuator) -
     em = replace(em, workspace=mr_tr.workspace)
     base_force = motor.max_torque * em.reduction  # F = T nG/l (Eq. 4)
     return replace(em, gearing=float(mr.f_max) / base_force)
+
+
+#: The haptic metrics a person compares side by side (label, JSON key, display scale);
+#: used by `mrclutch evaluate`'s table and the report's HTML.
+HAND_ROWS: tuple[tuple[str, str, float], ...] = (
+    ("m1 (g)", "m1_kg", 1e3),
+    ("b1 (N·s/m)", "b1_N_s_per_m", 1.0),
+    ("m2 (g)", "m2_kg", 1e3),
+    ("k (N/m)", "k_N_per_m", 1.0),
+    ("K rendered (N/m)", "K_N_per_m", 1.0),
+    ("bandwidth, lumped √(K/m) (Hz)", "bandwidth_lumped_hz", 1.0),
+    ("bandwidth, full response (Hz)", "bandwidth_hz", 1.0),
+    ("system resonance (Hz)", "resonance_hz", 1.0),
+    ("rendering area (dB·decade)", "rendering_area_dB_decade", 1.0),
+    ("passive at K", "passive", 1.0),
+    ("largest passive K (N/m)", "max_passive_K_N_per_m", 1.0),
+    ("largest stable K (N/m)", "max_stable_K_N_per_m", 1.0),
+)
 
 
 @dataclass(frozen=True)

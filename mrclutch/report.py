@@ -177,6 +177,8 @@ def findings(m: dict[str, Any]) -> list[str]:
 
 def render_html(m: dict[str, Any]) -> str:
     """One page: findings, the clutch, the hand, the figures, the files."""
+    from mrclutch.pipeline import HAND_ROWS
+
     c, h, e = m["clutch"], m["haptic"], m["motor"]
     e_ = html.escape
     clutch_rows = [
@@ -191,20 +193,6 @@ def render_html(m: dict[str, Any]) -> str:
         ("coil", f"{_fmt(c['coil_resistance_ohm'], 1, 3)} Ω, "
                  f"{_fmt(c['coil_power_W'], 1, 3)} W at max current", ""),
     ]  # fmt: skip
-    hand_rows = [
-        ("m1 (g)", "m1_kg", 1e3),
-        ("b1 (N·s/m)", "b1_N_s_per_m", 1),
-        ("m2 (g)", "m2_kg", 1e3),
-        ("k (N/m)", "k_N_per_m", 1),
-        ("K rendered (N/m)", "K_N_per_m", 1),
-        ("bandwidth, lumped √(K/m) (Hz)", "bandwidth_lumped_hz", 1),
-        ("bandwidth, full response (Hz)", "bandwidth_hz", 1),
-        ("system resonance (Hz)", "resonance_hz", 1),
-        ("rendering area (dB·decade)", "rendering_area_dB_decade", 1),
-        ("passive at K", "passive", 1),
-        ("largest passive K (N/m)", "max_passive_K_N_per_m", 1),
-        ("largest stable K (N/m)", "max_stable_K_N_per_m", 1),
-    ]
     rows1 = "".join(
         f"<tr><td>{e_(a)}</td><td class=n>{e_(b)}</td><td>{e_(u)}</td></tr>"
         for a, b, u in clutch_rows
@@ -212,7 +200,7 @@ def render_html(m: dict[str, Any]) -> str:
     rows2 = "".join(
         f"<tr><td>{e_(label)}</td><td class=n>{_fmt(h[k], f)}</td>"
         f"<td class=n>{_fmt(e[k], f)}</td></tr>"
-        for label, k, f in hand_rows
+        for label, k, f in HAND_ROWS
     )
     items = "".join(f"<li>{e_(s)}</li>" for s in findings(m))
     stl = ", ".join(f'<a href="{e_(p)}">{e_(p)}</a>' for p in m["cad"]["stl"].values())

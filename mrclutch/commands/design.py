@@ -113,6 +113,8 @@ def _evaluate(args: argparse.Namespace) -> int:
 
 def format_evaluation(data: dict) -> str:
     """A person's view of ``Evaluation.as_json()``."""
+    from mrclutch.pipeline import HAND_ROWS
+
     c = data["clutch"]
     lines = [
         f"design {data['design']}  (fidelity {data['fidelity']}: inertia by "
@@ -128,30 +130,21 @@ def format_evaluation(data: dict) -> str:
         f"{c['off_state_torque_N_m'] * 1e3:.4g} mN·m",
         f"  torque / inertia  {c['torque_per_inertia_N_m_per_kg_m2']:.4g} N·m/(kg·m²)",
         "",
-        f"{'at the hand':<28}{'MR pair':>14}{'Maxon 136206':>14}",
+        f"{'at the hand':<32}{'MR pair':>14}{'Maxon 136206':>14}",
     ]
     h, m = data["haptic"], data["motor"]
-    rows = [
-        ("m1 (g)", "m1_kg", 1e3),
-        ("b1 (N·s/m)", "b1_N_s_per_m", 1),
-        ("K (N/m)", "K_N_per_m", 1),
-        ("bandwidth, lumped (Hz)", "bandwidth_lumped_hz", 1),
-        ("bandwidth, full (Hz)", "bandwidth_hz", 1),
-        ("resonance (Hz)", "resonance_hz", 1),
-        ("rendering area (dB·dec)", "rendering_area_dB_decade", 1),
-        ("max passive K (N/m)", "max_passive_K_N_per_m", 1),
-        ("max stable K (N/m)", "max_stable_K_N_per_m", 1),
-    ]
-    for label, key, f in rows:
-        lines.append(f"  {label:<26}{_num(h[key], f):>14}{_num(m[key], f):>14}")
-    lines.append(f"  {'passive at K':<26}{h['passive']!s:>14}{m['passive']!s:>14}")
+    for label, key, f in HAND_ROWS:
+        hv, mv = (h[key], m[key]) if key != "passive" else (str(h[key]), str(m[key]))
+        lines.append(f"  {label:<30}{_num(hv, f):>14}{_num(mv, f):>14}")
     lines.append(f"  (motor geared ×{m['gearing']:.3g} to the MR pair's force)")
     g, gl = data["bandwidth_gain"], data["bandwidth_gain_lumped"]
     lines.append(f"bandwidth gain MR over motor: {_pct(gl)} lumped, {_pct(g)} on the full response")
     return "\n".join(lines)
 
 
-def _num(v: float | None, f: float) -> str:
+def _num(v: float | str | None, f: float) -> str:
+    if isinstance(v, str):
+        return v
     return "—" if v is None or v != v else f"{v * f:.4g}"  # None or NaN: none
 
 
