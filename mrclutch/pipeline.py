@@ -338,6 +338,7 @@ def evaluate_batch(
     }
     if passivity:
         out["max_passive_K_N_per_m"] = max_passive_stiffness(hp)
-    for k in list(out)[1:]:
-        out[k] = np.where(ok, np.broadcast_to(out[k], ok.shape), np.nan)
+    for k in out:
+        if k != "valid":
+            out[k] = np.where(ok, np.broadcast_to(out[k], ok.shape), np.nan)
     return out

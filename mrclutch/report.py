@@ -51,7 +51,7 @@ def write_report(
     progress: Callable[[str], None] | None = None,
 ) -> Report:
     """Write the report of ``design`` into ``out_dir`` (see module docstring)."""
-    from mrclutch.commands._common import to_jsonable
+    from mrclutch.jsonio import to_jsonable
     from mrclutch.pipeline import evaluate
 
     out = Path(out_dir)

@@ -4,15 +4,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from typing import Any
-
-import numpy as np
 
 from geometry.atomic import atomic_path
 from geometry.params import DrumClutch
 from mrclutch.design import ClutchDesign, design_preset, load_design
+from mrclutch.jsonio import to_jsonable
 
 __all__ = [
     "add_design_args",
@@ -46,24 +44,6 @@ def load_design_args(args: argparse.Namespace) -> ClutchDesign:
 def load_clutch(args: argparse.Namespace) -> DrumClutch:
     """The DrumClutch named by ``add_design_args`` options."""
     return load_design_args(args).clutch
-
-
-def to_jsonable(obj: Any) -> Any:
-    """Plain JSON types; NaN and ±inf become null (JSON has no NaN)."""
-    if isinstance(obj, dict):
-        return {str(k): to_jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [to_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return to_jsonable(obj.tolist())
-    if isinstance(obj, (np.bool_, bool)):
-        return bool(obj)
-    if isinstance(obj, (np.integer, int)):
-        return int(obj)
-    if isinstance(obj, (np.floating, float)):
-        v = float(obj)
-        return v if math.isfinite(v) else None
-    return obj
 
 
 def print_json(obj: Any) -> None:
