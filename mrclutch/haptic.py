@@ -220,7 +220,11 @@ def _illinois(
             break
         lo_a, hi_a, flo_a, fhi_a, sd = lo[act], hi[act], flo[act], fhi[act], side[act]
         x = hi_a - fhi_a * (hi_a - lo_a) / (fhi_a - flo_a)
-        x = np.where((x > lo_a) & (x < hi_a), x, 0.5 * (lo_a + hi_a))
+        x = np.where(np.isfinite(x), x, 0.5 * (lo_a + hi_a))
+        # at least δ from either end (Brent's minimum step, Numerical Recipes §9.3): a root
+        # within δ of an end is then straddled by the next bracket, of width ≤ δ
+        d = 0.4 * rtol * np.abs(hi_a)
+        x = np.clip(x, lo_a + d, hi_a - d)
         fx = f(act, x)
         left = fx * flo_a > 0  # x replaces lo
         hit = fx == 0
@@ -425,7 +429,7 @@ def _crossings(p: HapticParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             xi = X(grid).imag
             sc = np.nonzero(np.sign(xi[:-1]) * np.sign(xi[1:]) < 0)[0]
             wc = _illinois(
-                lambda _, x: X(x).imag, grid[sc], grid[sc + 1], xi[sc], xi[sc + 1], 1e-14
+                lambda _, x: X(x).imag, grid[sc], grid[sc + 1], xi[sc], xi[sc + 1], 1e-13
             )
             xv = X(wc)
             ok = real_positive(xv)
