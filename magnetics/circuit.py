@@ -37,6 +37,7 @@ at its initial μ); that field's yield stress adds torque over the band (the FEM
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping
 from dataclasses import dataclass
 
@@ -259,13 +260,21 @@ class _Kernels:
     leak: FloatArray
 
 
+@functools.lru_cache(maxsize=8)
+def _gauss(n: int) -> tuple[FloatArray, FloatArray]:
+    """Gauss–Legendre nodes and weights on [−1, 1], computed once per order."""
+    x, wt = np.polynomial.legendre.leggauss(n)
+    x.flags.writeable = wt.flags.writeable = False
+    return x, wt
+
+
 def _radial(r0: FloatArray, r1: FloatArray, length: FloatArray, n: int, mask=None):  # type: ignore[no-untyped-def]
     """Gauss–Legendre in u = ln r of ∫ H(Φ/(2π e^u L)) e^u du.
 
     Returns (k, w) of shape (S, K·n): B = k·Φ at each point, MMF = Σ w·H. Exact for a
     linear material (the integrand is then constant in u).
     """
-    x, wt = np.polynomial.legendre.leggauss(n)
+    x, wt = _gauss(n)
     u0, u1 = np.log(r0), np.log(r1)
     r = np.exp(0.5 * (u0 + u1)[..., None] + 0.5 * (u1 - u0)[..., None] * x)
     k = 1.0 / (2 * np.pi * r * length[..., None])
@@ -433,7 +442,7 @@ def solve_path(
 def band_h(path: MagneticPath, radial_mmf: FloatArray, mats: Mapping[str, Magnetic]):  # type: ignore[no-untyped-def]
     """Radial H (S, C, K, P) in each gap entry's half band at the Gauss points, and the
     points' weights·(b/2) (P,)·(S,1,1,1): B(u) = F_r·u/(r·S_b), u = 1 − 2x/b ∈ (0, 1)."""
-    x, wt = np.polynomial.legendre.leggauss(_BAND_POINTS)
+    x, wt = _gauss(_BAND_POINTS)
     u, wu = 0.5 * (x + 1), 0.5 * wt
     q = radial_mmf[:, :, None] / (path.gap_r_mid * path.band_reluctance[:, None])[:, None, :]
     b = q[..., None] * u
