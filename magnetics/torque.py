@@ -127,20 +127,21 @@ def yield_torque_from_h(
 
 
 def torque_curve(
-    clutch: DrumClutch,
+    clutch: DrumClutch | Section,
     currents: ArrayLike,
     method: str = "circuit",
     speed_rpm: float = 530.0,
     materials: Mapping[str, Magnetic] | None = None,
     fem_size: float | None = None,
 ) -> TorqueCurve:
-    """Torque of ``clutch`` at ``currents`` (A) by the circuit or the FEM."""
+    """Torque of ``clutch`` (or its already built section) at ``currents`` (A) by the
+    circuit or the FEM."""
     check_choice("method", method, METHODS)
     rpm = check_finite("speed_rpm", speed_rpm, " rpm")
     cur = np.atleast_1d(np.asarray(currents, dtype=float))
     if cur.ndim != 1 or not np.all(np.isfinite(cur)):
         raise ParameterError("currents: must be a 1-D array of finite values (A)")
-    section = build_section(clutch)
+    section = clutch if isinstance(clutch, Section) else build_section(clutch)
     fluid = _fluid(section, None)
     if method == "circuit":
         path = path_from_section(section, materials)

@@ -22,7 +22,9 @@ relative error (n ≈ 7.31: 14 mm winding drums, r_actuator = 7 mm, r_pulley ≈
 
 from __future__ import annotations
 
+import functools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -279,9 +281,14 @@ class HapticParams:
         """Eq. 4: the largest stiffness rendered over the workspace without saturation."""
         return self.f_max / self.workspace
 
-    @property
-    def shape(self) -> tuple[int, ...]:
+    @functools.cached_property
+    def shape(self) -> tuple[int, ...]:  # cached: the fields are frozen
         return np.broadcast_shapes(*(np.shape(getattr(self, f)) for f in _FIELDS))
+
+    @classmethod
+    def stack(cls, ps: Sequence[HapticParams]) -> HapticParams:
+        """Single designs as one 1-D vectorised set (the inverse of :meth:`item`)."""
+        return cls(**{f: np.array([float(getattr(p, f)) for p in ps]) for f in _FIELDS})
 
     def item(self, i: int) -> HapticParams:
         """Design ``i`` of a 1-D vectorised set, as scalars."""

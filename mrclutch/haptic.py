@@ -41,7 +41,7 @@ floor: A = ∫ max(0, 20 log10|Z_cl/Z_p|) d(log10 f), trapezoid rule on a log gr
 
 **Passivity.** Re Z_cl(jω) = Re Z_p(jω) + K g(ω) with g = Re[E (bs+k)/(s D1)] is affine in
 K and Re Z_p ≥ 0, so the passive K form the interval [0, K_p] with
-K_p = inf over {g < 0} of Re Z_p/(−g) (dense log grid, then ten 20× zooms on its minimum).
+K_p = inf over {g < 0} of Re Z_p/(−g) (dense log grid, then five 20× zooms on its minimum).
 
 **Stability** (exact for a pure delay, D-subdivision). For K > 0 small, the roots of χ are
 those of s Num (left half-plane) with the rigid-body root moved from 0 to ≈ −K/b1. Roots
@@ -59,6 +59,7 @@ first K_c where that count turns positive.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -81,6 +82,7 @@ __all__ = [
     "max_stable_stiffness",
     "metrics",
     "metrics_batch",
+    "metrics_of",
     "passive_impedance",
     "rendering_area",
     "resonance",
@@ -335,39 +337,44 @@ def rendering_area(
     return out.reshape(shape) if shape else float(out[0])
 
 
-def _g_and_re(p: HapticParams, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    s = 1j * w
-    d1 = (p.m1 * s + (p.b1 + p.b)) * s + p.k
-    g = (_hold(p, w, None) * (p.b * s + p.k) / (s * d1)).real
-    return g, passive_impedance(p, w).real
-
-
 def max_passive_stiffness(p: HapticParams) -> Any:
     """Largest K [N/m] with Re Z_cl(jω) ≥ 0 at every ω (module docstring): inf over g < 0
     of Re Z_p/(−g), on a log grid 1e-3 Hz – 1 MHz (40 per decade) around each design's
-    minimum, zoomed eight times by a 21-point grid over the two neighbouring cells (each
-    zoom narrows the cell 10×: 0.025 → 2.5e-10 decade; the minimum's value is quadratic in
+    minimum, zoomed five times by a 41-point grid over the two neighbouring cells (each
+    zoom narrows the cell 20×: 0.025 → 8e-9 decade; the minimum's value is quadratic in
     that). inf if g ≥ 0 everywhere. Vectorised over designs."""
     shape = p.shape
-    cols = [np.ravel(np.broadcast_to(getattr(p, f), shape)) for f in ("m1", "b1", "k", "b", "m2")]
-    q = HapticParams(
-        *(c[:, None] for c in cols),
-        delay=np.ravel(np.broadcast_to(p.delay, shape))[:, None],
-        sample_period=np.ravel(np.broadcast_to(p.sample_period, shape))[:, None],
+    m1, b1, k, b, m2, tau, T = (
+        np.ravel(np.broadcast_to(np.asarray(getattr(p, f), float), shape))[:, None]
+        for f in ("m1", "b1", "k", "b", "m2", "delay", "sample_period")
     )
-    u = np.broadcast_to(np.linspace(-3.0, 6.0, 361), (cols[0].size, 361))
-    rows = np.arange(cols[0].size)
+    a3, a2, a1, a0 = _num_coeffs(HapticParams(m1, b1, k, b, m2))
+    hold = bool(np.any(T > 0))
+
+    def ratio(u: np.ndarray) -> np.ndarray:  # Re Z_p/(−g) where g < 0, else inf
+        w = TWO_PI * 10.0**u
+        s = 1j * w
+        d1 = (m1 * s + (b1 + b)) * s + k  # Eq. 2 denominator
+        E = np.exp(-1j * w * tau)
+        if hold:  # zero-order hold, as in _hold
+            E = E * np.exp(-0.5j * w * T) * np.sinc(w * T / TWO_PI)
+        g = (E * (b * s + k) / (s * d1)).real
+        re = ((((a3 * s + a2) * s + a1) * s + a0) / d1).real  # Re Z_p, Eq. 2
+        neg = g < 0
+        return np.where(neg, re / np.where(neg, -g, 1.0), np.inf)
+
+    rows = np.arange(m1.shape[0])
+    u = np.broadcast_to(np.linspace(-3.0, 6.0, 361), (rows.size, 361))
     best = np.full(rows.size, np.inf)
-    zoom = np.linspace(-1.0, 1.0, 21)
-    for _ in range(9):  # the full grid, then eight zooms on [j−1, j+1]
-        g, re = _g_and_re(q, TWO_PI * 10.0**u)
-        r = np.where(g < 0, re / np.where(g < 0, -g, 1.0), np.inf)
+    zoom = np.linspace(-1.0, 1.0, 41)
+    for _ in range(6):  # the full grid, then five zooms on [j−1, j+1]
+        r = ratio(u)
         j = np.argmin(r, axis=1)
         best = np.minimum(best, r[rows, j])
         if not np.isfinite(best).any():
             break
-        du = u[:, 1] - u[:, 0]
-        u = u[rows, j][:, None] + du[:, None] * zoom[None, :]
+        du = u[:, 1:2] - u[:, 0:1]
+        u = u[rows, j][:, None] + du * zoom
     return best.reshape(shape) if shape else float(best[0])
 
 
@@ -526,9 +533,27 @@ def metrics(p: HapticParams, K: float | None = None) -> dict[str, Any]:
     """The metrics of one design at K (default K_max, Eq. 4) under the JSON keys of issue 2
     (SI; NaN/inf mean "none"/"unbounded" and become null in JSON)."""
     _scalar(p)
-    b = metrics_batch(p, K)
-    res: dict[str, Any] = {}
-    for key in METRIC_KEYS:
-        v = b[key].item()
-        res[key] = bool(v) if key == "passive" else float(v)
-    return res
+    return metrics_of([p], [K])[0]
+
+
+def metrics_of(
+    ps: Sequence[HapticParams], Ks: Sequence[float | None] | None = None
+) -> list[dict[str, Any]]:
+    """:func:`metrics` of several single designs (each at its K; None: its K_max), in one
+    vectorised pass: the per-call overhead is paid once (evaluate's MR pair and motor)."""
+    for p in ps:
+        _scalar(p)
+    Ks = [None] * len(ps) if Ks is None else list(Ks)
+    if len(Ks) != len(ps):
+        raise ParameterError(f"Ks: {len(Ks)} stiffnesses for {len(ps)} designs")
+    q = HapticParams.stack(ps)
+    K = np.array([p.k_max if K is None else K for p, K in zip(ps, Ks, strict=True)])
+    b = metrics_batch(q, K)
+    out = []
+    for i in range(len(ps)):
+        res: dict[str, Any] = {}
+        for key in METRIC_KEYS:
+            v = b[key][i].item()
+            res[key] = bool(v) if key == "passive" else float(v)
+        out.append(res)
+    return out

@@ -127,7 +127,7 @@ def clutch_figures(
         mass = brep_mass(c)
     i_max = design.current_limit
     curve = torque_curve(
-        c, [i_max], method=torque_method, speed_rpm=op.input_speed_rpm, fem_size=fem_size
+        section, [i_max], method=torque_method, speed_rpm=op.input_speed_rpm, fem_size=fem_size
     )
     drag = viscous_drag(section, op.input_speed)
     coil = coil_properties(c, i_max, op.coil_temperature)
@@ -232,7 +232,7 @@ def evaluate(
     """The clutch figures and their haptic consequences, beside the equal-force motor.
     ``accuracy`` (relative): pick per quantity the cheapest method that meets it
     (mrclutch.fidelity.choose); the Evaluation's fidelity then reads "accuracy=…"."""
-    from mrclutch.haptic import metrics
+    from mrclutch.haptic import metrics_of
 
     fig = clutch_figures(design, fidelity, accuracy)
     if accuracy is not None:
@@ -242,7 +242,8 @@ def evaluate(
     em_tr = motor_transmission(mr, design.transmission, motor)
     em = reflect(motor, em_tr)
     k = float(mr.k_max)
-    return Evaluation(design, fidelity, fig, mr, em, em_tr.gearing, metrics(mr), metrics(em, K=k))
+    mr_m, em_m = metrics_of([mr, em], [k, k])  # the motor at the MR system's K_max
+    return Evaluation(design, fidelity, fig, mr, em, em_tr.gearing, mr_m, em_m)
 
 
 # ---- the vectorised fast path for sweeps -----------------------------------------------
