@@ -402,9 +402,14 @@ def _chi(p: HapticParams, K: Any, s: Any) -> Any:
     return s * num + K * E * (p.b * s + p.k)
 
 
-def _crossings(p: HapticParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _crossings(
+    p: HapticParams, k_stop: float | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Imaginary-axis crossings of χ for one design: frequencies ω_c [rad/s], gains K_c
-    [N/m] and directions sign Re(ds/dK) (+1: into the right half-plane)."""
+    [N/m] and directions sign Re(ds/dK) (+1: into the right half-plane) — every crossing
+    with K_c ≤ ``k_stop`` (None: up to the smallest K_c, the stability limit), possibly
+    more. Above ω_a (the largest |root| of Num) the bound K(ω) ≥ ω|Num(jω)|/|k + jbω| is
+    increasing, so the scan stops where it exceeds the gains sought."""
     a = _num_coeffs(p)
     roots = np.roots(a)
     w_a = float(np.max(np.abs(roots)))
@@ -427,25 +432,28 @@ def _crossings(p: HapticParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         rts = np.roots(poly.imag[::-1])
         wc = np.sort(rts.real[(np.abs(rts.imag) < 1e-9 * np.abs(rts)) & (rts.real > 0)])
     else:
-        w_hi = 20.0 * w_a + 16.0 * math.pi / tau
+        # log grid below ω_a, then linear chunks of doubling span (step fine against both
+        # the delay's phase period and the modes), each bracket refined by regula falsi
         step = min(w_a / 50.0, math.pi / (16.0 * tau))
+        grid = w_a * np.logspace(-4, 0, 401)
+        found, best = [], math.inf
         while True:
-            grid = np.concatenate(
-                (w_a * np.logspace(-4, 0, 400, endpoint=False), np.arange(w_a, w_hi, step))
-            )
             xi = X(grid).imag
             sc = np.nonzero(np.sign(xi[:-1]) * np.sign(xi[1:]) < 0)[0]
-            wc = _illinois(
+            w = _illinois(
                 lambda _, x: X(x).imag, grid[sc], grid[sc + 1], xi[sc], xi[sc + 1], 1e-13
             )
-            xv = X(wc)
+            found.append(w)
+            xv = X(w)
             ok = real_positive(xv)
-            best = float(np.min(xv.real[ok])) if ok.any() else math.inf
-            s_hi = 1j * w_hi
-            lower = abs(s_hi * np.polyval(a, s_hi)) / abs(p.k + p.b * s_hi)
-            if lower > best or w_hi > 1e4 * (w_a + 1.0 / tau):
+            best = min(best, float(np.min(xv.real[ok]))) if ok.any() else best
+            w_end = grid[-1]
+            s_end = 1j * w_end
+            lower = abs(s_end * np.polyval(a, s_end)) / abs(p.k + p.b * s_end)
+            if lower > (best if k_stop is None else k_stop) or w_end > 1e4 * (w_a + 1 / tau):
                 break
-            w_hi *= 2.0
+            grid = np.linspace(w_end, 2 * w_end, math.ceil(w_end / step) + 1)
+        wc = np.concatenate(found)
     xv = X(wc)
     ok = real_positive(xv)
     wc, Kc = wc[ok], xv.real[ok]
@@ -485,7 +493,7 @@ def is_stable(p: HapticParams, K: float) -> bool:
     _scalar(p)
     if K == 0:
         return True
-    _, Kc, dirs = _crossings(p)
+    _, Kc, dirs = _crossings(p, k_stop=K)
     if np.any(np.isclose(Kc, K, rtol=1e-12)):
         return False
     return bool(np.sum(2 * dirs[Kc < K]) == 0)
