@@ -414,8 +414,9 @@ def solve_path(
     cur = np.asarray(currents, dtype=float)
     cur = np.broadcast_to(cur.reshape(cur.shape[0] if cur.ndim == 2 else 1, -1),
                           (path.turns.size, cur.shape[-1] if cur.ndim else 1))  # fmt: skip
-    phi = solve_flux(path, path.turns[:, None] * cur, mats)
-    parts = _mmf(path, mats, np.abs(phi))
+    kern = _kernels(path)
+    phi = solve_flux(path, path.turns[:, None] * cur, mats, kernels=kern)
+    parts = _mmf(path, mats, np.abs(phi), kern)
     rmid = path.gap_r_mid
     b = np.abs(phi)[:, :, None] / (2 * np.pi * rmid * path.gap_len)[:, None, :]
     b = np.where(path.gap_mask[:, None, :], b, 0.0)
