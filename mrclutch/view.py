@@ -16,8 +16,8 @@ from geometry.atomic import atomic_path
 from geometry.params import DrumClutch
 from geometry.validation import ParameterError, check_positive
 
-#: Chord height of the view's tessellation (m): ~1 px on a 30 mm clutch 1000 px wide.
-VIEW_TOLERANCE = 3e-5
+#: Default window of the view and screenshots (pixels).
+WINDOW_SIZE = (1024, 768)
 #: Opacity of the MR fluid so the drums in it stay visible.
 FLUID_OPACITY = 0.55
 
@@ -34,15 +34,28 @@ def _prepare_offscreen() -> None:
         os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 
 
+def view_tolerance(clutch: DrumClutch, window_size: tuple[int, int] = WINDOW_SIZE) -> float:
+    """Chord height [m] the view needs: one pixel when the whole clutch fills the window
+    (its larger envelope side over the window's smaller side). A finer tessellation adds
+    triangles no one can see; a coarser one shows facets."""
+    from geometry.section import build_section
+
+    if min(window_size) < 1:
+        raise ParameterError(f"window_size = {window_size!r}: need positive pixel counts")
+    return max(build_section(clutch).envelope) / min(window_size)
+
+
 def scene_meshes(
-    clutch: DrumClutch, tolerance: float = VIEW_TOLERANCE, cut: bool = True
+    clutch: DrumClutch, tolerance: float | None = None, cut: bool = True
 ) -> list[tuple[str, str, Any]]:
-    """(part, material, pyvista.PolyData in mm) for every solid; half of each if ``cut``."""
+    """(part, material, pyvista.PolyData in mm) for every solid; half of each if ``cut``.
+    ``tolerance`` [m] defaults to :func:`view_tolerance` of the default window."""
     import numpy as np
     import pyvista as pv
 
     from geometry.cad import material_solids, tessellate
 
+    tolerance = view_tolerance(clutch) if tolerance is None else tolerance
     check_positive("tolerance", tolerance, " m")
     out = []
     for (part, material), shape in material_solids(
@@ -58,11 +71,13 @@ def build_plotter(
     clutch: DrumClutch,
     *,
     off_screen: bool,
-    tolerance: float = VIEW_TOLERANCE,
-    window_size: tuple[int, int] = (1024, 768),
+    tolerance: float | None = None,
+    window_size: tuple[int, int] = WINDOW_SIZE,
     cut: bool = True,
 ) -> Any:
-    """A pyvista Plotter with the clutch, looking at the cut face from slightly above."""
+    """A pyvista Plotter with the clutch, looking at the cut face from slightly above;
+    tessellated to ``tolerance`` [m], by default one pixel of ``window_size``."""
+    tolerance = view_tolerance(clutch, window_size) if tolerance is None else tolerance
     if off_screen:
         _prepare_offscreen()
     import pyvista as pv
@@ -92,8 +107,8 @@ def screenshot(
     clutch: DrumClutch,
     path: str | os.PathLike[str],
     *,
-    tolerance: float = VIEW_TOLERANCE,
-    window_size: tuple[int, int] = (1024, 768),
+    tolerance: float | None = None,
+    window_size: tuple[int, int] = WINDOW_SIZE,
 ) -> Path:
     """Render off screen (no display needed) into a PNG at ``path``, atomically."""
     dest = Path(path)
@@ -108,7 +123,7 @@ def screenshot(
     return dest
 
 
-def show(clutch: DrumClutch, *, tolerance: float = VIEW_TOLERANCE) -> None:
+def show(clutch: DrumClutch, *, tolerance: float | None = None) -> None:
     """Open an interactive window (needs a display)."""
     if not has_display():
         raise ParameterError("no display for an interactive window; use --screenshot FILE.png")

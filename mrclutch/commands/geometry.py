@@ -48,7 +48,12 @@ def register(sub: Any) -> None:
     p = sub.add_parser("view", help="3-D view cut in half; --screenshot works headless")
     add_design_args(p)
     p.add_argument("--screenshot", metavar="FILE.png", help="render off screen into a PNG")
-    p.add_argument("--tolerance-mm", type=float, default=0.03, help="chord height of the view (mm)")
+    p.add_argument(
+        "--tolerance-mm",
+        type=float,
+        default=None,
+        help="chord height of the view, mm (default: one screen pixel of the clutch)",
+    )
     p.set_defaults(func=cmd_view)
 
 
@@ -210,7 +215,7 @@ def cmd_view(args: argparse.Namespace) -> int:
     from mrclutch.view import screenshot, show
 
     clutch = load_clutch(args)
-    tol = _tolerance(args)
+    tol = None if args.tolerance_mm is None else _tolerance(args)
     if args.screenshot:
         print(screenshot(clutch, args.screenshot, tolerance=tol))
     else:

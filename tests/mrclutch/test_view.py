@@ -35,6 +35,22 @@ def test_scene_is_cut_in_half_and_coarse():
     assert sum(m.n_cells for m in rotor) < 20_000  # the view does not over-tessellate
 
 
+def test_view_tessellates_as_finely_as_the_screen_shows():
+    from geometry.section import build_section
+    from mrclutch.view import scene_meshes, view_tolerance
+
+    c = preset("paper")
+    side = max(build_section(c).envelope)
+    small, large = view_tolerance(c, (400, 300)), view_tolerance(c, (2000, 1500))
+    assert small == pytest.approx(side / 300) and large == pytest.approx(side / 1500)
+    cells = [sum(m.n_cells for _, _, m in scene_meshes(c, t)) for t in (small, large)]
+    # a bigger screen gets a finer mesh: 5× finer chords give √5× the segments on curved
+    # edges; flat faces and the angular limit do not change (measured 1.45×)
+    assert cells[1] > 1.25 * cells[0]
+    with pytest.raises(ParameterError, match="window_size"):
+        view_tolerance(c, (0, 300))
+
+
 def test_screenshot_needs_png(tmp_path):
     from mrclutch.view import screenshot
 
