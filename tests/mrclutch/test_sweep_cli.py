@@ -49,3 +49,31 @@ def test_killed_sweep_resumes_to_the_same_rows(tmp_path, sig):
     assert 0 < rows < 60000 and rows % 2000 == 0  # whole chunks only
     subprocess.run(_sweep(spec, part, "--resume"), check=True, capture_output=True)
     assert part.read_text() == whole.read_text()
+
+
+HEAVY = ("build123d", "OCP", "skfem", "pyvista", "vtk", "trimesh")
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["sweep", "{spec}", "--out", "{out}", "--no-progress"],
+        ["optimize", "--drums", "2", "--no-verify", "--json"],
+    ],
+    ids=["sweep", "optimize"],
+)
+def test_sweeps_and_the_optimiser_never_build_cad(tmp_path, argv):
+    """Issue 6: a sweep (and the optimiser's search) uses the closed forms and the circuit
+    only — no CAD kernel, FEM or 3-D view is even imported."""
+    spec = tmp_path / "spec.toml"
+    spec.write_text(SPEC.replace("samples = 60000", "samples = 3000"))
+    args = [a.format(spec=spec, out=tmp_path / "rows.csv") for a in argv]
+    code = (
+        "import sys, io, contextlib\n"
+        "from mrclutch.cli import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        f"    rc = main({args!r})\n"
+        f"print(rc, [m for m in {HEAVY!r} if m in sys.modules])\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "0 []", out.stderr
