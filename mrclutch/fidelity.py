@@ -44,13 +44,9 @@ class FidelityWarning(UserWarning):
 
 # ---- the failure map: trust functions ---------------------------------------------------
 
-#: The saturating circuit is trusted to this torque error against FEM.
+#: The saturating circuit is trusted while its torque error against the FEM, as bounded by
+#: the measured error map (mrclutch.circuit_map), stays within this.
 CIRCUIT_TORQUE_TRUST = 0.10
-#: Gap/zone-length ratio above which the circuit's torque error may exceed
-#: CIRCUIT_TORQUE_TRUST: measured on the paper preset swept in zone length 1–6.5 mm and
-#: gap 0.4–1.2 mm against FEM at 0.5 mm (15 designs, circuit with fringing): every error
-#: above 10 % (10–20 %) had a ratio ≥ 0.16; every ratio ≤ 0.123 gave ≤ 8.6 %.
-FRINGING_RATIO = 0.15
 #: Largest Padé phase error [rad] at the stability crossing frequency trusted: the K_c
 #: error is about |d ln K_c/dφ| Δφ with |d ln K_c/dφ| = O(1) (magnitude and phase of
 #: ω Num/(k + jbω) move together near the crossing), so 0.01 rad keeps it near 1 %.
@@ -93,18 +89,21 @@ def linear_circuit_trust(clutch: Any, current: float) -> tuple[str, ...]:
     return ()
 
 
-def fringing_ratio(clutch: Any) -> float:
-    """Gap / active-zone length: the fringing field's share grows with it."""
-    return float(clutch.gap / clutch.zone_length)
+def circuit_trust(clutch: Any) -> tuple[str, ...]:
+    """Messages if the saturating circuit's torque may be more than CIRCUIT_TORQUE_TRUST off
+    the FEM on ``clutch``: the measured error map's bound (mrclutch.circuit_map), or the
+    design lies outside the map (error unknown)."""
+    from mrclutch.circuit_map import circuit_error
 
-
-def circuit_fringing_trust(clutch: Any) -> tuple[str, ...]:
-    """Messages if the saturating circuit is used where fringing matters."""
-    r = fringing_ratio(clutch)
-    if r > FRINGING_RATIO:
+    e = circuit_error(clutch)
+    if not math.isfinite(e.bound):
+        return e.notes
+    if e.bound > CIRCUIT_TORQUE_TRUST:
         return (
-            f"saturating circuit: gap/zone length = {r:.3f} > {FRINGING_RATIO} — fringing "
-            f"makes its torque more than {CIRCUIT_TORQUE_TRUST:.0%} off the FEM; use the FEM",
+            f"saturating circuit: torque {e.estimate:+.1%} off the FEM by the measured error "
+            f"map (bound {e.bound:.1%} > {CIRCUIT_TORQUE_TRUST:.0%}) at {clutch.n_drums} "
+            f"drums, gap {clutch.gap * 1e3:g} mm, zone {clutch.zone_length * 1e3:g} mm; "
+            f"use the FEM",
         )
     return ()
 
@@ -220,10 +219,11 @@ def linear_torque(design: ClutchDesign) -> float:
 
 
 def circuit_torque(design: ClutchDesign) -> float:
-    """Torque at the current limit by the saturating circuit; warns where fringing matters."""
+    """Torque at the current limit by the saturating circuit; warns outside its trusted
+    region (circuit_trust)."""
     from magnetics.torque import torque_curve
 
-    warn(circuit_fringing_trust(design.clutch))
+    warn(circuit_trust(design.clutch))
     curve = torque_curve(
         design.clutch, [design.current_limit], speed_rpm=design.operating.input_speed_rpm
     )
@@ -399,17 +399,31 @@ def stderr_progress(msg: str) -> None:
 
 # ---- automatic fidelity -----------------------------------------------------------------
 
-#: Measured torque error of each method against the FEM at 0.25 mm on the paper preset
-#: at its current limit (``mrclutch fidelity --preset paper``), cheapest first: (method,
-#: FEM size [m] or None, error_rel, typical time [s] on the 2-core development machine).
-#: tests/mrclutch/test_fidelity.py re-measures the entries so the map cannot go stale.
-TORQUE_MAP: tuple[tuple[str, float | None, float, float], ...] = (
-    ("circuit", None, 0.0045, 0.0024),
-    ("fem", 1.0e-3, 0.042, 0.11),
-    ("fem", 0.5e-3, 0.012, 0.21),
-    ("fem", 0.35e-3, 0.0036, 0.41),
-    ("fem", 0.25e-3, 0.0, 0.70),
+#: Torque methods, cheapest first: (method, FEM size [m] or None, typical time [s] at the
+#: paper preset's current limit on the 2-core development machine, `mrclutch fidelity`).
+#: Their error bounds come from the measured map (torque_error_bound).
+TORQUE_METHODS: tuple[tuple[str, float | None, float], ...] = (
+    ("circuit", None, 0.0024),
+    ("fem", 1.0e-3, 0.11),
+    ("fem", 0.5e-3, 0.21),
+    ("fem", 0.35e-3, 0.41),
+    ("fem", 0.25e-3, 0.70),
 )
+
+
+def torque_error_bound(clutch: Any, method: str, size: float | None) -> float:
+    """Bound on the relative torque error of a method against the reference FEM: the
+    circuit's from the measured error map at this design (mrclutch.circuit_map); a coarse
+    FEM's is the largest error measured over the map's slice (FEM_ERROR_BOUND); 0 for the
+    reference mesh size itself."""
+    from mrclutch import circuit_map_data as m
+    from mrclutch.circuit_map import circuit_error
+
+    if method == "circuit":
+        return circuit_error(clutch).bound
+    if size == m.REFERENCE_FEM_SIZE:
+        return 0.0
+    return m.FEM_ERROR_BOUND.get(size, math.inf)
 
 
 def inertia_bound(design: ClutchDesign) -> float:
@@ -444,12 +458,16 @@ def choose(design: ClutchDesign, accuracy: float) -> Choice:
     """Per quantity, the cheapest method whose error bound meets ``accuracy``.
 
     Inertia: analytic if its a-priori bound (hub holes) meets it, else the B-rep.
-    Torque: first entry of TORQUE_MAP within the target (the circuit also needs to be in its
-    trusted region). Bandwidth ∝ √(K_max/(m1+m2)) with K_max ∝ torque, by the full response
-    (exact for the model, milliseconds): its error is ≤ ½(torque error + inertia error).
+    Torque: the first of TORQUE_METHODS whose bound (torque_error_bound: the measured map)
+    meets the target. Bandwidth ∝ √(K_max/(m1+m2)) with K_max ∝ torque, by the full
+    response (exact for the model, a fraction of a millisecond): its error is
+    ≤ ½(torque error + inertia error). The stability and passivity limits are always exact
+    (the exact D-subdivision measured cheaper than its Padé and time-stepping stand-ins).
     """
     if not (isinstance(accuracy, (int, float)) and 0 < accuracy < 1):
         raise ParameterError(f"accuracy = {accuracy!r}: need 0 < accuracy < 1 (relative)")
+    from mrclutch.circuit_map import circuit_error
+
     notes: list[str] = []
     ei = inertia_bound(design)
     inertia = "analytic" if ei <= accuracy else "brep"
@@ -457,23 +475,16 @@ def choose(design: ClutchDesign, accuracy: float) -> Choice:
         ei = 0.0
         notes.append("inertia: the analytic method misses the hub holes; B-rep used")
     t_target = min(accuracy, 2 * accuracy - ei)
-    fringe = circuit_fringing_trust(design.clutch)
-    pick = None
-    for name, size, err, t in TORQUE_MAP:
-        if name == "circuit" and fringe:
-            continue
-        if err <= t_target:
-            pick = (name, size, err, t)
-            break
-    assert pick is not None  # the reference (error 0) always qualifies
-    name, size, et, t = pick
+    bounds = [(n, s, torque_error_bound(design.clutch, n, s), t) for n, s, t in TORQUE_METHODS]
+    name, size, et, t = next(b for b in bounds if b[2] <= t_target)  # the reference: 0
+    circ = circuit_error(design.clutch)
     if name == "fem":
-        circ = TORQUE_MAP[0]
+        est = "unknown" if not math.isfinite(circ.estimate) else f"{circ.estimate:+.1%}"
         notes.append(
-            f"torque within {accuracy:.3g} needs the FEM at {size * 1e3:g} mm "
-            f"(~{t:.2g} s): the saturating circuit is {circ[2]:.1%} off the FEM on the "
-            f"design the map was measured on (paper preset), so this target cannot be had "
-            f"at circuit speed ({circ[3] * 1e3:.0f} ms)"
+            f"torque within {accuracy:.3g} needs the FEM at {size * 1e3:g} mm (~{t:.2g} s): "
+            f"the saturating circuit's error on this design is {est} by the measured map "
+            f"(bound {circ.bound:.1%}), so this target cannot be had at circuit speed "
+            f"({bounds[0][3] * 1e3:.0f} ms)"
         )
     return Choice(
         accuracy,
@@ -481,5 +492,5 @@ def choose(design: ClutchDesign, accuracy: float) -> Choice:
         name,
         size,
         {"inertia": ei, "torque": et, "bandwidth": 0.5 * (et + ei)},
-        tuple(notes) + fringe,
+        tuple(notes) + circ.notes,
     )

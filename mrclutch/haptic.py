@@ -440,9 +440,7 @@ def _crossings(
         while True:
             xi = X(grid).imag
             sc = np.nonzero(np.sign(xi[:-1]) * np.sign(xi[1:]) < 0)[0]
-            w = _illinois(
-                lambda _, x: X(x).imag, grid[sc], grid[sc + 1], xi[sc], xi[sc + 1], 1e-13
-            )
+            w = _illinois(lambda _, x: X(x).imag, grid[sc], grid[sc + 1], xi[sc], xi[sc + 1], 1e-13)
             found.append(w)
             xv = X(w)
             ok = real_positive(xv)

@@ -119,6 +119,10 @@ def clutch_figures(
     else:
         inertia_method = "analytic" if fidelity == "fast" else "brep"
         torque_method = "circuit" if fidelity == "fast" else "fem"
+        if torque_method == "circuit":  # never a silent wrong number (issue 6)
+            from mrclutch.fidelity import circuit_trust
+
+            extra = circuit_trust(c)
     if inertia_method == "analytic":
         mass = analytic_mass(section)
     else:
@@ -257,6 +261,7 @@ BATCH_OUTPUTS: tuple[str, ...] = (
     "diameter_m",
     "length_m",
     "max_torque_N_m",
+    "circuit_error_bound",
     "damping_N_m_s",
     "off_state_torque_N_m",
     "m1_kg",
@@ -293,6 +298,7 @@ def evaluate_batch(
     from geometry.batch import broadcast_fields, layout, valid
     from geometry.mass import analytic_batch
     from magnetics.torque import max_torque_batch, viscous_batch
+    from mrclutch.circuit_map import error_bound
     from mrclutch.haptic import max_passive_stiffness, metrics_batch
 
     base = base if base is not None else ClutchDesign()
@@ -327,6 +333,7 @@ def evaluate_batch(
         "diameter_m": mass["diameter"],
         "length_m": mass["length"],
         "max_torque_N_m": torque,
+        "circuit_error_bound": error_bound(p)[1],
         "damping_N_m_s": damping,
         "off_state_torque_N_m": off_torque,
         "m1_kg": hm["m1_kg"],

@@ -1,0 +1,170 @@
+"""Measure the saturating circuit's torque error against the FEM over the design space and
+write it as the stored map `mrclutch/circuit_map_data.py` (issue 6: the failure map and the
+accuracy-target choice use it).
+
+Grid: n_drums × gap × zone length × drum bore × drum thickness, other dimensions, coil and
+current limit of the paper preset. At each node: yield torque at the current limit by the
+circuit and by the reference FEM (0.25 mm); the signed relative error circuit/FEM − 1. On
+the slice through the paper preset's bore and drum thickness also the coarse FEMs (1, 0.5,
+0.35 mm), whose largest error over the slice is stored as their bound. Then designs at
+cell centres (off the grid) measure how far multilinear interpolation of the map is from
+the truth: its largest miss relative to the map's local variation is stored as
+RANGE_FACTOR, which sets the margin of the circuit's error bound.
+
+    python benchmarks/measure_circuit_map.py [--jobs 2]     # ~10 min on 2 cores
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import itertools
+import math
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import replace
+from pathlib import Path
+
+AXES: dict[str, tuple[float, ...]] = {
+    "n_drums": (1, 2, 3, 4, 5, 6),
+    "gap": (0.2e-3, 0.4e-3, 0.7e-3, 1.0e-3),
+    "zone_length": (3e-3, 6e-3, 9e-3),
+    "drum_inner_diameter": (6e-3, 11.5e-3, 18e-3),
+    "drum_thickness": (0.1e-3, 0.3e-3, 0.6e-3),
+}
+REFERENCE_SIZE = 0.25e-3
+COARSE_SIZES = (1.0e-3, 0.5e-3, 0.35e-3)
+OUT = Path(__file__).resolve().parents[1] / "mrclutch" / "circuit_map_data.py"
+
+
+def _node(args: tuple[dict[str, float], bool]) -> tuple[float, dict[float, float]]:
+    """(circuit error, {coarse FEM size: error}) of one design; NaN if it is invalid."""
+    values, coarse = args
+    from geometry.validation import ParameterError
+    from magnetics.torque import torque_curve
+    from mrclutch.design import design_preset
+
+    base = design_preset("paper")
+    try:
+        kw = {k: (int(v) if k == "n_drums" else v) for k, v in values.items()}
+        c = replace(base.clutch, **kw)
+    except ParameterError:
+        return math.nan, {}
+    i = [replace(base, clutch=c).current_limit]
+    ref = float(torque_curve(c, i, method="fem", fem_size=REFERENCE_SIZE).yield_torque[0])
+    circ = float(torque_curve(c, i).yield_torque[0])
+    fem = {}
+    if coarse:
+        for s in COARSE_SIZES:
+            t = float(torque_curve(c, i, method="fem", fem_size=s).yield_torque[0])
+            fem[s] = t / ref - 1.0
+    return circ / ref - 1.0, fem
+
+
+def checks_of(base) -> list[dict[str, float]]:  # type: ignore[no-untyped-def]
+    """Off-grid designs: cell centres in gap and zone length, on the bore/thickness slice
+    of the base preset and at the centre of the bore/thickness cells above it."""
+    mid = lambda ax: [(x + y) / 2 for x, y in itertools.pairwise(AXES[ax])]  # noqa: E731
+    return [
+        {"n_drums": n, "gap": g, "zone_length": z, "drum_inner_diameter": d, "drum_thickness": t}
+        for n in (1, 2, 3, 4, 6)
+        for g in mid("gap")
+        for z in mid("zone_length")
+        for d, t in ((base.drum_inner_diameter, base.drum_thickness), (14.75e-3, 0.45e-3))
+    ]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--jobs", type=int, default=2)
+    a = ap.parse_args()
+    from mrclutch.design import design_preset
+
+    base = design_preset("paper").clutch
+    names = list(AXES)
+    nodes = [dict(zip(names, v, strict=True)) for v in itertools.product(*AXES.values())]
+    on_slice = [
+        n["drum_inner_diameter"] == base.drum_inner_diameter
+        and n["drum_thickness"] == base.drum_thickness
+        for n in nodes
+    ]
+    checks = checks_of(base)
+    work = [(n, s) for n, s in zip(nodes, on_slice, strict=True)] + [(c, False) for c in checks]
+    out = []
+    with ProcessPoolExecutor(a.jobs) as ex:
+        for k, r in enumerate(ex.map(_node, work, chunksize=4)):
+            out.append(r)
+            print(f"\r{k + 1}/{len(work)}", end="", file=sys.stderr, flush=True)
+    print(file=sys.stderr)
+    errs = [e for e, _ in out[: len(nodes)]]
+    sliced = [f for (_, f), sl in zip(out[: len(nodes)], on_slice, strict=True) if sl and f]
+    fem_bound = {s: max(abs(f[s]) for f in sliced) for s in COARSE_SIZES}
+    measured = [(c, e) for c, (e, _) in zip(checks, out[len(nodes) :], strict=True)]
+    write(errs, fem_bound, len(sliced), measured)
+
+
+def write(
+    errs: list[float],
+    fem_bound: dict[float, float],
+    n_sliced: int,
+    checks: list[tuple[dict[str, float], float]],
+) -> None:
+    """Write the data module; RANGE_FACTOR = the largest interpolation miss at the checks
+    over the local variation of the map there (mrclutch.circuit_map)."""
+    import numpy as np
+
+    sys.path.insert(0, str(OUT.parents[1]))
+    from mrclutch.circuit_map import _interp
+
+    grid = np.array(errs).reshape([len(v) for v in AXES.values()])
+    ratios = []
+    for c, e in checks:
+        est, _, rng = _interp(AXES, grid, c)
+        if math.isfinite(e) and math.isfinite(est) and rng > 0:
+            ratios.append(abs(e - est) / rng)
+    factor = max(ratios)
+
+    cells = ["nan" if not math.isfinite(e) else f"{e:.5f}" for e in errs]
+    rows = "\n".join("    " + ", ".join(cells[k : k + 9]) + "," for k in range(0, len(cells), 9))
+    axes_lines = "".join(f'    "{k}": {v!r},\n' for k, v in AXES.items())
+    bounds = ", ".join(f"{s!r}: {v:.5f}" for s, v in fem_bound.items())
+    nan_import = "\nfrom math import nan\n" if "nan" in cells else ""
+    check_lines = "".join(
+        f"    ({c['n_drums']}, {c['gap']:.6g}, {c['zone_length']:.6g}, "
+        f"{c['drum_inner_diameter']:.6g}, {c['drum_thickness']:.6g}, {e:.5f}),\n"
+        for c, e in checks
+    )
+    text = f'''"""Measured torque error of the saturating circuit against the FEM (signed,
+circuit/FEM − 1, yield torque at the current limit) on a grid over the design space: the
+stored failure map of the circuit. Generated by `python benchmarks/measure_circuit_map.py`
+on {datetime.date.today()}; do not edit by hand. Other dimensions, coil and current limit
+are the paper preset's; nan marks designs that fail validation."""
+{nan_import}
+BASE_PRESET = "paper"
+REFERENCE_FEM_SIZE = {REFERENCE_SIZE!r}  # m
+AXES: dict[str, tuple[float, ...]] = {{
+{axes_lines}}}
+#: Row-major over AXES (n_drums slowest, drum_thickness fastest).
+# fmt: off
+ERRORS: tuple[float, ...] = (
+{rows}
+)
+# fmt: on
+#: Largest |FEM(size)/FEM(reference) − 1| over the grid's slice through the paper
+#: preset's bore and drum thickness ({n_sliced} designs).
+FEM_ERROR_BOUND: dict[float, float] = {{{bounds}}}
+#: Off-grid designs measured the same way: (n_drums, gap, zone_length, bore, drum
+#: thickness, error).
+CHECKS: tuple[tuple[float, ...], ...] = (
+{check_lines})
+#: Largest interpolation miss at CHECKS over the map's local variation there (the range of
+#: the errors at the corners of the design's cell); the bound's margin is this times the
+#: local variation (mrclutch.circuit_map).
+RANGE_FACTOR = {math.ceil(factor * 100) / 100:.2f}
+'''
+    OUT.write_text(text)
+    print(f"wrote {OUT}: FEM bounds {fem_bound}, range factor {factor:.3f}")
+
+
+if __name__ == "__main__":
+    main()

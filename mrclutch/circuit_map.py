@@ -1,0 +1,152 @@
+"""Where the saturating circuit can be trusted: its torque error against the FEM, measured on
+a grid over the design space (`mrclutch/circuit_map_data.py`, written by
+`python benchmarks/measure_circuit_map.py`) and interpolated to any design.
+
+The estimate is the multilinear interpolation of the signed error in gap, zone length,
+drum bore and drum thickness at the design's drum count (no interpolation across drum
+counts). Its bound adds a margin RANGE_FACTOR × v × 4·t(1 − t): v is the local variation
+of the map (the range of the errors at the corners of the design's cell), t the design's
+fractional position in the cell along the worst axis (the linear-interpolation remainder,
+which vanishes at the nodes: a node is a measurement), and RANGE_FACTOR the largest miss
+over v measured at off-grid designs. A design whose dimensions off the map's axes (shell,
+coil, …) differ from the paper preset's gets the margin of a cell centre (t = ½).
+Outside the grid the error is unknown: NaN estimate, infinite bound.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
+from typing import Any
+
+import numpy as np
+
+
+def interpolate(
+    axes: Mapping[str, tuple[float, ...]], grid: np.ndarray, point: Mapping[str, Any]
+) -> Any:
+    """Multilinear interpolation of ``grid`` (shape = the axes' lengths) at ``point`` (scalars
+    or arrays that broadcast). The first axis (drum count) must hit a node exactly. NaN
+    outside the axes or where a corner with non-zero weight is NaN."""
+    return _interp(axes, grid, point)[0]
+
+
+def _interp(
+    axes: Mapping[str, tuple[float, ...]], grid: np.ndarray, point: Mapping[str, Any]
+) -> tuple[Any, Any, Any]:
+    """(estimate, worst 4·t(1 − t) over the continuous axes, range of the grid values at the
+    corners of the point's cell — its local variation)."""
+    names = list(axes)
+    vals = np.broadcast_arrays(*(np.asarray(point[n], dtype=float) for n in names))
+    shape = vals[0].shape
+    vals = [v.ravel() for v in vals]
+    inside = np.ones(vals[0].shape, bool)
+    lo_idx, frac = [], []
+    for k, (name, x) in enumerate(zip(names, vals, strict=True)):
+        a = np.asarray(axes[name], dtype=float)
+        span = a[-1] - a[0]
+        ok = (x >= a[0] - 1e-9 * span) & (x <= a[-1] + 1e-9 * span)
+        xc = np.clip(x, a[0], a[-1])
+        i = np.clip(np.searchsorted(a, xc, side="right") - 1, 0, a.size - 2)
+        t = (xc - a[i]) / (a[i + 1] - a[i])
+        t = np.where(np.abs(t) < 1e-9, 0.0, np.where(np.abs(1 - t) < 1e-9, 1.0, t))
+        if k == 0:  # the drum count: a node, no interpolation and no cell
+            ok &= (t == 0.0) | (t == 1.0)
+            i, t = i + (t == 1.0), np.zeros_like(t)
+        inside &= ok
+        lo_idx.append(i)
+        frac.append(t)
+    est = np.zeros(inside.shape)
+    hi = np.full(inside.shape, -np.inf)
+    lo = np.full(inside.shape, np.inf)
+    for corner in itertools.product((0, 1), repeat=len(names) - 1):
+        corner = (0, *corner)
+        w = np.ones(inside.shape)
+        for c, t in zip(corner, frac, strict=True):
+            w = w * (t if c else 1.0 - t)
+        idx = tuple(i + c for i, c in zip(lo_idx, corner, strict=True))
+        v = grid[idx]
+        est = est + np.where(w > 0, w * v, 0.0)  # NaN corners count only with weight
+        hi, lo = np.fmax(hi, v), np.fmin(lo, v)
+    est = np.where(inside, est, np.nan)
+    spread = np.max([4 * t * (1 - t) for t in frac[1:]], axis=0)
+    rng = np.where(inside, hi - lo, np.nan)
+    if shape == ():
+        return float(est[0]), float(spread[0]), float(rng[0])
+    return est.reshape(shape), spread.reshape(shape), rng.reshape(shape)
+
+
+#: Fields neither the circuit nor the axisymmetric FEM sees (the hub holes).
+AXISYMMETRIC_IGNORED = ("hub_holes", "hub_hole_diameter", "hub_hole_pitch_radius")
+
+
+@dataclass(frozen=True)
+class CircuitError:
+    """The circuit's expected torque error on one design (relative, signed estimate)."""
+
+    estimate: float  # circuit/FEM − 1 from the map; NaN outside it
+    bound: float  # |estimate| + interpolation margin; inf outside the map
+    notes: tuple[str, ...] = ()
+
+
+def _grid() -> tuple[dict[str, tuple[float, ...]], np.ndarray]:
+    from mrclutch import circuit_map_data as m
+
+    return m.AXES, np.array(m.ERRORS, dtype=float).reshape([len(v) for v in m.AXES.values()])
+
+
+def error_bound(p: Mapping[str, Any]) -> tuple[Any, Any, tuple[str, ...]]:
+    """Vectorised core of :func:`circuit_error` over DrumClutch fields ``p`` (scalars or
+    arrays, e.g. geometry.batch.broadcast_fields): (estimate, bound, names of the fields
+    off the map's axes that differ from the base preset somewhere)."""
+    from geometry.params import preset
+    from mrclutch import circuit_map_data as m
+
+    axes, grid = _grid()
+    est, spread, rng = _interp(axes, grid, {k: p[k] for k in axes})
+    base = preset(m.BASE_PRESET)
+    off = np.zeros(np.shape(est), bool)
+    names = []
+    for f in fields(base):
+        if f.name in axes or f.name in AXISYMMETRIC_IGNORED:
+            continue
+        differs = np.asarray(p[f.name]) != getattr(base, f.name)
+        if np.any(differs):
+            off = off | differs
+            names.append(f.name)
+    margin = m.RANGE_FACTOR * rng * np.where(off, 1.0, spread)
+    bound = np.where(np.isfinite(est), np.abs(est) + margin, np.inf)
+    if np.ndim(est) == 0:
+        return float(est), float(bound), tuple(names)
+    return est, bound, tuple(names)
+
+
+def circuit_error(clutch: Any) -> CircuitError:
+    """The map's estimate and bound of the saturating circuit's torque error on ``clutch``."""
+    from mrclutch import circuit_map_data as m
+
+    est, bound, off = error_bound({f.name: getattr(clutch, f.name) for f in fields(clutch)})
+    if not math.isfinite(est):
+        axes = _grid()[0]
+        where = ", ".join(
+            f"{k} = {v:g}" if k == "n_drums" else f"{k} = {v * 1e3:g} mm"
+            for k, v in ((k, getattr(clutch, k)) for k in axes)
+        )
+        return CircuitError(
+            math.nan,
+            math.inf,
+            (
+                f"saturating circuit: {where} is outside the measured error map "
+                f"(benchmarks/measure_circuit_map.py); its error is unknown",
+            ),
+        )
+    notes = ()
+    if off:
+        notes = (
+            f"circuit error map: measured with the {m.BASE_PRESET} preset's "
+            f"{', '.join(off)}; this design differs, so its error bound carries the "
+            f"margin of a cell centre ({m.RANGE_FACTOR:g} × the local variation of the map)",
+        )
+    return CircuitError(est, bound, notes)
