@@ -15,6 +15,7 @@ Outside the grid the error is unknown: NaN estimate, infinite bound.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from collections.abc import Mapping
@@ -31,6 +32,12 @@ def interpolate(
     or arrays that broadcast). The first axis (drum count) must hit a node exactly. NaN
     outside the axes or where a corner with non-zero weight is NaN."""
     return _interp(axes, grid, point)[0]
+
+
+@functools.lru_cache(maxsize=4)
+def _corners(k: int) -> np.ndarray:
+    """The 2^(k−1) corners of a cell, 0/1 per axis; the first axis (drum count) fixed at 0."""
+    return np.array([(0, *c) for c in itertools.product((0, 1), repeat=k - 1)])
 
 
 def _interp(
@@ -58,18 +65,14 @@ def _interp(
         inside &= ok
         lo_idx.append(i)
         frac.append(t)
-    est = np.zeros(inside.shape)
-    hi = np.full(inside.shape, -np.inf)
-    lo = np.full(inside.shape, np.inf)
-    for corner in itertools.product((0, 1), repeat=len(names) - 1):
-        corner = (0, *corner)
-        w = np.ones(inside.shape)
-        for c, t in zip(corner, frac, strict=True):
-            w = w * (t if c else 1.0 - t)
-        idx = tuple(i + c for i, c in zip(lo_idx, corner, strict=True))
-        v = grid[idx]
-        est = est + np.where(w > 0, w * v, 0.0)  # NaN corners count only with weight
-        hi, lo = np.fmax(hi, v), np.fmin(lo, v)
+    # all 2^(k−1) corners of the cell at once (the drum-count axis has one)
+    corners = _corners(len(names))
+    T = np.stack(frac)[None]  # (1, k, P)
+    idx = np.stack(lo_idx)[None] + corners[:, :, None]  # (M, k, P)
+    w = np.prod(np.where(corners[:, :, None] == 1, T, 1.0 - T), axis=1)  # (M, P)
+    v = grid[tuple(idx[:, j] for j in range(len(names)))]  # (M, P)
+    est = np.sum(np.where(w > 0, w * v, 0.0), axis=0)  # NaN corners count only with weight
+    hi, lo = np.fmax.reduce(v, axis=0), np.fmin.reduce(v, axis=0)
     est = np.where(inside, est, np.nan)
     spread = np.max([4 * t * (1 - t) for t in frac[1:]], axis=0)
     rng = np.where(inside, hi - lo, np.nan)
@@ -91,31 +94,41 @@ class CircuitError:
     notes: tuple[str, ...] = ()
 
 
+@functools.lru_cache(maxsize=1)
 def _grid() -> tuple[dict[str, tuple[float, ...]], np.ndarray]:
     from mrclutch import circuit_map_data as m
 
-    return m.AXES, np.array(m.ERRORS, dtype=float).reshape([len(v) for v in m.AXES.values()])
+    grid = np.array(m.ERRORS, dtype=float).reshape([len(v) for v in m.AXES.values()])
+    grid.flags.writeable = False
+    return m.AXES, grid
+
+
+@functools.lru_cache(maxsize=1)
+def _base_off_axes() -> dict[str, Any]:
+    """The base preset's fields that are not axes of the map (nor ignored by the solvers)."""
+    from geometry.params import preset
+    from mrclutch import circuit_map_data as m
+
+    base = preset(m.BASE_PRESET)
+    skip = set(m.AXES) | set(AXISYMMETRIC_IGNORED)
+    return {f.name: getattr(base, f.name) for f in fields(base) if f.name not in skip}
 
 
 def error_bound(p: Mapping[str, Any]) -> tuple[Any, Any, tuple[str, ...]]:
     """Vectorised core of :func:`circuit_error` over DrumClutch fields ``p`` (scalars or
     arrays, e.g. geometry.batch.broadcast_fields): (estimate, bound, names of the fields
     off the map's axes that differ from the base preset somewhere)."""
-    from geometry.params import preset
     from mrclutch import circuit_map_data as m
 
     axes, grid = _grid()
     est, spread, rng = _interp(axes, grid, {k: p[k] for k in axes})
-    base = preset(m.BASE_PRESET)
     off = np.zeros(np.shape(est), bool)
     names = []
-    for f in fields(base):
-        if f.name in axes or f.name in AXISYMMETRIC_IGNORED:
-            continue
-        differs = np.asarray(p[f.name]) != getattr(base, f.name)
+    for name, value in _base_off_axes().items():
+        differs = np.asarray(p[name]) != value
         if np.any(differs):
             off = off | differs
-            names.append(f.name)
+            names.append(name)
     margin = m.RANGE_FACTOR * rng * np.where(off, 1.0, spread)
     bound = np.where(np.isfinite(est), np.abs(est) + margin, np.inf)
     if np.ndim(est) == 0:

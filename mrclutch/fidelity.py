@@ -475,9 +475,12 @@ def choose(design: ClutchDesign, accuracy: float) -> Choice:
         ei = 0.0
         notes.append("inertia: the analytic method misses the hub holes; B-rep used")
     t_target = min(accuracy, 2 * accuracy - ei)
-    bounds = [(n, s, torque_error_bound(design.clutch, n, s), t) for n, s, t in TORQUE_METHODS]
-    name, size, et, t = next(b for b in bounds if b[2] <= t_target)  # the reference: 0
     circ = circuit_error(design.clutch)
+    bounds = [
+        (n, s, circ.bound if n == "circuit" else torque_error_bound(design.clutch, n, s), t)
+        for n, s, t in TORQUE_METHODS
+    ]
+    name, size, et, t = next(b for b in bounds if b[2] <= t_target)  # the reference: 0
     if name == "fem":
         est = "unknown" if not math.isfinite(circ.estimate) else f"{circ.estimate:+.1%}"
         notes.append(
