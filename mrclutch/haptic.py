@@ -348,17 +348,14 @@ def max_passive_stiffness(p: HapticParams) -> Any:
         np.ravel(np.broadcast_to(np.asarray(getattr(p, f), float), shape))[:, None]
         for f in ("m1", "b1", "k", "b", "m2", "delay", "sample_period")
     )
-    a3, a2, a1, a0 = _num_coeffs(HapticParams(m1, b1, k, b, m2))
-    hold = bool(np.any(T > 0))
+    q = HapticParams(m1, b1, k, b, m2, delay=tau, sample_period=T)
+    a3, a2, a1, a0 = _num_coeffs(q)
 
     def ratio(u: np.ndarray) -> np.ndarray:  # Re Z_p/(−g) where g < 0, else inf
         w = TWO_PI * 10.0**u
         s = 1j * w
         d1 = (m1 * s + (b1 + b)) * s + k  # Eq. 2 denominator
-        E = np.exp(-1j * w * tau)
-        if hold:  # zero-order hold, as in _hold
-            E = E * np.exp(-0.5j * w * T) * np.sinc(w * T / TWO_PI)
-        g = (E * (b * s + k) / (s * d1)).real
+        g = (_hold(q, w, None) * (b * s + k) / (s * d1)).real
         re = ((((a3 * s + a2) * s + a1) * s + a0) / d1).real  # Re Z_p, Eq. 2
         neg = g < 0
         return np.where(neg, re / np.where(neg, -g, 1.0), np.inf)
