@@ -13,8 +13,8 @@ import time
 
 import numpy as np
 
-from mrclutch.actuator import TABLE2_MR, HapticParams
-from mrclutch.haptic import closed_loop_impedance, metrics_batch
+from mrclutch.haptics.actuator import TABLE2_MR, HapticParams
+from mrclutch.haptics.model import closed_loop_impedance, metrics_batch
 
 W = 2 * np.pi * np.logspace(-1, 4, 1000)
 

@@ -50,8 +50,8 @@ def best_of(fn, repeats: int = 3) -> float:  # type: ignore[no-untyped-def]
 def parts(fields: dict[str, np.ndarray]) -> dict[str, float]:
     from geometry.mass import analytic_batch
     from magnetics.torque import max_torque_batch, viscous_batch
-    from mrclutch.actuator import HapticParams
-    from mrclutch.haptic import metrics_batch
+    from mrclutch.haptics.actuator import HapticParams
+    from mrclutch.haptics.model import metrics_batch
 
     d = design_preset("paper")
     hp = HapticParams(m1=np.full(N, 1e-3), b1=np.full(N, 0.2), k=4000.0, b=20.0, m2=14e-3,

@@ -35,7 +35,7 @@ from typing import Any
 
 from geometry.params import DrumClutch, preset
 from geometry.validation import ParameterError, check_positive, check_range
-from mrclutch.actuator import MR_170, MR_DELAY, Transmission
+from mrclutch.haptics.actuator import MR_170, MR_DELAY, Transmission
 
 
 @dataclass(frozen=True)

@@ -27,8 +27,8 @@ from typing import Any
 import numpy as np
 
 from geometry.validation import ParameterError
-from mrclutch.actuator import HapticParams
 from mrclutch.design import ClutchDesign
+from mrclutch.haptics.actuator import HapticParams
 
 QUANTITIES: tuple[str, ...] = ("inertia", "torque", "stability", "bandwidth")
 UNITS = {"inertia": "kg·m²", "torque": "N·m", "stability": "N/m", "bandwidth": "Hz"}
@@ -122,27 +122,11 @@ def mesh_trust(clutch: Any, tolerance: float) -> tuple[str, ...]:
     return ()
 
 
-def crossing_frequency(p: HapticParams, K: float) -> float:
-    """ω [rad/s] where a root of the delayed loop at K sits on the imaginary axis: the
-    magnitude condition K|k + jbω| = ω|Num(jω)| (the delay only sets the phase; Eq. 2)."""
-    from scipy.optimize import brentq
-
-    def f(w: float) -> float:
-        s = 1j * w
-        num = ((p.m1 * p.m2 * s + (p.m2 * p.b1 + p.m1 * p.b + p.m2 * p.b)) * s
-               + (p.b1 * p.b + p.m1 * p.k + p.m2 * p.k)) * s + p.b1 * p.k  # fmt: skip
-        return math.log(w * abs(num)) - math.log(K * abs(p.k + 1j * p.b * w))
-
-    lo, hi = 1e-6, 1.0
-    while f(hi) < 0:
-        hi *= 2.0
-    return float(brentq(f, lo, hi, xtol=1e-12, rtol=1e-12))
-
-
 def pade_trust(p: HapticParams, K: float, order: int) -> tuple[str, ...]:
     """Messages if the order-n Padé delay is off by more than PADE_PHASE_BOUND in phase at
     the crossing frequency of K (high K·τ: the crossing moves up to where Padé fails)."""
-    from mrclutch.methods import pade_phase_error
+    from mrclutch.haptics.delay import pade_phase_error
+    from mrclutch.haptics.model import crossing_frequency
 
     w = crossing_frequency(p, K)
     tau = float(p.delay) + 0.5 * float(p.sample_period)
@@ -266,7 +250,7 @@ def _brep_inertia(design: ClutchDesign) -> float:
 
 def pade_stability(design: ClutchDesign, order: int) -> float:
     """Largest stable K with an order-n Padé delay; warns where its phase is off."""
-    from mrclutch.methods import pade_stable_stiffness
+    from mrclutch.haptics.delay import pade_stable_stiffness
 
     p, _ = haptic_params(design)
     k = pade_stable_stiffness(p, order)
@@ -275,20 +259,20 @@ def pade_stability(design: ClutchDesign, order: int) -> float:
 
 
 def _step_stability(design: ClutchDesign, n: int) -> float:
-    from mrclutch.methods import step_stable_stiffness
+    from mrclutch.haptics.delay import step_stable_stiffness
 
     return step_stable_stiffness(haptic_params(design)[0], n)
 
 
 def _exact_stability(design: ClutchDesign) -> float:
-    from mrclutch.haptic import max_stable_stiffness
+    from mrclutch.haptics.model import max_stable_stiffness
 
     return float(max_stable_stiffness(haptic_params(design)[0]))
 
 
 def lumped_bandwidth(design: ClutchDesign) -> float:
     """Eq. 1 bandwidth [Hz] at K_max; warns near the transmission mode."""
-    from mrclutch.haptic import bandwidth_lumped
+    from mrclutch.haptics.model import bandwidth_lumped
 
     p, k = haptic_params(design)
     warn(lumped_trust(p, k))
@@ -296,7 +280,7 @@ def lumped_bandwidth(design: ClutchDesign) -> float:
 
 
 def _full_bandwidth(design: ClutchDesign) -> float:
-    from mrclutch.haptic import bandwidth
+    from mrclutch.haptics.model import bandwidth
 
     p, k = haptic_params(design)
     return float(bandwidth(p, k))

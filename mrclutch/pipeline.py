@@ -24,7 +24,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from geometry.validation import check_choice
-from mrclutch.actuator import (
+from mrclutch.design import ClutchDesign
+from mrclutch.haptics.actuator import (
     EM_170,
     Actuator,
     HapticParams,
@@ -32,7 +33,6 @@ from mrclutch.actuator import (
     actuator,
     reflect,
 )
-from mrclutch.design import ClutchDesign
 
 FIDELITIES: tuple[str, ...] = ("fast", "reference")
 #: Stated relative error of the fast path's rendering bandwidth against the reference
@@ -238,7 +238,7 @@ def evaluate(
     """The clutch figures and their haptic consequences, beside the equal-force motor.
     ``accuracy`` (relative): pick per quantity the cheapest method that meets it
     (mrclutch.fidelity.choose); the Evaluation's fidelity then reads "accuracy=…"."""
-    from mrclutch.haptic import metrics_of
+    from mrclutch.haptics.model import metrics_of
 
     fig = clutch_figures(design, fidelity, accuracy)
     if accuracy is not None:
@@ -301,7 +301,7 @@ def evaluate_batch(
     from geometry.mass import analytic_batch
     from magnetics.torque import max_torque_batch, viscous_batch
     from mrclutch.circuit_map import error_bound
-    from mrclutch.haptic import max_passive_stiffness, metrics_batch
+    from mrclutch.haptics.model import max_passive_stiffness, metrics_batch
 
     base = base if base is not None else ClutchDesign()
     p = broadcast_fields(fields, base.clutch)

@@ -68,9 +68,9 @@ def _edge(args: argparse.Namespace) -> tuple[float | None, float | None, float]:
 
 def run_haptic(args: argparse.Namespace) -> int:
     from geometry.validation import check_choice
-    from mrclutch.actuator import actuator, reflect, transmission_for
     from mrclutch.commands._common import print_json
-    from mrclutch.haptic import metrics
+    from mrclutch.haptics.actuator import actuator, reflect, transmission_for
+    from mrclutch.haptics.model import metrics
 
     K, delay, workspace = _edge(args)
     lever = check_positive("--lever-mm", args.lever_mm, " mm") * 1e-3
@@ -92,7 +92,7 @@ def compare_params(
     K: float | None = None, delay: float | None = None, workspace: float = 0.05
 ) -> tuple[Any, Any, float]:
     """(MR params, EM params, K): Table 2 MR set vs the 136206 through the EM bench."""
-    from mrclutch.actuator import TABLE2_EM_136206, TABLE2_MR
+    from mrclutch.haptics.actuator import TABLE2_EM_136206, TABLE2_MR
 
     mr = replace(TABLE2_MR, workspace=workspace)
     em = replace(TABLE2_EM_136206, workspace=workspace)
@@ -105,7 +105,7 @@ def compare_params(
 
 def compare_result(mr: Any, em: Any, K: float) -> dict[str, Any]:
     """The ``compare --json`` object."""
-    from mrclutch.haptic import bandwidth, is_stable, metrics
+    from mrclutch.haptics.model import bandwidth, is_stable, metrics
 
     m_mr, m_em = metrics(mr, K), metrics(em, K)
     bw_nodelay = float(bandwidth(replace(mr, delay=0.0), K))

@@ -26,7 +26,7 @@ def compare_figure(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from mrclutch.haptic import (
+    from mrclutch.haptics.model import (
         BAND_HZ,
         bandwidth,
         closed_loop_impedance,

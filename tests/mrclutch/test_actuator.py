@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from geometry.validation import ParameterError
-from mrclutch.actuator import (
+from mrclutch.haptics.actuator import (
     ACTUATORS,
     EM_170,
     MR_170,

@@ -7,7 +7,7 @@ import sys
 import pytest
 
 from mrclutch.cli import main
-from mrclutch.haptic import METRIC_KEYS
+from mrclutch.haptics.model import METRIC_KEYS
 
 
 def _json(capsys, argv):

@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 
 from geometry.validation import ParameterError
-from mrclutch.actuator import TABLE2_MR
 from mrclutch.design import design_preset
 from mrclutch.fidelity import (
     CIRCUIT_TORQUE_TRUST,
@@ -24,8 +23,9 @@ from mrclutch.fidelity import (
     mesh_trust,
     pade_trust,
 )
-from mrclutch.haptic import bandwidth, bandwidth_lumped, max_stable_stiffness
-from mrclutch.methods import pade_stable_stiffness
+from mrclutch.haptics.actuator import TABLE2_MR
+from mrclutch.haptics.delay import pade_stable_stiffness
+from mrclutch.haptics.model import bandwidth, bandwidth_lumped, max_stable_stiffness
 
 
 @pytest.fixture(scope="module")

@@ -8,16 +8,16 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from mrclutch.actuator import TABLE2_MR
 from mrclutch.design import design_preset
-from mrclutch.haptic import max_stable_stiffness
-from mrclutch.methods import (
+from mrclutch.haptics.actuator import TABLE2_MR
+from mrclutch.haptics.delay import (
     pade_coefficients,
     pade_phase_error,
     pade_stable_stiffness,
     simulate_growth,
     step_stable_stiffness,
 )
+from mrclutch.haptics.model import max_stable_stiffness
 from mrclutch.pipeline import evaluate
 
 

@@ -8,14 +8,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mrclutch.actuator import (
+from mrclutch.haptics.actuator import (
     TABLE2_EM_118890,
     TABLE2_EM_136206,
     TABLE2_EM_136209,
     TABLE2_MR,
     HapticParams,
 )
-from mrclutch.haptic import (
+from mrclutch.haptics.model import (
     METRIC_KEYS,
     bandwidth,
     bandwidth_lumped,

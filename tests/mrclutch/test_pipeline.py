@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from geometry import preset
-from mrclutch.actuator import HapticParams
 from mrclutch.design import ClutchDesign, design_preset
-from mrclutch.haptic import metrics
+from mrclutch.haptics.actuator import HapticParams
+from mrclutch.haptics.model import metrics
 from mrclutch.pipeline import BATCH_OUTPUTS, evaluate, evaluate_batch
 
 DESIGNS = [

@@ -5,9 +5,9 @@ from dataclasses import replace
 
 import pytest
 
-from mrclutch.actuator import EM_75, EM_170, TABLE2_MR, actuator, geared, reflect
 from mrclutch.commands.haptic import compare_params, compare_result
-from mrclutch.haptic import bandwidth
+from mrclutch.haptics.actuator import EM_75, EM_170, TABLE2_MR, actuator, geared, reflect
+from mrclutch.haptics.model import bandwidth
 
 
 def test_table2_theoretical_reflected_masses():

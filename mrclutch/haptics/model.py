@@ -66,7 +66,7 @@ from typing import Any
 import numpy as np
 
 from geometry.validation import ParameterError, check_nonnegative
-from mrclutch.actuator import HapticParams
+from mrclutch.haptics.actuator import HapticParams
 
 __all__ = [
     "BAND_HZ",
@@ -126,6 +126,24 @@ def _num_coeffs(p: HapticParams) -> tuple[Any, Any, Any, Any]:
         p.b1 * p.b + p.m1 * p.k + p.m2 * p.k,
         p.b1 * p.k,
     )
+
+
+def crossing_frequency(p: HapticParams, K: float) -> float:
+    """ω [rad/s] where a root of the delayed loop at K sits on the imaginary axis: the
+    magnitude condition K|k + jbω| = ω|Num(jω)| (the delay only sets the phase; Eq. 2)."""
+    from scipy.optimize import brentq
+
+    c3, c2, c1, c0 = _num_coeffs(p)
+
+    def f(w: float) -> float:
+        s = 1j * w
+        num = ((c3 * s + c2) * s + c1) * s + c0
+        return math.log(w * abs(num)) - math.log(K * abs(p.k + 1j * p.b * w))
+
+    lo, hi = 1e-6, 1.0
+    while f(hi) < 0:
+        hi *= 2.0
+    return float(brentq(f, lo, hi, xtol=1e-12, rtol=1e-12))
 
 
 def _hold(p: HapticParams, w: Any, sample_period: Any) -> Any:

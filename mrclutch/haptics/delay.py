@@ -1,6 +1,6 @@
 """Cheaper stand-ins for the exact delay: Padé approximants and time stepping.
 
-The exact reference is :func:`mrclutch.haptic.max_stable_stiffness` (D-subdivision on the
+The exact reference is :func:`mrclutch.haptics.model.max_stable_stiffness` (D-subdivision on the
 quasi-polynomial with the pure delay e^{−sτ}). The two approximations here give the same
 quantity — the largest virtual stiffness K [N/m] for which the free lever is stable — so
 their error can be measured against it (``mrclutch fidelity``):
@@ -17,7 +17,7 @@ their error can be measured against it (``mrclutch fidelity``):
   finite-time bias: :func:`simulate_growth`.)
 
 A zero-order hold of period T is folded into the delay as its phase lag T/2, as
-:func:`mrclutch.haptic.bandwidth` does.
+:func:`mrclutch.haptics.model.bandwidth` does.
 """
 
 from __future__ import annotations
@@ -28,7 +28,8 @@ from collections.abc import Callable
 import numpy as np
 
 from geometry.validation import ParameterError, check_positive
-from mrclutch.actuator import HapticParams
+from mrclutch.haptics.actuator import HapticParams
+from mrclutch.haptics.model import _num_coeffs
 
 
 def pade_coefficients(order: int) -> tuple[np.ndarray, np.ndarray]:
@@ -62,19 +63,6 @@ def pade_phase_error(tau: float, order: int, w: np.ndarray | float) -> np.ndarra
 
 def _tau(p: HapticParams) -> float:
     return float(p.delay) + 0.5 * float(p.sample_period)  # ZOH as its phase lag T/2
-
-
-def _num(p: HapticParams) -> np.ndarray:
-    """Eq. 2 numerator Num(s), descending powers (mrclutch.haptic module docstring)."""
-    return np.array(
-        [
-            p.m1 * p.m2,
-            p.m2 * p.b1 + p.m1 * p.b + p.m2 * p.b,
-            p.b1 * p.b + p.m1 * p.k + p.m2 * p.k,
-            p.b1 * p.k,
-        ],
-        dtype=float,
-    )
 
 
 def _largest_stable(stable: Callable[[float], bool], k0: float, rtol: float = 1e-9) -> float:
@@ -113,7 +101,8 @@ def pade_stable_stiffness(p: HapticParams, order: int) -> float:
     def poly(coeffs_asc_x: np.ndarray) -> np.ndarray:  # P(sτ) as a polynomial in σ
         return (coeffs_asc_x * (tau * w0) ** np.arange(coeffs_asc_x.size))[::-1]
 
-    snum = np.polymul(_num(p) * sig[3::-1], [1.0, 0.0]) * 1.0  # s Num(s), s = w0σ
+    num = np.array(_num_coeffs(p), dtype=float)  # Eq. 2 Num(s), descending powers
+    snum = np.polymul(num * sig[3::-1], [1.0, 0.0]) * 1.0  # s Num(s), s = w0σ
     snum = snum * w0  # the extra factor s = w0 σ
     bk = np.array([p.b * w0, p.k])
     lhs = np.polymul(snum, poly(den_p))
@@ -144,7 +133,7 @@ def step_map(p: HapticParams, K: float, steps_per_delay: int) -> np.ndarray:
             [p.k / p.m2, p.b / p.m2, -p.k / p.m2, -p.b / p.m2],
         ],
         dtype=float,
-    )  # Eq. 1-2 equations of motion (mrclutch.haptic module docstring)
+    )  # Eq. 1-2 equations of motion (mrclutch.haptics.model module docstring)
     B = np.array([0, 1 / p.m1, 0, 0])
     h = tau / N
     M = np.zeros((6, 6))  # FOH discretisation by one matrix exponential (Franklin et al.)
