@@ -14,13 +14,13 @@ Three methods (see README "Speed against accuracy"):
 
 ``mesh_mass``/``brep_mass`` take a clutch (its hub holes included); ``weigh_shape`` and
 ``weigh_mesh`` weigh any solid or closed mesh about an axis through the origin.
-``analytic_batch`` is the vectorised analytic method for sweeps (no section objects).
+The analytic method is one function of the region table (``part_sums``): ``analytic_mass``
+applies it to one section, ``analytic_batch`` to arrays of designs (sweeps).
 """
 
 from __future__ import annotations
 
-import math
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any
@@ -28,8 +28,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from geometry.params import DrumClutch
-from geometry.section import OUTPUT_PARTS, PARTS, Section, build_section
+from geometry import regions
+from geometry.params import DrumClutch, broadcast_fields, valid
+from geometry.regions import OUTPUT_PARTS, PARTS
+from geometry.section import Section, build_section
 from geometry.validation import ParameterError, check_positive
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -70,22 +72,40 @@ class MassReport:
         return sum(pm.mass for pm in self.parts.values())
 
 
+def tube(rho: Any, r0: Any, r1: Any, dz: Any) -> tuple[Any, Any]:
+    """Mass and axial inertia of a revolved rectangle (thick-walled tube; any dynamics text,
+    e.g. Meriam & Kraige, Appendix B): ρπ(r1²−r0²)Δz and ρπ(r1⁴−r0⁴)Δz/2."""
+    a0, a1 = r0 * r0, r1 * r1
+    m = rho * np.pi * (a1 - a0) * dz
+    return m, m * (a1 + a0) / 2
+
+
+def part_sums(
+    rects: Iterable[tuple[str, Any, Any, Any, Any, Any]],
+) -> dict[str, tuple[Any, Any]]:
+    """(mass, inertia) of every part from its rectangles (part, ρ, r0, r1, z0, z1): floats
+    for one design or arrays for many — the analytic method, written once."""
+    acc: dict[str, list[Any]] = {p: [0.0, 0.0] for p in PARTS}
+    for part, rho, r0, r1, z0, z1 in rects:
+        m, j = tube(rho, r0, r1, z1 - z0)
+        acc[part][0] = acc[part][0] + m
+        acc[part][1] = acc[part][1] + j
+    return {p: (m, j) for p, (m, j) in acc.items()}
+
+
 def analytic_mass(section: Section) -> MassReport:
     """Exact mass and inertia of every part of the axisymmetric section."""
-    acc = {p: [0.0, 0.0] for p in PARTS}
-    for reg in section.regions:
-        rho = section.densities[reg.material]
-        dz = reg.z1 - reg.z0
-        acc[reg.part][0] += rho * math.pi * (reg.r1**2 - reg.r0**2) * dz
-        # thick-walled tube about its axis: I = ρ π (r1⁴ − r0⁴) Δz / 2
-        acc[reg.part][1] += rho * math.pi * (reg.r1**4 - reg.r0**4) * dz / 2
+    dens = section.densities
+    sums = part_sums(
+        (r.part, dens[r.material], r.r0, r.r1, r.z0, r.z1) for r in section.regions
+    )
     notes: tuple[str, ...] = ()
     if section.clutch.hub_holes:
         notes = (
             f"analytic method does not see the {section.clutch.hub_holes} hub holes "
             "(non-axisymmetric); use mesh or brep",
         )
-    parts = {p: PartMass(m, i) for p, (m, i) in acc.items()}
+    parts = {p: PartMass(float(m), float(i)) for p, (m, i) in sums.items()}
     return MassReport("analytic", MappingProxyType(parts), notes)
 
 
@@ -265,25 +285,7 @@ def _converge(
     )
 
 
-# ---- vectorised analytic method ----------------------------------------------------------
-def _tube(rho: Any, r0: Any, r1: Any, dz: Any) -> tuple[Any, Any]:
-    """Mass and axial inertia of a revolved rectangle: ρπ(r1²−r0²)Δz, ρπ(r1⁴−r0⁴)Δz/2."""
-    a0, a1 = r0 * r0, r1 * r1
-    return rho * np.pi * (a1 - a0) * dz, rho * np.pi * (a1 * a1 - a0 * a0) * dz / 2
-
-
-def _drum_sums(r0: np.ndarray, r1: np.ndarray, mask: np.ndarray) -> tuple[Any, Any]:
-    """Σ over existing drums of (r1² − r0²) and (r1⁴ − r0⁴), shape S."""
-    s2 = np.zeros(r0.shape[0])
-    s4 = np.zeros(r0.shape[0])
-    for k in range(r0.shape[1]):  # few columns: column sums beat a reduce over axis 1
-        a0, a1 = r0[:, k] ** 2, r1[:, k] ** 2
-        m = mask[:, k]
-        s2 += np.where(m, a1 - a0, 0.0)
-        s4 += np.where(m, a1 * a1 - a0 * a0, 0.0)
-    return s2, s4
-
-
+# ---- the analytic method on arrays of designs --------------------------------------------------
 def analytic_batch(fields: Mapping[str, ArrayLike]) -> dict[str, np.ndarray]:
     """``analytic_mass(build_section(DrumClutch(**design)))`` for arrays of designs at once.
 
@@ -291,18 +293,16 @@ def analytic_batch(fields: Mapping[str, ArrayLike]) -> dict[str, np.ndarray]:
     fields take the DrumClutch defaults. Returns arrays of shape S: ``rotor_inertia``
     (kg·m²), ``rotor_mass``, ``clutch_mass`` (kg), ``diameter``, ``length`` (m, envelope),
     ``valid`` (passes DrumClutch's validation; the other entries of invalid designs are
-    meaningless), and ``mass_<part>`` / ``inertia_<part>`` for every part. The regions are
-    those of ``geometry.section.build_section`` (checked design by design in tests).
+    NaN), and ``mass_<part>`` / ``inertia_<part>`` for every part: ``part_sums`` over the
+    region table, one batch per drum count.
     """
-    from geometry.batch import broadcast_fields
-
     p = broadcast_fields(fields)
     size = p["n_drums"].size
     if size <= BATCH_CHUNK:
         return _analytic_chunk(p)
     # Chunks of < 128 kB arrays: glibc recycles such temporaries from its heap, while each
     # larger one is a fresh mmap whose pages fault in on first touch (the dominant cost on
-    # 10⁵ designs; measured in benchmarks/bench_geometry.py: ~70 ms unchunked, ~40 ms).
+    # 10⁵ designs; measured in benchmarks/bench_geometry.py).
     out: dict[str, np.ndarray] = {}
     for i in range(0, size, BATCH_CHUNK):
         part = _analytic_chunk({k: v[i : i + BATCH_CHUNK] for k, v in p.items()})
@@ -318,80 +318,24 @@ def analytic_batch(fields: Mapping[str, ArrayLike]) -> dict[str, np.ndarray]:
 BATCH_CHUNK = 16000
 
 
-def _analytic_chunk(p: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
-    from types import SimpleNamespace
-
-    from geometry.batch import hub_outer_radius, layout, valid
-    from geometry.section import DENSITY_MRF, DENSITY_STAINLESS, DENSITY_STEEL, coil_density
-
-    lay = layout(p, with_gaps=False)
-    p = lay.p
-    t, band, rs, h = p["end_cap_thickness"], p["band_length"], p["shaft_radius"], p["hub_thickness"]
-    rp, big_r, core = lay.pole_radius, lay.outer_radius, lay.core_radius
-    hub_r = hub_outer_radius(lay)
-    out2, out4 = _drum_sums(lay.out_r0, lay.out_r1, lay.out_mask)
-    in2, in4 = _drum_sums(lay.in_r0, lay.in_r1, lay.in_mask)
-    # Unit-density (ρ = 1) volumes V and inertias J of the pieces laid out in section.py.
-    v_out_steel = (lay.zA1 - lay.zs0) + (lay.zB1 - lay.zB0)  # axial length of drum steel
-    v_in_steel = (lay.zA1 - lay.zA0) + (lay.zs1 - lay.zB0)
-    shaft = _tube(1.0, 0.0, rs, lay.zs0 + p["shaft_length"])
-    shaft_in = _tube(1.0, 0.0, rs, lay.zs0 - t)  # the part of the shaft inside the cavity
-    hub = _tube(1.0, rs, hub_r, h)
-    core_t = _tube(1.0, 0.0, core, lay.zs1 - lay.zA0)
-    shell = _tube(1.0, rp, big_r, (lay.zA1 - t) + (lay.zs1 - lay.zB0))
-    back = _tube(1.0, lay.coil_outer_radius, big_r, band)
-    sleeve = _tube(1.0, rp, lay.coil_inner_radius, band)
-    caps = _tube(1.0, rs + p["shaft_bore_clearance"], big_r, t)
-    cap_b = _tube(1.0, 0.0, big_r, t)
-    coil = _tube(1.0, lay.coil_inner_radius, lay.coil_outer_radius, band)
-    cavity = _tube(1.0, 0.0, rp, lay.zs1 - t)
-    half_pi = np.pi / 2
-    coil_rho = coil_density(
-        SimpleNamespace(
-            coil_turns=p["coil_turns"],
-            wire_diameter=p["wire_diameter"],
-            coil_window_area=p["coil_depth"] * band,
-        )
+def region_mass(rg: regions.Regions) -> dict[str, Any]:
+    """Per-part mass and inertia, totals and envelope of the designs of one region table."""
+    sums = part_sums(
+        (sp.part, rg.density(sp.material), *rg.bounds(sp)) for sp in rg
     )
-    parts: dict[str, tuple[Any, Any]] = {
-        "shaft": (DENSITY_STAINLESS * shaft[0], DENSITY_STAINLESS * shaft[1]),
-        "rotor": (
-            DENSITY_STAINLESS * (hub[0] + np.pi * out2 * band)
-            + DENSITY_STEEL * np.pi * out2 * v_out_steel,
-            DENSITY_STAINLESS * (hub[1] + half_pi * out4 * band)
-            + DENSITY_STEEL * half_pi * out4 * v_out_steel,
-        ),
-        "input": (
-            np.pi * in2 * (DENSITY_STAINLESS * band + DENSITY_STEEL * v_in_steel),
-            half_pi * in4 * (DENSITY_STAINLESS * band + DENSITY_STEEL * v_in_steel),
-        ),
-        "housing": tuple(
-            DENSITY_STEEL * (core_t[k] + shell[k] + back[k])
-            + DENSITY_STAINLESS * (sleeve[k] + caps[k] + cap_b[k])
-            for k in (0, 1)
-        ),
-        "coil": (coil_rho * coil[0], coil_rho * coil[1]),
-        # the fluid fills the cavity r < rp, t < z < zs1 less the solids inside it
-        "fluid": (
-            DENSITY_MRF
-            * (
-                cavity[0] - shaft_in[0] - hub[0] - core_t[0]
-                - np.pi * out2 * (lay.zB1 - lay.zs0) - np.pi * in2 * (lay.zs1 - lay.zA0)
-            ),
-            DENSITY_MRF
-            * (
-                cavity[1] - shaft_in[1] - hub[1] - core_t[1]
-                - half_pi * out4 * (lay.zB1 - lay.zs0) - half_pi * in4 * (lay.zs1 - lay.zA0)
-            ),
-        ),
-    }  # fmt: skip
-    res: dict[str, np.ndarray] = {}
-    for part in PARTS:
-        res[f"mass_{part}"], res[f"inertia_{part}"] = parts[part]
-    res["rotor_inertia"] = sum(parts[q][1] for q in OUTPUT_PARTS)
-    res["rotor_mass"] = sum(parts[q][0] for q in OUTPUT_PARTS)
-    res["clutch_mass"] = sum(parts[q][0] for q in PARTS)
-    res["diameter"] = 2 * big_r
-    res["length"] = lay.overall_length
-    res["valid"] = valid(lay)
+    res: dict[str, Any] = {}
+    for part, (m, j) in sums.items():
+        res[f"mass_{part}"], res[f"inertia_{part}"] = m, j
+    res["rotor_inertia"] = sum(sums[q][1] for q in OUTPUT_PARTS)
+    res["rotor_mass"] = sum(sums[q][0] for q in OUTPUT_PARTS)
+    res["clutch_mass"] = sum(sums[q][0] for q in PARTS)
+    res["diameter"] = 2 * rg.outer_radius
+    res["length"] = rg.length
+    return res
+
+
+def _analytic_chunk(p: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+    ok = valid(p)
+    res = regions.per_topology(p, ok, lambda rg, rows: region_mass(rg))
+    res["valid"] = ok
     return res

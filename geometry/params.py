@@ -27,7 +27,9 @@ from dataclasses import dataclass, fields, replace
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
+from geometry import regions
 from geometry.validation import (
     ParameterError,
     check_int,
@@ -55,7 +57,7 @@ HUB_HOLE_WEB = 0.2e-3
 
 # ---- the validation rules, stated once --------------------------------------------------
 # ``DrumClutch.__post_init__`` turns them into ParameterErrors one design at a time;
-# ``geometry.batch.valid`` evaluates the same tables and functions on arrays of designs.
+# ``valid`` evaluates the same tables and functions on arrays of designs.
 #: Integer fields: (name, lo, hi), inclusive.
 INT_RANGES: tuple[tuple[str, int, int], ...] = (
     ("n_drums", 1, 20),
@@ -107,6 +109,12 @@ def hub_holes_inside(
     lo = shaft_radius + HUB_HOLE_MARGIN
     hi = first_drum_r0 - HUB_HOLE_MARGIN
     return (pitch_radius - hole_diameter / 2 >= lo) & (pitch_radius + hole_diameter / 2 <= hi)
+
+
+def bore_covered(bore_radius: Any, hub_outer_radius: Any) -> Any:
+    """The front cap's bore opens inside the hub's face, so the hub closes the fluid chamber
+    (the face film between hub and cap needs a cap face to shear against)."""
+    return bore_radius < hub_outer_radius
 
 
 def hub_holes_apart(n_holes: Any, pitch_radius: Any, hole_diameter: Any) -> Any:
@@ -168,6 +176,14 @@ class DrumClutch:
                 f"shaft_radius = {self.shaft_radius:.6g} m: must be < the hub's outer radius "
                 f"{self.hub_outer_radius:.6g} m"
             )
+        bore = self.shaft_radius + self.shaft_bore_clearance
+        if not bore_covered(bore, self.hub_outer_radius):
+            raise ParameterError(
+                f"shaft_bore_clearance = {self.shaft_bore_clearance:.6g} m: the front cap's bore "
+                f"(radius {bore:.6g} m) must stay inside the hub (outer radius "
+                f"{self.hub_outer_radius:.6g} m), or the fluid chamber opens; allowed range "
+                f"(0, {self.hub_outer_radius - self.shaft_radius:.6g}) m"
+            )
         # The coil must fit its window (turns · d_ins² ≤ packing · window area).
         have = COIL_PACKING * self.coil_window_area
         if not coil_fits(
@@ -190,8 +206,9 @@ class DrumClutch:
     def _check_hub_holes(self) -> None:
         r_h, d_h = self.hub_hole_pitch_radius, self.hub_hole_diameter
         lo = self.shaft_radius + HUB_HOLE_MARGIN
-        hi = self.drum_radii_out[0][0] - HUB_HOLE_MARGIN
-        if not hub_holes_inside(r_h, d_h, self.shaft_radius, self.drum_radii_out[0][0]):
+        first = self.drum_radii_out[0][0]
+        hi = first - HUB_HOLE_MARGIN
+        if not hub_holes_inside(r_h, d_h, self.shaft_radius, first):
             raise ParameterError(
                 f"hub_hole_pitch_radius = {r_h:.6g} m with hub_hole_diameter = {d_h:.6g} m: "
                 f"holes must lie between r = {lo:.6g} m (shaft + 0.25 mm) and "
@@ -206,43 +223,56 @@ class DrumClutch:
                 f"{r_h * 1e3:.3g} mm pitch radius overlap; allowed range [0, {max_n}]"
             )
 
-    # ---- derived radii (single place where the radial stack is laid out) ----------------
+    # ---- derived dimensions: the region table's stations (geometry/regions.py) -----------
+    @property
+    def stations(self) -> dict[str, float]:
+        """Every r and z station of the section (``geometry.regions.stations``), metres."""
+        return regions.stations(vars(self), self.n_drums)
+
     @property
     def core_radius(self) -> float:
         """Outer radius of the steel core = inner wall of the first gap."""
         return self.drum_inner_diameter / 2 - self.gap
 
+    def _drum_radii(self, kind: str) -> tuple[tuple[float, float], ...]:
+        st = self.stations
+        return tuple(
+            (st[regions.rho(j)], st[regions.rho(j + 1)])
+            for j in range(regions.n_layers(self.n_drums))
+            if regions.layer(j)[0] == kind
+        )
+
     @property
     def drum_radii_out(self) -> tuple[tuple[float, float], ...]:
         """(inner, outer) radius of every output drum, innermost first."""
-        return tuple(self._stack()[0])
+        return self._drum_radii("out")
 
     @property
     def drum_radii_in(self) -> tuple[tuple[float, float], ...]:
         """(inner, outer) radius of every input drum, innermost first."""
-        return tuple(self._stack()[1])
+        return self._drum_radii("in")
 
     @property
     def pole_radius(self) -> float:
         """Inner radius of the shell's pole faces = outer wall of the last gap."""
-        return self._stack()[2]
+        return self.stations[regions.rho(4 * self.n_drums - 1)]
 
     @property
     def hub_outer_radius(self) -> float:
         """The hub reaches the outer face of the outermost output drum."""
-        return self.drum_radii_out[-1][1]
+        return self.stations[regions.rho(4 * self.n_drums - 2)]
 
     @property
     def coil_inner_radius(self) -> float:
-        return self.pole_radius + self.sleeve_thickness
+        return self.stations["coil_in"]
 
     @property
     def coil_outer_radius(self) -> float:
-        return self.coil_inner_radius + self.coil_depth
+        return self.stations["coil_out"]
 
     @property
     def outer_radius(self) -> float:
-        return self.coil_outer_radius + self.shell_thickness
+        return self.stations["outer"]
 
     @property
     def wire_outer_diameter(self) -> float:
@@ -260,36 +290,19 @@ class DrumClutch:
     @property
     def stack_length(self) -> float:
         """Axial length of the drum stack region (clearance + zone + band + zone + clearance)."""
-        return 2 * self.end_clearance + 2 * self.zone_length + self.band_length
+        st = self.stations
+        return st["cap_back"] - st["hub_back"]
 
     @property
     def body_length(self) -> float:
         """Housing length: front cap + hub + stack + back cap."""
-        return (
-            self.end_cap_thickness
-            + self.end_clearance
-            + self.hub_thickness
-            + self.stack_length
-            + self.end_cap_thickness
-        )
+        return self.stations["back"]
 
     @property
     def overall_length(self) -> float:
         """Envelope length including the output shaft stick-out."""
-        return self.body_length + self.shaft_length
-
-    def _stack(self) -> tuple[list[tuple[float, float]], list[tuple[float, float]], float]:
-        out: list[tuple[float, float]] = []
-        inp: list[tuple[float, float]] = []
-        r = self.core_radius
-        for i in range(self.n_drums):
-            r += self.gap
-            out.append((r, r + self.drum_thickness))
-            r += self.drum_thickness + self.gap
-            if i < self.n_drums - 1:
-                inp.append((r, r + self.input_drum_thickness))
-                r += self.input_drum_thickness
-        return out, inp, r
+        st = self.stations
+        return st["back"] - st["shaft_tip"]
 
     # ---- conversion at the edges ----------------------------------------------------------
     def to_mm(self) -> dict[str, float | int]:
@@ -345,6 +358,57 @@ class DrumClutch:
 FIELD_NAMES = tuple(f.name for f in fields(DrumClutch))
 INTEGER_FIELDS = frozenset({"n_drums", "coil_turns", "hub_holes"})
 LENGTH_FIELDS = frozenset(n for n in FIELD_NAMES if n not in INTEGER_FIELDS)
+
+# ---- arrays of designs -------------------------------------------------------------------
+def broadcast_fields(
+    values: Mapping[str, ArrayLike], base: DrumClutch | None = None
+) -> dict[str, np.ndarray]:
+    """Every DrumClutch field as a 1-D array of a common length S (missing ones from base)."""
+    unknown = sorted(set(values) - set(FIELD_NAMES))
+    if unknown:
+        raise ParameterError(f"{unknown[0]}: unknown DrumClutch field")
+    base = base if base is not None else DrumClutch()
+    arrays: dict[str, Any] = {}
+    for f in fields(DrumClutch):
+        v = values[f.name] if f.name in values else getattr(base, f.name)
+        arrays[f.name] = np.asarray(v, dtype=float)
+    shaped = np.broadcast_arrays(*arrays.values())
+    return {k: np.ravel(a) for k, a in zip(arrays, shaped, strict=True)}
+
+
+def valid(p: Mapping[str, np.ndarray]) -> NDArray[np.bool_]:
+    """Which of the designs ``p`` (``broadcast_fields``) pass DrumClutch's validation: the
+    same rule tables and predicates, on arrays (integer fields must hold integers)."""
+    ok = np.ones(np.asarray(p["n_drums"]).shape, dtype=bool)
+    with np.errstate(invalid="ignore"):
+        for name, ilo, ihi in INT_RANGES:
+            v = p[name]
+            ok &= (v >= ilo) & (v <= ihi) & (v == np.round(v))  # NaN fails
+    for name, lo, hi, lo_open in LENGTH_RANGES:
+        v = p[name]
+        ok &= ((v > lo) if lo_open else (v >= lo)) & (v <= hi)  # NaN fails both
+    for name in NONNEGATIVE_FIELDS:
+        ok &= np.isfinite(p[name]) & (p[name] >= 0)
+    for name in POSITIVE_FIELDS:
+        ok &= np.isfinite(p[name]) & (p[name] > 0)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        d_ins = p["wire_diameter"] + 2 * p["wire_insulation"]
+        ok &= coil_fits(p["coil_turns"], d_ins, p["coil_depth"], p["band_length"])
+        ok &= wire_fits(d_ins, p["coil_depth"], p["band_length"])
+        for n, rows in regions.by_drum_count(p["n_drums"], ok).items():
+            sub = {k: v[rows] for k, v in p.items()}
+            rg = regions.evaluate(sub, n)
+            good = rg.core_radius > 0
+            good &= sub["shaft_radius"] < rg.hub_outer_radius
+            good &= bore_covered(rg.at["bore"], rg.hub_outer_radius)
+            r_h, d_h = sub["hub_hole_pitch_radius"], sub["hub_hole_diameter"]
+            first_r0 = rg.at[regions.rho(1)]
+            holes = hub_holes_inside(r_h, d_h, sub["shaft_radius"], first_r0)
+            holes &= hub_holes_apart(sub["hub_holes"], r_h, d_h)
+            good &= (sub["hub_holes"] == 0) | holes
+            ok[rows] = good
+    return ok
+
 
 #: The paper's clutch (Lebel et al., Table 1: 0.4 N·m, 2.7 g·cm², 85 g, 30×30×40 mm,
 #: 140 turns of 28 AWG). The paper gives no drum dimensions; ours are chosen in

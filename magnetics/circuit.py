@@ -44,14 +44,15 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from geometry.batch import layout
+from geometry.materials import MRF, STEEL
 from geometry.params import DrumClutch
+from geometry.regions import ZONES, Regions
 from geometry.section import Section, build_section
 from geometry.validation import ParameterError
 from magnetics.materials import MATERIALS, MU0, BHCurve, Magnetic, magnetic
 
 FloatArray = NDArray[np.float64]
-STEEL, FLUID = "steel_1018", "mrf_132dg"
+FLUID = MRF
 _POLE_POINTS = 3  # Gauss points in ln r for the thick pole rings
 _BAND_POINTS = 3  # Gauss points along the half band (linear potential fall)
 #: A steel element is reported saturated where its differential μr falls below this.
@@ -97,142 +98,112 @@ class MagneticPath:
         return 0.5 * (self.gap_r0 + self.gap_r1)
 
 
-def _overlap(a0: float, a1: float, b0: float, b1: float) -> float:
-    return max(0.0, min(a1, b1) - max(a0, b0))
-
-
 def _leak_permeance(
-    mu_fluid: float, band: float, fluid_area: float, nonmag_stack: float, window: float
-) -> float:
+    mu_fluid: float, band: FloatArray, fluid_area: FloatArray, nonmag_stack: FloatArray,
+    window: FloatArray,
+) -> FloatArray:
     # Axial permeance μA/l of the band region (Roters ch. 5); fluid and stainless inside the
     # stack at half weight (linear potential drop across the stack), sleeve + coil at full.
     return (0.5 * (mu_fluid * fluid_area + MU0 * nonmag_stack) + MU0 * window) / band
 
 
+def path_from_regions(
+    rg: Regions, materials: Mapping[str, Magnetic] | None = None
+) -> MagneticPath:
+    """The loop of the designs of one region table (S designs of one drum count).
+
+    Read from the table, not laid out again: a gap's walls are the steel regions that share
+    its edge stations, the length it carries flux over is where those walls face each
+    other inside the gap's wetted length and an active zone; the drum walls are the steel
+    regions of the rotor and input parts, crossed over their overlap with each zone; the
+    leakage and band reluctance come from the regions that span the band between the core
+    and the back iron.
+    """
+    mats = MATERIALS if materials is None else materials
+    size = np.size(rg.at["outer"])
+    at = {k: np.broadcast_to(np.asarray(v, dtype=float), (size,)) for k, v in rg.at.items()}
+    col = lambda v: np.broadcast_to(np.asarray(v, dtype=float), (size,))  # noqa: E731
+
+    def box(sp):  # type: ignore[no-untyped-def]
+        return at[sp.r0], at[sp.r1], at[sp.z0], at[sp.z1]
+
+    steels = [sp for sp in rg if sp.material == STEEL]
+    gaps = rg.films("cylinder")
+    zones = [(name, at[a], at[b]) for name, a, b in ZONES]
+    gap_r0, gap_r1, gap_len, labels = [], [], [], []
+    for zname, z0, z1 in zones:
+        for g in gaps:
+            _, _, g0, g1 = box(g)
+            length = np.zeros(size)
+            for a in (w for w in steels if w.r1 == g.r0):  # inner walls
+                for b in (w for w in steels if w.r0 == g.r1):  # outer walls
+                    lo = np.maximum(np.maximum(at[a.z0], at[b.z0]), g0)
+                    hi = np.minimum(np.minimum(at[a.z1], at[b.z1]), g1)
+                    facing = (hi > lo) & (np.minimum(hi, z1) > np.maximum(lo, z0))
+                    length = length + np.where(facing, hi - lo, 0.0)
+            if np.any(length > 0):
+                gap_r0.append(at[g.r0])
+                gap_r1.append(at[g.r1])
+                gap_len.append(length)
+                labels.append(f"{g.name}_{zname}")
+    drum_r0, drum_r1, drum_len = [], [], []
+    for _, z0, z1 in zones:
+        for sp in steels:
+            if sp.part in ("rotor", "input"):
+                r0, r1, a0, a1 = box(sp)
+                length = np.maximum(np.minimum(a1, z1) - np.maximum(a0, z0), 0.0)
+                if np.any(length > 0):
+                    drum_r0.append(r0)
+                    drum_r1.append(r1)
+                    drum_len.append(length)
+    core, back = box(rg.spec("core")), box(rg.spec("shell_back"))
+    pole_a, pole_b = box(rg.spec("shell_A")), box(rg.spec("shell_B"))
+    # Leakage over the band (zone A's end to zone B's start): what lies between the core
+    # and the back iron there; the band's radial series reluctance S_b from the core to
+    # the pole radius (series layers: Σ ln(ro/ri)/μ).
+    (_, za0, za1), (_, zb0, _) = zones
+    band = zb0 - za1
+    mu_f = magnetic(FLUID, mats).mu_initial
+    fluid_area = nonmag = window = s_band = np.zeros(size)
+    rc, rp = core[1], pole_a[0]
+    for sp in rg:
+        r0, r1, a0, a1 = box(sp)
+        spans = (a0 <= za1) & (a1 >= zb0) & (r0 >= rc)
+        area = np.pi * (r1**2 - r0**2)
+        layer = spans & (r1 <= rp)
+        mu = mu_f if sp.material == FLUID else magnetic(sp.material, mats).mu_initial
+        s_band = s_band + np.where(layer, np.log(r1 / np.where(layer, r0, r1)) / mu, 0.0)
+        if sp.material == FLUID:
+            fluid_area = fluid_area + np.where(layer, area, 0.0)
+        elif sp.material != STEEL:
+            nonmag = nonmag + np.where(layer, area, 0.0)
+        window = window + np.where(spans & ~layer & (r1 <= back[0]), area, 0.0)
+    stack = lambda xs: np.stack(xs, axis=1) if xs else np.zeros((size, 0))  # noqa: E731
+    zc = 0.5 * (za0 + za1), 0.5 * (zb0 + zones[1][2])
+    glen = stack(gap_len)
+    dlen = stack(drum_len)
+    return MagneticPath(
+        turns=col(rg.fields["coil_turns"]).astype(float),
+        gap_r0=stack(gap_r0), gap_r1=stack(gap_r1), gap_len=glen, gap_mask=glen > 0,
+        gap_label=tuple(labels),
+        drum_r0=stack(drum_r0), drum_r1=stack(drum_r1), drum_len=dlen, drum_mask=dlen > 0,
+        pole_r0=stack([pole_a[0], pole_b[0]]), pole_r1=stack([back[0], back[0]]),
+        pole_len=stack([pole_a[3] - pole_a[2], pole_b[3] - pole_b[2]]),
+        core_area=np.pi * rc**2, core_len=zc[1] - zc[0],
+        back_area=np.pi * (back[1] ** 2 - back[0] ** 2), back_len=zc[1] - zc[0],
+        leak_permeance=_leak_permeance(mu_f, band, fluid_area, nonmag, window),
+        band_len=band, band_reluctance=s_band,
+        steel=STEEL, fluid=FLUID,
+    )  # fmt: skip
+
+
 def path_from_section(
     section: Section, materials: Mapping[str, Magnetic] | None = None
 ) -> MagneticPath:
-    """The loop read from the section's regions, gaps and zones (one design, S = 1)."""
-    c = section.clutch
-    mats = MATERIALS if materials is None else materials
-    za, zb = section.zones
-    core = section.region("core")
-    pole_a, pole_b = section.region("shell_A"), section.region("shell_B")
-    back = section.region("shell_back")
-    steel = core.material
-    fluid = section.region(f"gap{section.gaps[0].index}").material
-    steels = [r for r in section.regions if r.material == steel]
-    gap_r0, gap_r1, gap_len, labels = [], [], [], []
-    for zone in (za, zb):
-        for g in section.gaps:
-            inner = [r for r in steels if abs(r.r1 - g.r_inner) < 1e-12]
-            outer = [r for r in steels if abs(r.r0 - g.r_outer) < 1e-12]
-            length = 0.0
-            for a in inner:
-                for b in outer:
-                    lo, hi = max(a.z0, b.z0, g.z0), min(a.z1, b.z1, g.z1)
-                    if hi > lo and _overlap(lo, hi, zone.z0, zone.z1) > 0:
-                        length += hi - lo  # facing steel walls that carry this zone
-            if length > 0:
-                gap_r0.append(g.r_inner)
-                gap_r1.append(g.r_outer)
-                gap_len.append(length)
-                labels.append(f"gap{g.index}_{zone.name}")
-    drum_r0, drum_r1, drum_len = [], [], []
-    for zone in (za, zb):
-        for r in section.regions:
-            if r.part in ("rotor", "input") and r.material == steel:
-                length = _overlap(r.z0, r.z1, zone.z0, zone.z1)
-                if length > 0 and core.r1 <= r.r0 and r.r1 <= pole_a.r0:
-                    drum_r0.append(r.r0)
-                    drum_r1.append(r.r1)
-                    drum_len.append(length)
-    # Leakage over the band (za.z1..zb.z0): what lies between core and back iron there;
-    # the band's radial series reluctance S_b from the core to the pole radius.
-    band = zb.z0 - za.z1
-    mu_f = magnetic(fluid, mats).mu_initial
-    fluid_area = nonmag = window = s_band = 0.0
-    for r in section.regions:
-        if r.z0 <= za.z1 + 1e-12 and r.z1 >= zb.z0 - 1e-12 and r.r0 >= core.r1 - 1e-12:
-            area = np.pi * (r.r1**2 - r.r0**2)
-            if r.r1 <= pole_a.r0 + 1e-12:
-                mu = mu_f if r.material == fluid else magnetic(r.material, mats).mu_initial
-                s_band += np.log(r.r1 / r.r0) / mu  # series layers: Σ ln(ro/ri)/μ
-                if r.material == fluid:
-                    fluid_area += area
-                elif r.material != steel:
-                    nonmag += area
-            elif r.r1 <= back.r0 + 1e-12:
-                window += area
-    one = lambda v: np.asarray([v], dtype=float)  # noqa: E731
-    row = lambda v: np.asarray([v], dtype=float).reshape(1, -1)  # noqa: E731
-    zc = 0.5 * (za.z0 + za.z1), 0.5 * (zb.z0 + zb.z1)
-    return MagneticPath(
-        turns=one(c.coil_turns),
-        gap_r0=row(gap_r0), gap_r1=row(gap_r1), gap_len=row(gap_len),
-        gap_mask=np.ones((1, len(gap_r0)), bool), gap_label=tuple(labels),
-        drum_r0=row(drum_r0), drum_r1=row(drum_r1), drum_len=row(drum_len),
-        drum_mask=np.ones((1, len(drum_r0)), bool),
-        pole_r0=row([pole_a.r0, pole_b.r0]), pole_r1=row([back.r0, back.r0]),
-        pole_len=row([pole_a.z1 - pole_a.z0, pole_b.z1 - pole_b.z0]),
-        core_area=one(np.pi * core.r1**2), core_len=one(zc[1] - zc[0]),
-        back_area=one(np.pi * (back.r1**2 - back.r0**2)), back_len=one(zc[1] - zc[0]),
-        leak_permeance=one(_leak_permeance(mu_f, band, fluid_area, nonmag, window)),
-        band_len=one(band), band_reluctance=one(s_band),
-        steel=steel, fluid=fluid,
-    )  # fmt: skip
-
-
-def path_from_fields(
-    fields: Mapping[str, ArrayLike], materials: Mapping[str, Magnetic] | None = None
-) -> MagneticPath:
-    """The same loop for arrays of designs, from ``geometry.batch.layout`` (vectorised)."""
-    mats = MATERIALS if materials is None else materials
-    lay = layout(fields)
-    p = lay.p
-    zone = p["zone_length"]
-    band = p["band_length"]
-    n = p["n_drums"]
-    # Each gap carries field over both zones; in zone A the outermost gap's walls (outer
-    # drum and pole) also face each other over the end clearance.
-    gl = np.concatenate([lay.gap_r_inner, lay.gap_r_inner], axis=1)
-    gu = np.concatenate([lay.gap_r_outer, lay.gap_r_outer], axis=1)
-    gm = np.concatenate([lay.gap_mask, lay.gap_mask], axis=1)
-    kk = lay.gap_mask.shape[1]
-    last_a = np.arange(2 * kk)[None, :] == (2 * n - 1)[:, None]
-    glen = zone[:, None] + np.where(last_a, p["end_clearance"][:, None], 0.0)
-    # Steel drums crossed radially: output drums and input drums, in both zones.
-    dr0 = np.concatenate([lay.out_r0, lay.in_r0], axis=1)
-    dr1 = np.concatenate([lay.out_r1, lay.in_r1], axis=1)
-    dm = np.concatenate([lay.out_mask, lay.in_mask], axis=1)
-    dr0, dr1, dm = (np.concatenate([a, a], axis=1) for a in (dr0, dr1, dm))
-    dlen = np.broadcast_to(zone[:, None], dr0.shape).copy()
-    t = p["end_cap_thickness"]
-    pole_len = np.stack([lay.zA1 - t, lay.zs1 - lay.zB0], axis=1)
-    rp, rco, R = lay.pole_radius, lay.coil_outer_radius, lay.outer_radius
-    rc = lay.core_radius
-    gap_area = np.where(lay.gap_mask, np.pi * (lay.gap_r_outer**2 - lay.gap_r_inner**2), 0.0)
-    fluid_area = gap_area.sum(axis=1)
-    nonmag = np.pi * (rp**2 - rc**2) - fluid_area
-    window = np.pi * (rco**2 - rp**2)
-    mu_f = magnetic(FLUID, mats).mu_initial
-    mu_s = magnetic("stainless_304", mats).mu_initial
-    ln_gaps = np.where(lay.gap_mask, np.log(lay.gap_r_outer / lay.gap_r_inner), 0.0).sum(1)
-    # Band layers from core to pole radius: fluid gaps and stainless drum walls in series.
-    s_band = ln_gaps / mu_f + (np.log(rp / rc) - ln_gaps) / mu_s
-    zc = zone + band
-    return MagneticPath(
-        turns=p["coil_turns"].astype(float),
-        gap_r0=gl, gap_r1=gu, gap_len=glen, gap_mask=gm,
-        gap_label=tuple(f"gap{k % kk}_{'AB'[k // kk]}" for k in range(gl.shape[1])),
-        drum_r0=dr0, drum_r1=dr1, drum_len=dlen, drum_mask=dm,
-        pole_r0=np.stack([rp, rp], axis=1), pole_r1=np.stack([rco, rco], axis=1),
-        pole_len=pole_len,
-        core_area=np.pi * rc**2, core_len=zc,
-        back_area=np.pi * (R**2 - rco**2), back_len=zc,
-        leak_permeance=_leak_permeance(mu_f, band, fluid_area, nonmag, window),
-        band_len=band, band_reluctance=s_band,
-    )  # fmt: skip
+    """The loop of one design (S = 1): ``path_from_regions`` of the section's table."""
+    if section.table is None:
+        raise ParameterError("section: built by hand, without a region table; no circuit")
+    return path_from_regions(section.table, materials)
 
 
 @dataclass(frozen=True)

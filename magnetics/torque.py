@@ -13,19 +13,22 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from geometry.batch import layout
-from geometry.params import DrumClutch
+from geometry.materials import MRF
+from geometry.params import DrumClutch, broadcast_fields, valid
+from geometry.regions import Regions, per_topology
 from geometry.section import Section, build_section
 from geometry.validation import ParameterError, check_choice, check_finite, check_range
 from magnetics.circuit import (
+    MagneticPath,
     _kernels,
     _mmf,
     band_h,
-    path_from_fields,
+    path_from_regions,
     path_from_section,
     solve_flux,
     solve_path,
@@ -53,20 +56,31 @@ class Drag:
     face_torque: tuple[float, ...]  # per face film, N·m
 
 
+def film_damping(rg: Regions, viscosity: float) -> tuple[list[Any], list[Any]]:
+    """dT/dω (N·m·s) of every cylindrical gap and every face film of a region table (floats
+    for one design, arrays for many): the viscous drag, written once."""
+    gaps = []
+    for sp in rg.films("cylinder"):
+        r0, r1, z0, z1 = rg.bounds(sp)
+        # Couette: T = 2π η ω r³ L / g (thin cylindrical gap at mid-radius)
+        gaps.append(2 * np.pi * viscosity * ((r0 + r1) / 2) ** 3 * (z1 - z0) / (r1 - r0))
+    faces = []
+    for sp in rg.films("face"):
+        r0, r1, z0, z1 = rg.bounds(sp)
+        # Disk film: T = π η ω (r1⁴ − r0⁴) / (2h)
+        faces.append(np.pi * viscosity * (r1**4 - r0**4) / (2 * (z1 - z0)))
+    return gaps, faces
+
+
 def viscous_drag(section: Section, slip_speed: float, fluid: MRFluid | None = None) -> Drag:
     """Viscous torque of every sheared film of ``section`` at ``slip_speed`` (rad/s)."""
     w = check_finite("slip_speed", slip_speed, " rad/s")
-    eta = _fluid(section, fluid).viscosity
-    # Couette: T = 2π η ω r³ L / g (thin cylindrical gap at mid-radius)
-    gaps = tuple(
-        2 * math.pi * eta * w * g.r_mean**3 * (g.z1 - g.z0) / g.width for g in section.gaps
-    )
-    # Disk film: T = π η ω (r1⁴ − r0⁴) / (2h)
-    faces = tuple(math.pi * eta * w * (f.r1**4 - f.r0**4) / (2 * f.height) for f in section.faces)
-    total = sum(gaps) + sum(faces)
-    c_gap = sum(2 * math.pi * eta * g.r_mean**3 * (g.z1 - g.z0) / g.width for g in section.gaps)
-    c_face = sum(math.pi * eta * (f.r1**4 - f.r0**4) / (2 * f.height) for f in section.faces)
-    return Drag(w, total, c_gap + c_face, gaps, faces)
+    if section.table is None:
+        raise ParameterError("section: built by hand, without a region table; no drag")
+    c_gap, c_face = film_damping(section.table, _fluid(section, fluid).viscosity)
+    damping = float(sum(c_gap) + sum(c_face))
+    return Drag(w, damping * w, damping, tuple(float(c * w) for c in c_gap),
+                tuple(float(c * w) for c in c_face))  # fmt: skip
 
 
 def _fluid(section: Section, fluid: MRFluid | None) -> MRFluid:
@@ -160,7 +174,22 @@ def torque_curve(
                        drag.damping)  # fmt: skip
 
 
-# ---- vectorised batch functions for sweeps over arrays of designs ------------------------
+# ---- arrays of designs: one batch per drum count (geometry.regions.per_topology) ----------
+
+
+def yield_torque_at(
+    path: MagneticPath,
+    current: ArrayLike,
+    materials: Mapping[str, Magnetic] | None = None,
+    fluid: MRFluid | None = None,
+) -> FloatArray:
+    """Yield torque (N·m, shape S) of the S designs of ``path``, each at its current."""
+    mats = MATERIALS if materials is None else materials
+    cur = np.broadcast_to(np.asarray(current, dtype=float), path.turns.shape)
+    kern = _kernels(path)
+    phi = np.abs(solve_flux(path, (path.turns * cur)[:, None], mats, rtol=1e-7, kernels=kern))
+    radial = 0.5 * _mmf(path, mats, phi, kern)["radial"]
+    return _gap_torque(path, phi, radial, mats, fluid).sum(-1)[:, 0]
 
 
 def max_torque_batch(
@@ -169,14 +198,16 @@ def max_torque_batch(
     materials: Mapping[str, Magnetic] | None = None,
     fluid: MRFluid | None = None,
 ) -> FloatArray:
-    """Yield torque (N·m, shape S) of S designs, each at its current (broadcast to S)."""
-    mats = MATERIALS if materials is None else materials
-    path = path_from_fields(fields, mats)
-    cur = np.broadcast_to(np.asarray(current, dtype=float), path.turns.shape)
-    kern = _kernels(path)
-    phi = np.abs(solve_flux(path, (path.turns * cur)[:, None], mats, rtol=1e-7, kernels=kern))
-    radial = 0.5 * _mmf(path, mats, phi, kern)["radial"]
-    return _gap_torque(path, phi, radial, mats, fluid).sum(-1)[:, 0]
+    """Yield torque (N·m, shape S) of S designs, each at its current (broadcast to S);
+    NaN for designs that fail DrumClutch's validation."""
+    p = broadcast_fields(fields)
+    cur = np.broadcast_to(np.asarray(current, dtype=float), p["n_drums"].shape)
+
+    def one(rg: Regions, rows: np.ndarray) -> dict[str, FloatArray]:
+        return {"t": yield_torque_at(path_from_regions(rg, materials), cur[rows], materials,
+                                     fluid)}  # fmt: skip
+
+    return per_topology(p, valid(p), one)["t"]
 
 
 def torque_grid_batch(
@@ -186,7 +217,25 @@ def torque_grid_batch(
     fluid: MRFluid | None = None,
     n_table: int = 192,
 ) -> FloatArray:
-    """Yield torque (S, C) of S designs at every one of C currents.
+    """Yield torque (S, C) of S designs at every one of C currents (``torque_table`` per
+    drum count); NaN rows for designs that fail DrumClutch's validation."""
+    p = broadcast_fields(fields)
+
+    def one(rg: Regions, rows: np.ndarray) -> dict[str, FloatArray]:
+        path = path_from_regions(rg, materials)
+        return {"t": torque_table(path, currents, materials, fluid, n_table)}
+
+    return per_topology(p, valid(p), one)["t"]
+
+
+def torque_table(
+    path: MagneticPath,
+    currents: ArrayLike,
+    materials: Mapping[str, Magnetic] | None = None,
+    fluid: MRFluid | None = None,
+    n_table: int = 192,
+) -> FloatArray:
+    """Yield torque (S, C) of the designs of ``path`` at every one of C currents.
 
     Tabulate-and-invert: the loop's MMF F(Φ) is strictly increasing, so it is tabulated
     on ``n_table`` fluxes per design (0 … the flux at the largest |N·I|, bracketed
@@ -194,7 +243,6 @@ def torque_grid_batch(
     Relative error in torque ≲ 1e-3 at 192 points (tests/magnetics/test_circuit.py).
     """
     mats = MATERIALS if materials is None else materials
-    path = path_from_fields(fields, mats)
     cur = np.abs(np.asarray(currents, dtype=float).ravel())
     s = path.turns.size
     ni_max = path.turns * max(float(cur.max(initial=0.0)), 1e-12)
@@ -229,28 +277,17 @@ def _gap_torque(path, phi, radial, materials, fluid) -> FloatArray:  # type: ign
     return np.where(path.gap_mask[:, None, :], 2 * np.pi * rmid**2 * tau, 0.0)
 
 
+def film_damping_total(rg: Regions, viscosity: float) -> Any:
+    """dT/dω (N·m·s) of all films of the designs of a region table."""
+    c_gap, c_face = film_damping(rg, viscosity)
+    return sum(c_gap) + sum(c_face)
+
+
 def viscous_batch(
     fields: Mapping[str, ArrayLike], slip_speed: ArrayLike, fluid: MRFluid | None = None
 ) -> tuple[FloatArray, FloatArray]:
-    """(off-state torque N·m, damping N·m·s), shape S, same films as ``viscous_drag``."""
-    lay = layout(fields)
-    p = lay.p
-    eta = (FLUIDS["mrf_132dg"] if fluid is None else fluid).viscosity
-    g = lay.gap_r_outer - lay.gap_r_inner
-    r = 0.5 * (lay.gap_r_outer + lay.gap_r_inner)
-    # Couette 2π η r³ L / g per cylindrical gap (per unit ω)
-    c_gap = np.where(lay.gap_mask, 2 * np.pi * eta * r**3 * (lay.gap_z1 - lay.gap_z0) / g, 0)
-    h = p["end_clearance"]
-    r_hub = lay.out_r1[np.arange(lay.size), p["n_drums"] - 1]
-    r_bore = p["shaft_radius"] + p["shaft_bore_clearance"]
-
-    def disk(r0: ArrayLike, r1: ArrayLike) -> FloatArray:
-        hh = h[:, None] if np.ndim(r0) > 1 else h
-        return np.pi * eta * (np.asarray(r1) ** 4 - np.asarray(r0) ** 4) / (2 * hh)
-
-    c_face = disk(r_bore, r_hub) + disk(0.0 * r_hub, lay.core_radius)
-    c_face = c_face + np.where(lay.out_mask, disk(lay.out_r0, lay.out_r1), 0).sum(1)
-    c_face = c_face + np.where(lay.in_mask, disk(lay.in_r0, lay.in_r1), 0).sum(1)
-    c = c_gap.sum(1) + c_face
-    w = np.asarray(slip_speed, dtype=float)
-    return c * w, c
+    """(off-state torque N·m, damping N·m·s), shape S: ``film_damping`` per drum count."""
+    p = broadcast_fields(fields)
+    eta = (FLUIDS[MRF] if fluid is None else fluid).viscosity
+    c = per_topology(p, valid(p), lambda rg, rows: {"c": film_damping_total(rg, eta)})["c"]
+    return c * np.asarray(slip_speed, dtype=float), c

@@ -33,6 +33,8 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from geometry.params import DrumClutch, preset
 from geometry.validation import ParameterError, check_positive, check_range
 from mrclutch.haptics.actuator import MR_170, MR_DELAY, Transmission
@@ -73,8 +75,13 @@ class ClutchDesign:
     @property
     def current_limit(self) -> float:
         """The largest current allowed: max_current, capped by the current-density limit."""
-        wire_area = math.pi * self.clutch.wire_diameter**2 / 4
-        return min(self.operating.max_current, self.operating.max_current_density * wire_area)
+        return float(current_limit(self.operating, self.clutch.wire_diameter))
+
+
+def current_limit(operating: Operating, wire_diameter: Any) -> Any:
+    """max_current capped by the current-density limit in the copper (floats or arrays)."""
+    wire_area = math.pi * wire_diameter**2 / 4
+    return np.minimum(operating.max_current, operating.max_current_density * wire_area)
 
 
 #: Named designs. "paper": the paper's clutch on the paper's MR bench (170 mm lever).

@@ -23,8 +23,22 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from geometry import regions
+from geometry.mass import analytic_mass, brep_mass, region_mass
+from geometry.params import broadcast_fields, valid
+from geometry.section import build_section
 from geometry.validation import check_choice
-from mrclutch.design import ClutchDesign
+from magnetics.circuit import path_from_regions
+from magnetics.error_map import error_bound
+from magnetics.materials import FLUIDS
+from magnetics.torque import (
+    coil_properties,
+    film_damping_total,
+    torque_curve,
+    viscous_drag,
+    yield_torque_at,
+)
+from mrclutch.design import ClutchDesign, current_limit
 from mrclutch.haptics.actuator import (
     EM_170,
     Actuator,
@@ -33,6 +47,8 @@ from mrclutch.haptics.actuator import (
     actuator,
     reflect,
 )
+from mrclutch.haptics.model import max_passive_stiffness, metrics_batch, metrics_of
+from mrclutch.trust import choose, circuit_trust
 
 FIDELITIES: tuple[str, ...] = ("fast", "reference")
 #: Stated relative error of the fast path's rendering bandwidth against the reference
@@ -97,20 +113,14 @@ def clutch_figures(
     """Inertia, mass, torque at the current limit and drag of one design.
 
     With ``accuracy`` (relative, e.g. 0.01) the methods are the cheapest that meet it
-    (mrclutch.fidelity.choose) and ``fidelity`` is ignored; the choice's notes (e.g. which
+    (mrclutch.trust.choose) and ``fidelity`` is ignored; the choice's notes (e.g. which
     quantity needs an FEM) are added to the figures' notes."""
-    from geometry.mass import analytic_mass
-    from geometry.section import build_section
-    from magnetics.torque import coil_properties, torque_curve, viscous_drag
-
     check_choice("fidelity", fidelity, FIDELITIES)
     c, op = design.clutch, design.operating
     section = build_section(c)
     fem_size = None
     extra: tuple[str, ...] = ()
     if accuracy is not None:
-        from mrclutch.fidelity import choose
-
         ch = choose(design, accuracy)
         inertia_method, torque_method, fem_size, extra = (
             ch.inertia,
@@ -122,14 +132,10 @@ def clutch_figures(
         inertia_method = "analytic" if fidelity == "fast" else "brep"
         torque_method = "circuit" if fidelity == "fast" else "fem"
         if torque_method == "circuit":  # never a silent wrong number (issue 6)
-            from mrclutch.fidelity import circuit_trust
-
             extra = circuit_trust(c)
     if inertia_method == "analytic":
         mass = analytic_mass(section)
     else:
-        from geometry.mass import brep_mass
-
         mass = brep_mass(c)
     i_max = design.current_limit
     curve = torque_curve(
@@ -170,6 +176,15 @@ def mr_actuator(design: ClutchDesign, figures: ClutchFigures) -> Actuator:
         delay=design.operating.delay,
         name=design.name,
     )
+
+
+def mr_at_hand(design: ClutchDesign, inertia: Any, damping: Any, torque: Any, mass: Any
+               ) -> HapticParams:  # fmt: skip
+    """The antagonistic pair of clutches with these figures (floats or arrays of designs),
+    seen at the hand through the design's transmission (Eq. 3–4): what ``evaluate`` and
+    ``evaluate_batch`` both feed the haptic model."""
+    pair = Actuator.mr_pair(inertia, damping, torque, mass, design.operating.delay, design.name)
+    return reflect(pair, design.transmission)
 
 
 def motor_transmission(mr: HapticParams, mr_tr: Transmission, motor: Actuator) -> Transmission:
@@ -237,13 +252,12 @@ def evaluate(
 ) -> Evaluation:
     """The clutch figures and their haptic consequences, beside the equal-force motor.
     ``accuracy`` (relative): pick per quantity the cheapest method that meets it
-    (mrclutch.fidelity.choose); the Evaluation's fidelity then reads "accuracy=…"."""
-    from mrclutch.haptics.model import metrics_of
-
+    (mrclutch.trust.choose); the Evaluation's fidelity then reads "accuracy=…"."""
     fig = clutch_figures(design, fidelity, accuracy)
     if accuracy is not None:
         fidelity = f"accuracy={accuracy:g}"
-    mr = reflect(mr_actuator(design, fig), design.transmission)
+    mr = mr_at_hand(design, fig.rotor_inertia, fig.viscous_damping, fig.max_torque,
+                    fig.clutch_mass)  # fmt: skip
     motor = actuator(MOTOR)
     em_tr = motor_transmission(mr, design.transmission, motor)
     em = reflect(motor, em_tr)
@@ -296,59 +310,62 @@ def evaluate_batch(
     fields: Mapping[str, ArrayLike], base: ClutchDesign | None = None, *, passivity: bool = False
 ) -> dict[str, np.ndarray]:
     """The fast path for S designs at once; returns arrays under ``BATCH_OUTPUTS``
-    (and ``max_passive_K_N_per_m`` with ``passivity=True``)."""
-    from geometry.batch import broadcast_fields, layout, valid
-    from geometry.mass import analytic_batch
-    from magnetics.torque import max_torque_batch, viscous_batch
-    from mrclutch.circuit_map import error_bound
-    from mrclutch.haptics.model import max_passive_stiffness, metrics_batch
+    (and ``max_passive_K_N_per_m`` with ``passivity=True``).
 
+    The same physics as ``evaluate(design, "fast")``, on arrays: per drum count, the region
+    table gives the analytic mass (``region_mass``), the circuit (``path_from_regions``)
+    and the film drag (``film_damping_total``); the pair at the hand is ``mr_at_hand``.
+    Designs that fail DrumClutch's validation get ``valid = 0`` and NaN outputs; no invalid
+    number reaches a solver."""
     base = base if base is not None else ClutchDesign()
     p = broadcast_fields(fields, base.clutch)
-    ok = valid(layout(p))
-    if not ok.all():  # evaluate the invalid rows on the base geometry, then blank them
-        ref = broadcast_fields({}, base.clutch)
-        p = {k: np.where(ok, v, ref[k][0]) for k, v in p.items()}
-    op, tr = base.operating, base.transmission
-    mass = analytic_batch(p)
-    wire_area = np.pi * p["wire_diameter"] ** 2 / 4
-    current = np.minimum(op.max_current, op.max_current_density * wire_area)
-    off_torque, damping = viscous_batch(p, op.input_speed)
-    torque = max_torque_batch(p, current) + off_torque
-    r = tr.reduction  # Eq. 3/4 through the design's transmission
-    hp = HapticParams(
-        m1=2 * mass["rotor_inertia"] * r**2,  # the antagonistic pair: both rotors move
-        b1=2 * damping * r**2,
-        k=tr.k,
-        b=tr.b,
-        m2=tr.m2,
-        delay=op.delay,
-        f_max=torque * r,
-        workspace=tr.workspace,
-    )
-    hm = metrics_batch(hp, limits=False)
+    ok = valid(p)
+    op = base.operating
+    current = current_limit(op, p["wire_diameter"])
+    eta = FLUIDS["mrf_132dg"].viscosity
+
+    def clutch(rg: regions.Regions, rows: np.ndarray) -> dict[str, Any]:
+        out = region_mass(rg)
+        out["damping"] = film_damping_total(rg, eta)
+        out["yield_torque"] = yield_torque_at(path_from_regions(rg), current[rows])
+        return out
+
+    fig = regions.per_topology(p, ok, clutch)
+    off_torque = fig["damping"] * op.input_speed
+    torque = fig["yield_torque"] + off_torque
+    hand = {}
+    if ok.any():
+        hp = mr_at_hand(base, fig["rotor_inertia"][ok], fig["damping"][ok], torque[ok],
+                        fig["clutch_mass"][ok])  # fmt: skip
+        hand = dict(metrics_batch(hp, limits=False))
+        if passivity:
+            hand["max_passive_K_N_per_m"] = max_passive_stiffness(hp)
     out = {
         "valid": ok.astype(float),
-        "rotor_inertia_kg_m2": mass["rotor_inertia"],
-        "rotor_mass_kg": mass["rotor_mass"],
-        "clutch_mass_kg": mass["clutch_mass"],
-        "diameter_m": mass["diameter"],
-        "length_m": mass["length"],
+        "rotor_inertia_kg_m2": fig["rotor_inertia"],
+        "rotor_mass_kg": fig["rotor_mass"],
+        "clutch_mass_kg": fig["clutch_mass"],
+        "diameter_m": fig["diameter"],
+        "length_m": fig["length"],
         "max_torque_N_m": torque,
-        "circuit_error_bound": error_bound(p)[1],
-        "damping_N_m_s": damping,
+        "circuit_error_bound": np.where(ok, error_bound(p)[1], np.nan),
+        "damping_N_m_s": fig["damping"],
         "off_state_torque_N_m": off_torque,
-        "m1_kg": hm["m1_kg"],
-        "b1_N_s_per_m": hm["b1_N_s_per_m"],
-        "K_max_N_per_m": hm["K_N_per_m"],
-        "bandwidth_lumped_hz": hm["bandwidth_lumped_hz"],
-        "bandwidth_hz": hm["bandwidth_hz"],
-        "resonance_hz": hm["resonance_hz"],
-        "rendering_area_dB_decade": hm["rendering_area_dB_decade"],
+    }
+    metric_keys = {
+        "m1_kg": "m1_kg",
+        "b1_N_s_per_m": "b1_N_s_per_m",
+        "K_max_N_per_m": "K_N_per_m",
+        "bandwidth_lumped_hz": "bandwidth_lumped_hz",
+        "bandwidth_hz": "bandwidth_hz",
+        "resonance_hz": "resonance_hz",
+        "rendering_area_dB_decade": "rendering_area_dB_decade",
     }
     if passivity:
-        out["max_passive_K_N_per_m"] = max_passive_stiffness(hp)
-    for k in out:
-        if k != "valid":
-            out[k] = np.where(ok, np.broadcast_to(out[k], ok.shape), np.nan)
+        metric_keys["max_passive_K_N_per_m"] = "max_passive_K_N_per_m"
+    for key, src in metric_keys.items():
+        col = np.full(ok.shape, np.nan)
+        if ok.any():
+            col[ok] = np.broadcast_to(np.asarray(hand[src], dtype=float), (int(ok.sum()),))
+        out[key] = col
     return out

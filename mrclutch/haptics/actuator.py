@@ -120,11 +120,11 @@ class Actuator:
 
     def __post_init__(self) -> None:
         check_choice("kind", self.kind, ("mr", "em"))
-        check_positive("rotor_inertia", self.rotor_inertia, " kg·m²")
-        check_nonnegative("damping", self.damping, " N·m·s/rad")
-        check_positive("max_torque", self.max_torque, " N·m")
+        _check_pos_array("rotor_inertia", self.rotor_inertia, " kg·m²")
+        _check_pos_array("damping", self.damping, " N·m·s/rad", allow_zero=True)
+        _check_pos_array("max_torque", self.max_torque, " N·m")
         check_nonnegative("delay", self.delay, " s")
-        check_nonnegative("mass", self.mass, " kg")
+        _check_pos_array("mass", self.mass, " kg", allow_zero=True)
 
     @classmethod
     def mr_pair(
@@ -137,10 +137,11 @@ class Actuator:
         name: str = "mr-pair",
     ) -> Actuator:
         """Antagonistic pair of MR clutches (paper §II-A): both output rotors move with the
-        lever, so inertia, drag and mass double; each direction gets one clutch's torque."""
-        check_positive("clutch_inertia", clutch_inertia, " kg·m²")
-        check_nonnegative("clutch_damping", clutch_damping, " N·m·s/rad")
-        check_nonnegative("clutch_mass", clutch_mass, " kg")
+        lever, so inertia, drag and mass double; each direction gets one clutch's torque.
+        The clutch figures may be arrays (one entry per design)."""
+        _check_pos_array("clutch_inertia", clutch_inertia, " kg·m²")
+        _check_pos_array("clutch_damping", clutch_damping, " N·m·s/rad", allow_zero=True)
+        _check_pos_array("clutch_mass", clutch_mass, " kg", allow_zero=True)
         return cls(
             name=name,
             kind="mr",

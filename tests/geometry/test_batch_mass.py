@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 
 from geometry import ParameterError, build_section, preset
 from geometry.mass import analytic_batch, analytic_mass
+from geometry.params import broadcast_fields
 from geometry.section import PARTS
 
 
@@ -75,6 +76,6 @@ def test_chunked_equals_unchunked():
 
     rng = np.random.default_rng(1)
     f = {"gap": rng.uniform(0.1e-3, 1e-3, 3 * m.BATCH_CHUNK + 7), "n_drums": 3}
-    whole = m._analytic_chunk(__import__("geometry.batch").batch.broadcast_fields(f))
+    whole = m._analytic_chunk(broadcast_fields(f))
     split = analytic_batch(f)
     np.testing.assert_array_equal(whole["rotor_inertia"], split["rotor_inertia"])

@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 
 from geometry.params import DrumClutch, preset
 from geometry.section import build_section
-from magnetics.circuit import path_from_fields, path_from_section, solve
+from magnetics.circuit import path_from_section, solve
 from magnetics.materials import MU0, linear_materials
 from magnetics.torque import max_torque_batch, torque_curve, torque_grid_batch
 
@@ -53,16 +53,38 @@ def test_linear_limit_planar_formula_for_a_thin_large_radius_stack():
     assert spread < 1e-3
 
 
-def test_section_and_batch_paths_agree():
-    a, b = path_from_section(build_section(PAPER)), path_from_fields({})
-    for name in ("core_area", "core_len", "back_area", "leak_permeance", "pole_len"):
-        np.testing.assert_allclose(getattr(a, name), getattr(b, name), rtol=1e-12)
-    np.testing.assert_allclose(np.sort(a.gap_r0.ravel()), np.sort(b.gap_r0.ravel()))
+def test_path_read_from_the_table_matches_closed_forms():
+    """The loop the circuit reads from the region table: gaps carry flux over the zone (the
+    outermost gap in zone A over the zone plus the end clearance, where drum and pole both
+    reach the hub), drum walls over the zone, core and back iron between the zone centres,
+    the band's series reluctance over fluid gaps and stainless walls."""
+    c = replace(PAPER, n_drums=3)
+    path = path_from_section(build_section(c))
+    n, zone, cl = c.n_drums, c.zone_length, c.end_clearance
+    expected = np.full(4 * n, zone)
+    expected[2 * n - 1] += cl
+    np.testing.assert_allclose(path.gap_len[0], expected, rtol=1e-12)
+    np.testing.assert_allclose(path.drum_len[0], zone, rtol=1e-12)
+    assert path.drum_len.shape[1] == 2 * (2 * n - 1)
+    np.testing.assert_allclose(path.core_area, np.pi * c.core_radius**2, rtol=1e-12)
+    np.testing.assert_allclose(path.core_len, zone + c.band_length, rtol=1e-12)
+    np.testing.assert_allclose(
+        path.back_area, np.pi * (c.outer_radius**2 - c.coil_outer_radius**2), rtol=1e-12
+    )
+    ln_gaps = sum(np.log(g.r_outer / g.r_inner) for g in build_section(c).gaps)
+    ln_all = np.log(c.pole_radius / c.core_radius)
+    mu_f = MU0 * 5.0
+    mats = linear_materials(1e4, 5.0)
+    sb = path_from_section(build_section(c), mats).band_reluctance
+    np.testing.assert_allclose(sb, ln_gaps / mu_f + (ln_all - ln_gaps) / MU0, rtol=1e-12)
+
+
+def test_batch_solvers_match_the_design_solve():
+    """Arrays of designs: the per-design Newton (rtol 1e-7) and the tabulate-and-invert grid
+    (1e-3 by construction) against the one-design solve."""
     t = torque_curve(PAPER, [0.5, 3.0, 7.0]).yield_torque
     np.testing.assert_allclose(max_torque_batch({}, [0.5, 3.0, 7.0][2]), t[2], rtol=1e-8)
     np.testing.assert_allclose(torque_grid_batch({}, [0.5, 3.0, 7.0])[0], t, rtol=1e-3)
-
-
 def test_robust_extreme_currents_finite_monotone():
     tc = torque_curve(PAPER, [0.0, 1e-6, 1.0, 7.0, 100.0, 1000.0])
     assert np.all(np.isfinite(tc.torque))

@@ -11,21 +11,19 @@ import pytest
 
 from geometry.validation import ParameterError
 from mrclutch.design import design_preset
-from mrclutch.fidelity import (
+from mrclutch.fidelity import circuit_torque, fem_torque, linear_torque
+from mrclutch.haptics.actuator import TABLE2_MR
+from mrclutch.haptics.delay import pade_stable_stiffness
+from mrclutch.haptics.model import bandwidth, bandwidth_lumped, max_stable_stiffness
+from mrclutch.trust import (
     CIRCUIT_TORQUE_TRUST,
     FidelityWarning,
-    circuit_torque,
     circuit_trust,
-    fem_torque,
     linear_circuit_trust,
-    linear_torque,
     lumped_trust,
     mesh_trust,
     pade_trust,
 )
-from mrclutch.haptics.actuator import TABLE2_MR
-from mrclutch.haptics.delay import pade_stable_stiffness
-from mrclutch.haptics.model import bandwidth, bandwidth_lumped, max_stable_stiffness
 
 
 @pytest.fixture(scope="module")

@@ -71,7 +71,7 @@ def test_measure_rows_and_reference(paper):
 
 
 def test_choose_picks_cheapest_meeting_target(paper):
-    from mrclutch.fidelity import TORQUE_METHODS, choose, inertia_bound, torque_error_bound
+    from mrclutch.trust import TORQUE_METHODS, choose, inertia_bound, torque_error_bound
 
     three = replace(paper, clutch=replace(paper.clutch, n_drums=3))
     for design in (paper, three):

@@ -9,7 +9,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from geometry import ParameterError
-from geometry.batch import layout
+from geometry.params import broadcast_fields, valid
+from geometry.regions import per_topology
 from mrclutch.sweep import ParamRange, SweepSpec, load_spec, pareto_front, run_sweep
 
 OUTPUTS = ("outer_radius", "pole_radius")
@@ -17,8 +18,10 @@ OUTPUTS = ("outer_radius", "pole_radius")
 
 def geometric_outputs(fields):
     """A cheap, deterministic evaluator (the product's evaluator is tested elsewhere)."""
-    lay = layout(fields)
-    return {"outer_radius": lay.outer_radius, "pole_radius": lay.pole_radius}
+    p = broadcast_fields(fields)
+    return per_topology(
+        p, valid(p), lambda rg, _: {"outer_radius": rg.outer_radius, "pole_radius": rg.pole_radius}
+    )
 
 
 class InterruptAfter:

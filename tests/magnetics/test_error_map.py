@@ -8,8 +8,7 @@ import numpy as np
 import pytest
 
 from geometry.params import preset
-from mrclutch import circuit_map_data as data
-from mrclutch.circuit_map import _interp, circuit_error, error_bound, interpolate
+from magnetics.error_map import _interp, circuit_error, error_bound, interpolate, load
 
 AXES = {"n": (1, 2, 3), "x": (0.0, 1.0, 3.0), "y": (-1.0, 2.0)}
 
@@ -38,8 +37,8 @@ def test_off_the_grid_is_nan_and_a_nan_corner_only_counts_with_weight():
 
 
 def _local_variation(c):
-    axes = dict(data.AXES)
-    grid = np.array(data.ERRORS).reshape([len(v) for v in axes.values()])
+    axes = dict(load().axes)
+    grid = np.array(load().errors).reshape([len(v) for v in axes.values()])
     return _interp(axes, grid, {k: getattr(c, k) for k in axes})[2]
 
 
@@ -48,11 +47,11 @@ def test_bound_has_no_margin_on_a_node_and_a_cell_centre_margin_off_the_base():
     e = circuit_error(paper)  # the paper preset is a node of the map
     assert e.bound == pytest.approx(abs(e.estimate), abs=1e-15) and not e.notes
     mid = replace(paper, gap=0.55e-3)  # half way between two gap nodes
-    margin = data.RANGE_FACTOR * _local_variation(mid)
+    margin = load().range_factor * _local_variation(mid)
     assert margin > 0.01
     assert circuit_error(mid).bound == pytest.approx(abs(circuit_error(mid).estimate) + margin)
     off = replace(paper, shell_thickness=2e-3)  # on the node, but off the base preset
-    margin = data.RANGE_FACTOR * _local_variation(off)
+    margin = load().range_factor * _local_variation(off)
     assert circuit_error(off).bound == pytest.approx(abs(e.estimate) + margin)
     assert "shell_thickness" in circuit_error(off).notes[0]
     holes = circuit_error(preset("paper-holes"))  # holes: invisible to both solvers
@@ -66,7 +65,7 @@ def test_stored_checks_lie_within_their_bounds():
     """RANGE_FACTOR is what the off-grid checks measured: every check is inside its bound."""
     paper = preset("paper")
     names = ("n_drums", "gap", "zone_length", "drum_inner_diameter", "drum_thickness")
-    for row in data.CHECKS:
+    for row in load().checks:
         kw = dict(zip(names, row[:5], strict=True))
         c = replace(paper, **{**kw, "n_drums": int(row[0])})
         e = circuit_error(c)
@@ -74,7 +73,7 @@ def test_stored_checks_lie_within_their_bounds():
 
 
 def test_vectorised_bound_equals_the_single_design_one():
-    from geometry.batch import broadcast_fields
+    from geometry.params import broadcast_fields
 
     paper = preset("paper")
     gaps = np.array([0.2e-3, 0.55e-3, 0.7e-3, 1.2e-3])
@@ -95,6 +94,6 @@ def test_stored_map_holds(node):
     d = design_preset("paper")
     c = replace(d.clutch, **node)
     i = [replace(d, clutch=c).current_limit]
-    ref = torque_curve(c, i, method="fem", fem_size=data.REFERENCE_FEM_SIZE).yield_torque[0]
+    ref = torque_curve(c, i, method="fem", fem_size=load().reference_fem_size).yield_torque[0]
     err = torque_curve(c, i).yield_torque[0] / ref - 1
     assert err == pytest.approx(circuit_error(c).estimate, abs=2e-5)  # stored to 5 decimals

@@ -1,6 +1,6 @@
 """Where the saturating circuit can be trusted: its torque error against the FEM, measured on
-a grid over the design space (`mrclutch/circuit_map_data.py`, written by
-`python benchmarks/measure_circuit_map.py`) and interpolated to any design.
+a grid over the design space (the data file `magnetics/data/circuit_error_map.json`, written
+by `python benchmarks/measure_circuit_map.py`) and interpolated to any design.
 
 The estimate is the multilinear interpolation of the signed error in gap, zone length,
 drum bore and drum thickness at the design's drum count (no interpolation across drum
@@ -17,12 +17,52 @@ from __future__ import annotations
 
 import functools
 import itertools
+import json
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
+from pathlib import Path
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
+
+from geometry.params import preset
+
+#: The measured map (data, not code): written by benchmarks/measure_circuit_map.py.
+DATA_FILE = Path(__file__).parent / "data" / "circuit_error_map.json"
+
+
+@dataclass(frozen=True)
+class ErrorMap:
+    """The stored map: signed circuit/FEM − 1 on a grid over ``axes`` (row-major, n_drums
+    slowest), the coarse FEMs' error bounds, the off-grid checks and the interpolation
+    margin factor (module docstring)."""
+
+    base_preset: str
+    reference_fem_size: float  # m
+    axes: Mapping[str, tuple[float, ...]]
+    errors: tuple[float, ...]
+    fem_error_bound: Mapping[float, float]  # FEM size (m) -> largest error vs reference
+    checks: tuple[tuple[float, ...], ...]  # (n_drums, gap, zone, bore, drum t, error)
+    range_factor: float
+
+
+@functools.lru_cache(maxsize=1)
+def load() -> ErrorMap:
+    """The map from DATA_FILE (read once)."""
+    d = json.loads(DATA_FILE.read_text())
+    return ErrorMap(
+        base_preset=d["base_preset"],
+        reference_fem_size=float(d["reference_fem_size_m"]),
+        axes=MappingProxyType({k: tuple(v) for k, v in d["axes"].items()}),
+        errors=tuple(math.nan if e is None else float(e) for e in d["errors"]),
+        fem_error_bound=MappingProxyType(
+            {float(k): float(v) for k, v in d["fem_error_bound"].items()}
+        ),
+        checks=tuple(tuple(c) for c in d["checks"]),
+        range_factor=float(d["range_factor"]),
+    )
 
 
 def interpolate(
@@ -95,31 +135,27 @@ class CircuitError:
 
 
 @functools.lru_cache(maxsize=1)
-def _grid() -> tuple[dict[str, tuple[float, ...]], np.ndarray]:
-    from mrclutch import circuit_map_data as m
-
-    grid = np.array(m.ERRORS, dtype=float).reshape([len(v) for v in m.AXES.values()])
+def _grid() -> tuple[Mapping[str, tuple[float, ...]], np.ndarray]:
+    m = load()
+    grid = np.array(m.errors, dtype=float).reshape([len(v) for v in m.axes.values()])
     grid.flags.writeable = False
-    return m.AXES, grid
+    return m.axes, grid
 
 
 @functools.lru_cache(maxsize=1)
 def _base_off_axes() -> dict[str, Any]:
     """The base preset's fields that are not axes of the map (nor ignored by the solvers)."""
-    from geometry.params import preset
-    from mrclutch import circuit_map_data as m
-
-    base = preset(m.BASE_PRESET)
-    skip = set(m.AXES) | set(AXISYMMETRIC_IGNORED)
+    m = load()
+    base = preset(m.base_preset)
+    skip = set(m.axes) | set(AXISYMMETRIC_IGNORED)
     return {f.name: getattr(base, f.name) for f in fields(base) if f.name not in skip}
 
 
 def error_bound(p: Mapping[str, Any]) -> tuple[Any, Any, tuple[str, ...]]:
     """Vectorised core of :func:`circuit_error` over DrumClutch fields ``p`` (scalars or
-    arrays, e.g. geometry.batch.broadcast_fields): (estimate, bound, names of the fields
+    arrays, e.g. geometry.params.broadcast_fields): (estimate, bound, names of the fields
     off the map's axes that differ from the base preset somewhere)."""
-    from mrclutch import circuit_map_data as m
-
+    m = load()
     axes, grid = _grid()
     est, spread, rng = _interp(axes, grid, {k: p[k] for k in axes})
     off = np.zeros(np.shape(est), bool)
@@ -129,7 +165,7 @@ def error_bound(p: Mapping[str, Any]) -> tuple[Any, Any, tuple[str, ...]]:
         if np.any(differs):
             off = off | differs
             names.append(name)
-    margin = m.RANGE_FACTOR * rng * np.where(off, 1.0, spread)
+    margin = m.range_factor * rng * np.where(off, 1.0, spread)
     bound = np.where(np.isfinite(est), np.abs(est) + margin, np.inf)
     if np.ndim(est) == 0:
         return float(est), float(bound), tuple(names)
@@ -138,8 +174,7 @@ def error_bound(p: Mapping[str, Any]) -> tuple[Any, Any, tuple[str, ...]]:
 
 def circuit_error(clutch: Any) -> CircuitError:
     """The map's estimate and bound of the saturating circuit's torque error on ``clutch``."""
-    from mrclutch import circuit_map_data as m
-
+    m = load()
     est, bound, off = error_bound({f.name: getattr(clutch, f.name) for f in fields(clutch)})
     if not math.isfinite(est):
         axes = _grid()[0]
@@ -158,8 +193,8 @@ def circuit_error(clutch: Any) -> CircuitError:
     notes = ()
     if off:
         notes = (
-            f"circuit error map: measured with the {m.BASE_PRESET} preset's "
+            f"circuit error map: measured with the {m.base_preset} preset's "
             f"{', '.join(off)}; this design differs, so its error bound carries the "
-            f"margin of a cell centre ({m.RANGE_FACTOR:g} × the local variation of the map)",
+            f"margin of a cell centre ({m.range_factor:g} × the local variation of the map)",
         )
     return CircuitError(est, bound, notes)

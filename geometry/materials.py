@@ -1,0 +1,36 @@
+"""The clutch's materials: their names (keyed once, here) and densities, each with its source.
+
+Every region of the section (``geometry.regions``) names one of these materials; the
+magnetic and rheological properties of the same names are in ``magnetics.materials``.
+Sources: docs/references.md.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from types import MappingProxyType
+from typing import Any
+
+STEEL = "steel_1018"  # the magnetic yoke and the drums' active zones
+STAINLESS = "stainless_304"  # hub, shaft, end caps, sleeve, the drums' non-magnetic band
+COIL = "coil"  # copper wire smeared with its bonding epoxy over the coil window
+MRF = "mrf_132dg"  # the MR fluid
+
+#: kg/m³. The coil's density depends on its fill: see ``coil_density``.
+DENSITY: Mapping[str, float] = MappingProxyType(
+    {
+        STEEL: 7870.0,  # AISI 1018, FEMM 4.2 material library [materials]
+        STAINLESS: 8000.0,  # AISI 304/316 [materials]
+        MRF: 3050.0,  # LORD MRF-132DG datasheet, ≈ 3.05 g/cm³ [mrf132dg]
+    }
+)
+DENSITY_COPPER = 8960.0  # [materials]
+DENSITY_EPOXY = 1200.0  # bonding epoxy of an epoxy-bonded coil (typical 1.1–1.3 g/cm³)
+
+
+def coil_density(turns: Any, wire_diameter: Any, window_area: Any) -> Any:
+    """Smeared density of the epoxy-bonded coil: copper fraction of the window, rest epoxy
+    (floats or arrays)."""
+    frac = turns * (math.pi * wire_diameter**2 / 4) / window_area
+    return frac * DENSITY_COPPER + (1 - frac) * DENSITY_EPOXY
