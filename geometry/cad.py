@@ -20,6 +20,7 @@ import math
 from collections.abc import Iterable
 from typing import TYPE_CHECKING, Any
 
+from geometry.materials import COIL, COLOUR, MRF, STAINLESS, STEEL
 from geometry.section import PARTS, Region, Section, build_section
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
@@ -28,20 +29,15 @@ if TYPE_CHECKING:  # pragma: no cover - typing only
 MM_PER_M = 1000.0
 
 #: Display colours (RGB 0..1) by material, shared by the STEP assembly and the 3-D view.
-MATERIAL_COLOURS: dict[str, tuple[float, float, float]] = {
-    "steel_1018": (0.45, 0.47, 0.52),
-    "stainless_304": (0.80, 0.82, 0.85),
-    "coil": (0.85, 0.45, 0.15),
-    "mrf_132dg": (0.15, 0.15, 0.18),
-}
+MATERIAL_COLOURS = COLOUR
 #: Colour of a part in the STEP assembly: its dominant material's colour.
 PART_MATERIAL: dict[str, str] = {
-    "rotor": "steel_1018",
-    "shaft": "stainless_304",
-    "input": "steel_1018",
-    "housing": "steel_1018",
-    "coil": "coil",
-    "fluid": "mrf_132dg",
+    "rotor": STEEL,
+    "shaft": STAINLESS,
+    "input": STEEL,
+    "housing": STEEL,
+    "coil": COIL,
+    "fluid": MRF,
 }
 
 

@@ -25,6 +25,19 @@ DENSITY: Mapping[str, float] = MappingProxyType(
         MRF: 3050.0,  # LORD MRF-132DG datasheet, ≈ 3.05 g/cm³ [mrf132dg]
     }
 )
+#: How a person reads each material's name, and its display colour (RGB 0..1): the STEP
+#: assembly, the 3-D view and the section plot share them.
+LABEL: Mapping[str, str] = MappingProxyType(
+    {STEEL: "steel 1018", STAINLESS: "stainless 304", COIL: "coil (Cu + epoxy)", MRF: "MRF-132DG"}
+)
+COLOUR: Mapping[str, tuple[float, float, float]] = MappingProxyType(
+    {
+        STEEL: (0.45, 0.47, 0.52),
+        STAINLESS: (0.80, 0.82, 0.85),
+        COIL: (0.85, 0.45, 0.15),
+        MRF: (0.15, 0.15, 0.18),
+    }
+)
 DENSITY_COPPER = 8960.0  # [materials]
 DENSITY_EPOXY = 1200.0  # bonding epoxy of an epoxy-bonded coil (typical 1.1–1.3 g/cm³)
 

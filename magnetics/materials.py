@@ -19,6 +19,7 @@ from types import MappingProxyType
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from geometry.materials import COIL, MRF, STAINLESS, STEEL
 from geometry.validation import ParameterError, check_positive
 
 MU0 = 4e-7 * math.pi  # vacuum permeability, H/m (pre-2019 SI value; differs by 5e-10)
@@ -154,7 +155,7 @@ Magnetic = LinearMaterial | BHCurve
 # AISI 1018 steel. Source: FEMM 4.2 material library (matlib.dat, "1018 Steel"),
 # shared/reference/materials.md.
 STEEL_1018 = BHCurve(
-    "steel_1018",
+    STEEL,
     (0.2503, 0.925, 1.25, 1.39, 1.525, 1.71, 1.87, 1.955, 2.02, 2.11, 2.225, 2.43),
     (238.7, 795.8, 1591.6, 2387.3, 3978.9, 7957.8, 15915.5, 23873.0, 39789.0, 79578.0,
      159155.0, 318310.0),
@@ -164,7 +165,7 @@ STEEL_1018 = BHCurve(
 # LORD MRF-132DG. Source: manufacturer's B–H curve as digitised in the public FEMM
 # material "LORD MRF 132-DG" (shared/reference/materials.md); H converted kA/m → A/m.
 MRF_132DG_BH = BHCurve(
-    "mrf_132dg",
+    MRF,
     (0.103, 0.160, 0.229, 0.309, 0.372, 0.424, 0.481, 0.556, 0.607, 0.682, 0.722, 0.785,
      0.831, 0.877, 0.917, 0.951, 0.974, 0.997),
     tuple(1e3 * h for h in (12.1, 19.7, 30.2, 43.9, 57.5, 66.5, 80.2, 95.3, 116.4, 139.1,
@@ -202,27 +203,27 @@ class MRFluid:
 # Chosen over interpolating the three datasheet points 4.64/13.77/23.47 kPa at
 # 18/46/80 kA/m because it saturates physically (~48 kPa) beyond the points; it is
 # +17 %, −1 %, −4.6 % off those points (tests/magnetics/test_materials.py).
-MRF_132DG = MRFluid("mrf_132dg", 0.32, 1.0, 0.112, "Carlson/LORD closed form; datasheet η")
+MRF_132DG = MRFluid(MRF, 0.32, 1.0, 0.112, "Carlson/LORD closed form; datasheet η")
 
 #: Datasheet yield stress of MRF-132DG (H in A/m, τy in Pa), for comparison only.
 MRF_132DG_DATASHEET_TAU = ((18e3, 4.64e3), (46e3, 13.77e3), (80e3, 23.47e3))
 
 AIR = LinearMaterial("air", 1.0, "vacuum")
-STAINLESS_304 = LinearMaterial("stainless_304", 1.0, "austenitic, μr≈1 (materials.md)")
-COIL = LinearMaterial("coil", 1.0, "copper + epoxy, μr≈1 (materials.md)")
+STAINLESS_304 = LinearMaterial(STAINLESS, 1.0, "austenitic, μr≈1 (materials.md)")
+COIL_MATERIAL = LinearMaterial(COIL, 1.0, "copper + epoxy, μr≈1 (materials.md)")
 
 #: Magnetic materials keyed by the section's material names.
 MATERIALS: Mapping[str, Magnetic] = MappingProxyType(
     {
-        "steel_1018": STEEL_1018,
-        "mrf_132dg": MRF_132DG_BH,
-        "stainless_304": STAINLESS_304,
-        "coil": COIL,
+        STEEL: STEEL_1018,
+        MRF: MRF_132DG_BH,
+        STAINLESS: STAINLESS_304,
+        COIL: COIL_MATERIAL,
         "air": AIR,
     }
 )
 #: MR fluids' rheology keyed by the section's fluid material names.
-FLUIDS: Mapping[str, MRFluid] = MappingProxyType({"mrf_132dg": MRF_132DG})
+FLUIDS: Mapping[str, MRFluid] = MappingProxyType({MRF: MRF_132DG})
 
 
 def magnetic(name: str, materials: Mapping[str, Magnetic] | None = None) -> Magnetic:
@@ -239,6 +240,6 @@ def magnetic(name: str, materials: Mapping[str, Magnetic] | None = None) -> Magn
 def linear_materials(steel_mu_r: float, fluid_mu_r: float) -> Mapping[str, Magnetic]:
     """The registry with linear steel and fluid (for closed-form tests)."""
     d = dict(MATERIALS)
-    d["steel_1018"] = LinearMaterial("steel_1018", steel_mu_r, "linear test steel")
-    d["mrf_132dg"] = LinearMaterial("mrf_132dg", fluid_mu_r, "linear test fluid")
+    d[STEEL] = LinearMaterial(STEEL, steel_mu_r, "linear test steel")
+    d[MRF] = LinearMaterial(MRF, fluid_mu_r, "linear test fluid")
     return MappingProxyType(d)

@@ -21,9 +21,16 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any
 
+from geometry.mass import analytic_mass, brep_mass, mesh_mass
+from geometry.materials import MRF, STEEL
+from geometry.section import build_section
 from geometry.validation import ParameterError
+from magnetics.materials import MATERIALS, MU0, linear_materials
+from magnetics.torque import torque_curve
 from mrclutch.design import ClutchDesign
 from mrclutch.haptics.actuator import HapticParams
+from mrclutch.haptics.delay import pade_stable_stiffness, step_stable_stiffness
+from mrclutch.haptics.model import bandwidth, bandwidth_lumped, max_stable_stiffness
 from mrclutch.pipeline import evaluate
 from mrclutch.trust import (
     FidelityWarning,
@@ -70,11 +77,8 @@ def haptic_params(design: ClutchDesign) -> tuple[HapticParams, float]:
 def linear_torque(design: ClutchDesign) -> float:
     """Torque at the current limit by the circuit with linear steel and fluid at their
     initial permeabilities; warns past the steel knee."""
-    from magnetics.materials import MATERIALS, MU0, linear_materials
-    from magnetics.torque import torque_curve
-
     mats = linear_materials(
-        MATERIALS["steel_1018"].mu_initial / MU0, MATERIALS["mrf_132dg"].mu_initial / MU0
+        MATERIALS[STEEL].mu_initial / MU0, MATERIALS[MRF].mu_initial / MU0
     )
     c, i = design.clutch, design.current_limit
     warn(linear_circuit_trust(c, i))
@@ -85,8 +89,6 @@ def linear_torque(design: ClutchDesign) -> float:
 def circuit_torque(design: ClutchDesign) -> float:
     """Torque at the current limit by the saturating circuit; warns outside its trusted
     region (circuit_trust)."""
-    from magnetics.torque import torque_curve
-
     warn(circuit_trust(design.clutch))
     curve = torque_curve(
         design.clutch, [design.current_limit], speed_rpm=design.operating.input_speed_rpm
@@ -96,8 +98,6 @@ def circuit_torque(design: ClutchDesign) -> float:
 
 def fem_torque(design: ClutchDesign, size: float) -> float:
     """Torque at the current limit by the axisymmetric FEM at element size [m]."""
-    from magnetics.torque import torque_curve
-
     curve = torque_curve(
         design.clutch,
         [design.current_limit],
@@ -109,29 +109,20 @@ def fem_torque(design: ClutchDesign, size: float) -> float:
 
 
 def _analytic_inertia(design: ClutchDesign) -> float:
-    from geometry.mass import analytic_mass
-    from geometry.section import build_section
-
     return analytic_mass(build_section(design.clutch)).rotor_inertia
 
 
 def _mesh_inertia(design: ClutchDesign, tol: float) -> float:
-    from geometry.mass import mesh_mass
-
     warn(mesh_trust(design.clutch, tol))
     return mesh_mass(design.clutch, tolerance=tol, guard=False).rotor_inertia
 
 
 def _brep_inertia(design: ClutchDesign) -> float:
-    from geometry.mass import brep_mass
-
     return brep_mass(design.clutch).rotor_inertia
 
 
 def pade_stability(design: ClutchDesign, order: int) -> float:
     """Largest stable K with an order-n Padé delay; warns where its phase is off."""
-    from mrclutch.haptics.delay import pade_stable_stiffness
-
     p, _ = haptic_params(design)
     k = pade_stable_stiffness(p, order)
     warn(pade_trust(p, k, order))
@@ -139,29 +130,21 @@ def pade_stability(design: ClutchDesign, order: int) -> float:
 
 
 def _step_stability(design: ClutchDesign, n: int) -> float:
-    from mrclutch.haptics.delay import step_stable_stiffness
-
     return step_stable_stiffness(haptic_params(design)[0], n)
 
 
 def _exact_stability(design: ClutchDesign) -> float:
-    from mrclutch.haptics.model import max_stable_stiffness
-
     return float(max_stable_stiffness(haptic_params(design)[0]))
 
 
 def lumped_bandwidth(design: ClutchDesign) -> float:
     """Eq. 1 bandwidth [Hz] at K_max; warns near the transmission mode."""
-    from mrclutch.haptics.model import bandwidth_lumped
-
     p, k = haptic_params(design)
     warn(lumped_trust(p, k))
     return float(bandwidth_lumped(p, k))
 
 
 def _full_bandwidth(design: ClutchDesign) -> float:
-    from mrclutch.haptics.model import bandwidth
-
     p, k = haptic_params(design)
     return float(bandwidth(p, k))
 

@@ -19,6 +19,7 @@ import numpy as np
 from geometry.params import INTEGER_FIELDS, LENGTH_FIELDS
 from geometry.validation import ParameterError, check_choice, check_int, check_positive
 from mrclutch.design import ClutchDesign
+from mrclutch.pipeline import evaluate_batch
 
 OBJECTIVES = {"bandwidth": "bandwidth_hz", "area": "rendering_area_dB_decade"}
 
@@ -81,8 +82,6 @@ def optimize(
 ) -> Optimum:
     """Best design on the fast path (see module docstring)."""
     from scipy.optimize import differential_evolution
-
-    from mrclutch.pipeline import evaluate_batch
 
     check_choice("objective", objective, tuple(OBJECTIVES))
     cons = constraints if constraints is not None else Constraints()

@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike
 
 from geometry import regions
 from geometry.mass import analytic_mass, brep_mass, region_mass
+from geometry.materials import MRF
 from geometry.params import broadcast_fields, valid
 from geometry.section import build_section
 from geometry.validation import check_choice
@@ -322,7 +323,7 @@ def evaluate_batch(
     ok = valid(p)
     op = base.operating
     current = current_limit(op, p["wire_diameter"])
-    eta = FLUIDS["mrf_132dg"].viscosity
+    eta = FLUIDS[MRF].viscosity
 
     def clutch(rg: regions.Regions, rows: np.ndarray) -> dict[str, Any]:
         out = region_mass(rg)

@@ -22,6 +22,7 @@ import numpy as np
 
 from geometry.validation import ParameterError, check_range
 from mrclutch.design import ClutchDesign
+from mrclutch.pipeline import evaluate_batch
 
 #: Paper §IV-B: "2X scaling increase by 14 % the total reflected inertia of MR system".
 PAPER_TOTAL_INERTIA_INCREASE_2X = 0.14
@@ -37,8 +38,6 @@ class Route:
 
 
 def _figures(design: ClutchDesign, fields: dict[str, Any]) -> dict[str, float]:
-    from mrclutch.pipeline import evaluate_batch
-
     r = evaluate_batch(fields, design)
     if r["valid"][0] != 1:
         raise ParameterError(f"scaling: {fields} gives an invalid clutch")

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from geometry.mass import analytic_mass
+from geometry.mass import analytic_mass, thinnest_feature
 from geometry.materials import STEEL
 from geometry.section import build_section
 from geometry.validation import ParameterError
@@ -99,8 +99,6 @@ def circuit_trust(clutch: Any) -> tuple[str, ...]:
 def mesh_trust(clutch: Any, tolerance: float) -> tuple[str, ...]:
     """Messages if an unguarded mesh at ``tolerance`` [m] cannot resolve the thinnest wall
     (chord height above half of it: facets of one wall can cross the other)."""
-    from geometry.mass import thinnest_feature
-
     t = thinnest_feature(clutch)
     if tolerance > t / 2:
         return (

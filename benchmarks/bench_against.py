@@ -1,0 +1,86 @@
+"""The fast sweep path against an earlier revision, measured in one run (ratios, not times).
+
+    python benchmarks/bench_against.py --base c8c990d [--designs 100000] [--rounds 5]
+
+Checks the base revision out into a temporary git worktree and times, alternately in fresh
+subprocesses of each tree, the sweep's evaluator (``evaluate_batch`` on random designs of
+1–4 drums, the spec of examples/random_sweep.toml's ranges) and ``mrclutch --help``.
+Prints the median time of each and the ratio current/base (< 1: faster now). Alternating
+rounds keep the ratio honest on a shared, noisy machine.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+SWEEP = r"""
+import sys, time
+import numpy as np
+from mrclutch.pipeline import evaluate_batch
+rng = np.random.default_rng(1)
+S = int(sys.argv[1])
+f = {"n_drums": rng.integers(1, 5, S), "gap": rng.uniform(0.2e-3, 1.0e-3, S),
+     "drum_thickness": rng.uniform(0.1e-3, 0.6e-3, S),
+     "zone_length": rng.uniform(3e-3, 9e-3, S),
+     "drum_inner_diameter": rng.uniform(6e-3, 18e-3, S)}
+chunk = 20000  # the sweep's chunk size
+evaluate_batch({k: v[:100] for k, v in f.items()})  # warm-up (imports, caches)
+t = time.perf_counter()
+for i in range(0, S, chunk):
+    out = evaluate_batch({k: v[i:i + chunk] for k, v in f.items()})
+print(time.perf_counter() - t)
+"""
+
+HELP = r"""
+import subprocess, sys, time
+t = time.perf_counter()
+subprocess.run([sys.executable, "-m", "mrclutch", "--help"], check=True, capture_output=True)
+print(time.perf_counter() - t)
+"""
+
+
+def _time(tree: Path, code: str, *args: str) -> float:
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    out = subprocess.run(
+        [sys.executable, "-c", code, *args], cwd=tree, env=env, check=True,
+        capture_output=True, text=True,
+    )  # fmt: skip
+    return float(out.stdout.strip().splitlines()[-1])
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--base", required=True, help="git revision to compare with")
+    ap.add_argument("--designs", type=int, default=100_000)
+    ap.add_argument("--rounds", type=int, default=5)
+    a = ap.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        base = Path(tmp) / "base"
+        subprocess.run(["git", "worktree", "add", "--detach", str(base), a.base], cwd=ROOT,
+                       check=True, capture_output=True)  # fmt: skip
+        try:
+            for name, code, args in (
+                (f"fast sweep path, {a.designs} designs", SWEEP, (str(a.designs),)),
+                ("mrclutch --help", HELP, ()),
+            ):
+                now, then = [], []
+                for _ in range(a.rounds):
+                    then.append(_time(base, code, *args))
+                    now.append(_time(ROOT, code, *args))
+                mn, mb = statistics.median(now), statistics.median(then)
+                print(f"{name:<38} now {mn:8.3f} s   base {mb:8.3f} s   ratio {mn / mb:5.2f}")
+        finally:
+            subprocess.run(["git", "worktree", "remove", "--force", str(base)], cwd=ROOT,
+                           check=False, capture_output=True)  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()
