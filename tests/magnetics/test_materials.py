@@ -39,3 +39,29 @@ def test_carlson_yield_stress_against_datasheet():
     assert np.all(np.abs(ratio[1:] - 1) < 0.05)
     assert MRF_132DG.tau_y(0.0) == 0.0
     assert MRF_132DG.tau_y(1e7) == pytest.approx(MRF_132DG.tau_y_max)
+
+
+def test_numpy_pchip_is_scipys_pchip() -> None:
+    """The materials' own PCHIP (no scipy at import) equals scipy's on random data,
+    monotone or not, values and derivatives."""
+    from scipy.interpolate import PchipInterpolator
+
+    from magnetics.materials import pchip
+
+    rng = np.random.default_rng(7)
+    for _ in range(100):
+        x = np.unique(rng.uniform(0.0, 10.0, rng.integers(3, 12)))
+        y = rng.normal(size=x.size)
+        q = np.linspace(x[0], x[-1], 301)
+        ref = PchipInterpolator(x, y)
+        v, d = pchip(x, y, q)
+        np.testing.assert_allclose(v, ref(q), rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(d, ref.derivative()(q), rtol=1e-10, atol=1e-10)
+
+
+def test_importing_the_materials_does_not_import_scipy() -> None:
+    import subprocess
+    import sys
+
+    code = "import sys, magnetics.materials; assert 'scipy' not in sys.modules, 'scipy'"
+    subprocess.run([sys.executable, "-c", code], check=True)
