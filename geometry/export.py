@@ -15,6 +15,8 @@ from pathlib import Path
 from typing import Any
 
 from geometry.atomic import atomic_path
+from geometry.cad import assembly, brep_volume_mm3, part_solids, tessellate
+from geometry.mass import check_mesh
 from geometry.params import DrumClutch
 from geometry.validation import ParameterError, check_positive
 
@@ -52,9 +54,6 @@ def write_stl(
     Returns the triangle count. The mesh is checked watertight before it is written.
     """
     import trimesh
-
-    from geometry.cad import tessellate
-    from geometry.mass import check_mesh
 
     check_positive("tolerance", tolerance, " m")
     dest = Path(path)
@@ -98,8 +97,6 @@ def export_clutch(
     check: bool = True,
 ) -> ExportResult:
     """Write ``clutch.step`` and ``<part>.stl`` into ``out_dir`` and check the round trip."""
-    from geometry.cad import assembly, brep_volume_mm3, part_solids
-
     check_positive("tolerance", tolerance, " m")
     out = Path(out_dir)
     if out.exists() and not out.is_dir():

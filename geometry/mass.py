@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from geometry import regions
+from geometry.cad import material_solids, tessellate
 from geometry.params import DrumClutch, broadcast_fields, valid
 from geometry.regions import OUTPUT_PARTS, PARTS
 from geometry.section import Section, build_section
@@ -96,9 +97,7 @@ def part_sums(
 def analytic_mass(section: Section) -> MassReport:
     """Exact mass and inertia of every part of the axisymmetric section."""
     dens = section.densities
-    sums = part_sums(
-        (r.part, dens[r.material], r.r0, r.r1, r.z0, r.z1) for r in section.regions
-    )
+    sums = part_sums((r.part, dens[r.material], r.r0, r.r1, r.z0, r.z1) for r in section.regions)
     notes: tuple[str, ...] = ()
     if section.clutch.hub_holes:
         notes = (
@@ -135,8 +134,6 @@ def brep_mass(
     clutch: DrumClutch, solids: Mapping[tuple[str, str], Any] | None = None
 ) -> MassReport:
     """Mass and inertia of every part from OpenCascade's exact volume integrals."""
-    from geometry.cad import material_solids
-
     s = build_section(clutch)
     solids = solids if solids is not None else material_solids(clutch, s)
     acc = {p: [0.0, 0.0] for p in PARTS}
@@ -176,8 +173,6 @@ def weigh_mesh(
 def _tri(shape: Any, tol_mm: float, ang: float) -> trimesh.Trimesh:
     import trimesh
 
-    from geometry.cad import tessellate
-
     v, f = tessellate(shape, tol_mm, ang)
     return trimesh.Trimesh(v, f, process=True)
 
@@ -212,8 +207,6 @@ def mesh_mass(
     ``max_refinements`` halvings raises ParameterError. ``guard=False`` returns the raw
     numbers at ``tolerance`` (for benchmarks and to show what goes wrong).
     """
-    from geometry.cad import material_solids
-
     check_positive("tolerance", tolerance, " m")
     check_positive("angular_tolerance", angular_tolerance, " rad")
     s = build_section(clutch)
@@ -320,9 +313,7 @@ BATCH_CHUNK = 16000
 
 def region_mass(rg: regions.Regions) -> dict[str, Any]:
     """Per-part mass and inertia, totals and envelope of the designs of one region table."""
-    sums = part_sums(
-        (sp.part, rg.density(sp.material), *rg.bounds(sp)) for sp in rg
-    )
+    sums = part_sums((sp.part, rg.density(sp.material), *rg.bounds(sp)) for sp in rg)
     res: dict[str, Any] = {}
     for part, (m, j) in sums.items():
         res[f"mass_{part}"], res[f"inertia_{part}"] = m, j

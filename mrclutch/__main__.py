@@ -1,5 +1,5 @@
 import sys
 
-from mrclutch.cli import main
+from mrclutch.cli.main import main
 
 sys.exit(main())

@@ -50,7 +50,6 @@ PADE_ORDERS: tuple[int, ...] = (1, 2, 4)
 STEPS_PER_DELAY: tuple[int, ...] = (2, 5, 20)
 
 
-
 # ---- methods: design → value ------------------------------------------------------------
 
 
@@ -77,9 +76,7 @@ def haptic_params(design: ClutchDesign) -> tuple[HapticParams, float]:
 def linear_torque(design: ClutchDesign) -> float:
     """Torque at the current limit by the circuit with linear steel and fluid at their
     initial permeabilities; warns past the steel knee."""
-    mats = linear_materials(
-        MATERIALS[STEEL].mu_initial / MU0, MATERIALS[MRF].mu_initial / MU0
-    )
+    mats = linear_materials(MATERIALS[STEEL].mu_initial / MU0, MATERIALS[MRF].mu_initial / MU0)
     c, i = design.clutch, design.current_limit
     warn(linear_circuit_trust(c, i))
     curve = torque_curve(c, [i], materials=mats, speed_rpm=design.operating.input_speed_rpm)
@@ -242,5 +239,3 @@ def measure(
 
 def stderr_progress(msg: str) -> None:
     print(f"fidelity: {msg}", file=sys.stderr, flush=True)
-
-

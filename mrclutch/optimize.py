@@ -55,7 +55,7 @@ class Constraints:
         v += np.maximum(0, r["diameter_m"] / self.max_diameter - 1)
         v += np.maximum(0, r["length_m"] / self.max_length - 1)
         if self.passive:
-            v += np.maximum(0, r["K_max_N_per_m"] / r["max_passive_K_N_per_m"] - 1)
+            v += np.maximum(0, r["K_N_per_m"] / r["max_passive_K_N_per_m"] - 1)
         return np.where(r["valid"] == 1, np.nan_to_num(v, nan=np.inf), np.inf)
 
 

@@ -49,6 +49,7 @@ from mrclutch.haptics.actuator import (
     reflect,
 )
 from mrclutch.haptics.model import max_passive_stiffness, metrics_batch, metrics_of
+from mrclutch.outputs import SWEEP_COLUMNS
 from mrclutch.trust import choose, circuit_trust
 
 FIDELITIES: tuple[str, ...] = ("fast", "reference")
@@ -196,24 +197,6 @@ def motor_transmission(mr: HapticParams, mr_tr: Transmission, motor: Actuator) -
     return replace(em, gearing=float(mr.f_max) / base_force)
 
 
-#: The haptic metrics a person compares side by side (label, JSON key, display scale);
-#: used by `mrclutch evaluate`'s table and the report's HTML.
-HAND_ROWS: tuple[tuple[str, str, float], ...] = (
-    ("m1 (g)", "m1_kg", 1e3),
-    ("b1 (N·s/m)", "b1_N_s_per_m", 1.0),
-    ("m2 (g)", "m2_kg", 1e3),
-    ("k (N/m)", "k_N_per_m", 1.0),
-    ("K rendered (N/m)", "K_N_per_m", 1.0),
-    ("bandwidth, lumped √(K/m) (Hz)", "bandwidth_lumped_hz", 1.0),
-    ("bandwidth, full response (Hz)", "bandwidth_hz", 1.0),
-    ("system resonance (Hz)", "resonance_hz", 1.0),
-    ("rendering area (dB·decade)", "rendering_area_dB_decade", 1.0),
-    ("passive at K", "passive", 1.0),
-    ("largest passive K (N/m)", "max_passive_K_N_per_m", 1.0),
-    ("largest stable K (N/m)", "max_stable_K_N_per_m", 1.0),
-)
-
-
 @dataclass(frozen=True)
 class Evaluation:
     """A design evaluated: the clutch, the MR pair at the hand and the equal-force motor."""
@@ -269,26 +252,8 @@ def evaluate(
 
 # ---- the vectorised fast path for sweeps -----------------------------------------------
 
-#: Columns of a sweep row (SI, units in the names), in order.
-BATCH_OUTPUTS: tuple[str, ...] = (
-    "valid",
-    "rotor_inertia_kg_m2",
-    "rotor_mass_kg",
-    "clutch_mass_kg",
-    "diameter_m",
-    "length_m",
-    "max_torque_N_m",
-    "circuit_error_bound",
-    "damping_N_m_s",
-    "off_state_torque_N_m",
-    "m1_kg",
-    "b1_N_s_per_m",
-    "K_max_N_per_m",
-    "bandwidth_lumped_hz",
-    "bandwidth_hz",
-    "resonance_hz",
-    "rendering_area_dB_decade",
-)
+#: Columns of a sweep row (mrclutch.outputs names them once).
+BATCH_OUTPUTS: tuple[str, ...] = SWEEP_COLUMNS
 
 
 @dataclass(frozen=True)
@@ -350,23 +315,15 @@ def evaluate_batch(
         "length_m": fig["length"],
         "max_torque_N_m": torque,
         "circuit_error_bound": np.where(ok, error_bound(p)[1], np.nan),
-        "damping_N_m_s": fig["damping"],
+        "viscous_damping_N_m_s": fig["damping"],
         "off_state_torque_N_m": off_torque,
     }
-    metric_keys = {
-        "m1_kg": "m1_kg",
-        "b1_N_s_per_m": "b1_N_s_per_m",
-        "K_max_N_per_m": "K_N_per_m",
-        "bandwidth_lumped_hz": "bandwidth_lumped_hz",
-        "bandwidth_hz": "bandwidth_hz",
-        "resonance_hz": "resonance_hz",
-        "rendering_area_dB_decade": "rendering_area_dB_decade",
-    }
-    if passivity:
-        metric_keys["max_passive_K_N_per_m"] = "max_passive_K_N_per_m"
-    for key, src in metric_keys.items():
-        col = np.full(ok.shape, np.nan)
-        if ok.any():
-            col[ok] = np.broadcast_to(np.asarray(hand[src], dtype=float), (int(ok.sum()),))
-        out[key] = col
-    return out
+    extra = ("max_passive_K_N_per_m",) if passivity else ()
+    columns = (*SWEEP_COLUMNS, *extra)
+    for key in columns:
+        if key not in out:  # a metric at the hand
+            col = np.full(ok.shape, np.nan)
+            if ok.any():
+                col[ok] = np.broadcast_to(np.asarray(hand[key], dtype=float), (int(ok.sum()),))
+            out[key] = col
+    return {key: out[key] for key in columns}

@@ -30,6 +30,7 @@ import numpy as np
 
 from geometry.params import INTEGER_FIELDS, LENGTH_FIELDS, DrumClutch, preset
 from geometry.validation import ParameterError, check_int
+from mrclutch.outputs import OUTPUTS, describe
 
 Evaluator = Callable[[dict[str, np.ndarray]], dict[str, np.ndarray]]
 
@@ -294,7 +295,11 @@ def run_sweep(
     On Ctrl-C or SIGTERM the finished chunks stay on disk; ``resume=True`` continues.
     """
     out = Path(out)
-    meta = {"fingerprint": spec.fingerprint(), "n_designs": spec.n_designs}
+    meta = {
+        "fingerprint": spec.fingerprint(),
+        "n_designs": spec.n_designs,
+        "columns": describe([k for k in outputs if k in OUTPUTS]),  # units and meanings
+    }
     header = ",".join(["design_id", *spec.columns, *outputs])
     start_rows = 0
     if out.exists() and resume:

@@ -4,7 +4,7 @@ import sys
 
 import pytest
 
-from mrclutch.cli import main
+from mrclutch.cli.main import main
 
 
 def test_torque_json_shape(capsys):
@@ -12,8 +12,8 @@ def test_torque_json_shape(capsys):
     out = json.loads(capsys.readouterr().out)
     assert [p["current_A"] for p in out["points"]] == [0, 1, 2, 3, 4, 5, 6, 7]
     t = [p["torque_N_m"] for p in out["points"]]
-    assert t == sorted(t) and t[0] == pytest.approx(out["viscous_torque_N_m"])
-    assert out["damping_N_m_s"] > 0 and out["speed_rpm"] == 530
+    assert t == sorted(t) and t[0] == pytest.approx(out["off_state_torque_N_m"])
+    assert out["viscous_damping_N_m_s"] > 0 and out["speed_rpm"] == 530
 
 
 def test_torque_plot_and_field_plot(tmp_path, capsys):
@@ -48,7 +48,7 @@ def test_torque_both_methods_chart_and_error(tmp_path, capsys):
     """Issue 4: circuit against FEM on the paper preset, 0-7 A, chart and largest error."""
     import json
 
-    from mrclutch.cli import main
+    from mrclutch.cli.main import main
 
     png = tmp_path / "both.png"
     args = ["torque", "--method", "both", "--current", "0,2,4,7", "--plot", str(png), "--json"]

@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from mrclutch.cli import main
+from mrclutch.cli.main import main
 
 pytest.importorskip("build123d")
 

@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from mrclutch.cli import main
+from mrclutch.cli.main import main
 from mrclutch.haptics.model import METRIC_KEYS
 
 
@@ -86,7 +86,7 @@ def test_bad_plot_path_leaves_no_file(tmp_path, capsys):
 def test_fast_path_imports_nothing_heavy():
     code = (
         "import sys, io, contextlib\n"
-        "from mrclutch.cli import main\n"
+        "from mrclutch.cli.main import main\n"
         "with contextlib.redirect_stdout(io.StringIO()):\n"
         "    main(['haptic', '--json'])\n"
         "heavy = [m for m in ('build123d', 'pyvista', 'vtk', 'skfem', 'matplotlib', 'trimesh')"

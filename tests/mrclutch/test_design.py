@@ -5,7 +5,7 @@ import math
 import pytest
 
 from geometry import ParameterError, preset
-from mrclutch.cli import main
+from mrclutch.cli.main import main
 from mrclutch.design import ClutchDesign, Operating, design_from_mapping, load_design
 
 

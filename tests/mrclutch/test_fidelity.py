@@ -107,14 +107,14 @@ def test_accuracy_target_is_met_against_the_reference(paper, n_drums):
 
 
 def test_cli_fidelity_rejects_bad_input(tmp_path):
-    from mrclutch.cli import main
+    from mrclutch.cli.main import main
 
     assert main(["fidelity", "--preset", "paper", "--out", str(tmp_path), "--repeats", "0"]) == 2
     assert main(["evaluate", "--accuracy", "0"]) == 2
 
 
 def test_fidelity_table_writer(tmp_path):
-    from mrclutch.commands.fidelity import rows_csv
+    from mrclutch.cli.commands.fidelity import rows_csv
     from mrclutch.fidelity import Row
 
     rows = [Row("torque", "fem", "size 1 mm", 0.1, 0.44, 0.04, False)]

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from geometry import ParameterError
-from mrclutch.cli import main
+from mrclutch.cli.main import main
 from mrclutch.design import design_preset
 from mrclutch.optimize import Constraints, optimize, parse_bounds
 from mrclutch.pipeline import evaluate, evaluate_batch

@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from mrclutch.cli import main
+from mrclutch.cli.main import main
 
 EXPECTED = {
     "clutch.step", "rotor.stl", "shaft.stl", "input.stl", "housing.stl", "coil.stl",
@@ -73,7 +73,7 @@ def test_bad_design_file_leaves_nothing(tmp_path, capsys):
 
 
 def test_interrupted_report_leaves_nothing(tmp_path, monkeypatch, capsys):
-    import mrclutch.report as rep
+    import mrclutch.cli.report as rep
 
     def boom(*a, **k):
         raise KeyboardInterrupt

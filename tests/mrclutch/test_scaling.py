@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from mrclutch.cli import main
+from mrclutch.cli.main import main
 from mrclutch.design import design_preset
 from mrclutch.pipeline import evaluate_batch
 from mrclutch.scaling import scaling_study

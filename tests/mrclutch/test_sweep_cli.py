@@ -70,7 +70,7 @@ def test_sweeps_and_the_optimiser_never_build_cad(tmp_path, argv):
     args = [a.format(spec=spec, out=tmp_path / "rows.csv") for a in argv]
     code = (
         "import sys, io, contextlib\n"
-        "from mrclutch.cli import main\n"
+        "from mrclutch.cli.main import main\n"
         "with contextlib.redirect_stdout(io.StringIO()):\n"
         f"    rc = main({args!r})\n"
         f"print(rc, [m for m in {HEAVY!r} if m in sys.modules])\n"

@@ -12,7 +12,7 @@ pytest.importorskip("build123d")
 def test_screenshot_is_not_blank(tmp_path):
     import matplotlib.image as mpimg
 
-    from mrclutch.view import screenshot
+    from mrclutch.cli.view import screenshot
 
     path = screenshot(preset("paper-holes"), tmp_path / "clutch.png", window_size=(400, 300))
     img = mpimg.imread(path)[..., :3]
@@ -26,7 +26,7 @@ def test_screenshot_is_not_blank(tmp_path):
 
 
 def test_scene_is_cut_in_half_and_coarse():
-    from mrclutch.view import scene_meshes
+    from mrclutch.cli.view import scene_meshes
 
     meshes = scene_meshes(preset("paper"))
     rotor = [m for p, _, m in meshes if p == "rotor"]
@@ -37,7 +37,7 @@ def test_scene_is_cut_in_half_and_coarse():
 
 def test_view_tessellates_as_finely_as_the_screen_shows():
     from geometry.section import build_section
-    from mrclutch.view import scene_meshes, view_tolerance
+    from mrclutch.cli.view import scene_meshes, view_tolerance
 
     c = preset("paper")
     side = max(build_section(c).envelope)
@@ -52,7 +52,7 @@ def test_view_tessellates_as_finely_as_the_screen_shows():
 
 
 def test_screenshot_needs_png(tmp_path):
-    from mrclutch.view import screenshot
+    from mrclutch.cli.view import screenshot
 
     with pytest.raises(ParameterError, match=r"\.png"):
         screenshot(preset("paper"), tmp_path / "x.jpg")

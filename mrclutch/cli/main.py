@@ -1,6 +1,6 @@
 """Thin command line over the library. ``mrclutch COMMAND --help`` for each command.
 
-Each command lives in a module of ``mrclutch.commands`` that exposes
+Each command lives in a module of ``mrclutch.cli.commands`` that exposes
 ``register(subparsers)``; those modules import nothing heavy at module level, so
 ``mrclutch --help`` and the analytic commands start fast. Bad input ends in one line on
 stderr and exit status 2, never a traceback.
@@ -14,20 +14,18 @@ import sys
 from collections.abc import Sequence
 
 from geometry.validation import ParameterError
+from mrclutch import __version__
+from mrclutch.cli.errors import CLIError
 
 #: Command modules, in the order their commands appear in ``--help``.
 COMMAND_MODULES: tuple[str, ...] = (
-    "mrclutch.commands.haptic",
-    "mrclutch.commands.geometry",
-    "mrclutch.commands.magnetics",
-    "mrclutch.commands.design",
-    "mrclutch.commands.scaling",
-    "mrclutch.commands.fidelity",
+    "mrclutch.cli.commands.haptic",
+    "mrclutch.cli.commands.geometry",
+    "mrclutch.cli.commands.magnetics",
+    "mrclutch.cli.commands.design",
+    "mrclutch.cli.commands.scaling",
+    "mrclutch.cli.commands.fidelity",
 )
-
-
-class CLIError(Exception):
-    """A user-facing error: printed as one line, exit status 2."""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -36,7 +34,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Design MR drum clutches for haptic devices: CAD, inertia, torque, "
         "drag and the haptic consequences (SI units; lengths in mm where marked _mm).",
     )
-    parser.add_argument("--version", action="version", version=_version())
+    parser.add_argument("--version", action="version", version=f"mrclutch {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
     for name in COMMAND_MODULES:
@@ -61,9 +59,3 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"mrclutch {args.command}: interrupted", file=sys.stderr)
         return 130
-
-
-def _version() -> str:
-    from mrclutch import __version__
-
-    return f"mrclutch {__version__}"

@@ -6,7 +6,15 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from mrclutch.commands._common import add_design_args, load_design_args
+from mrclutch.cli.commands._common import (
+    add_design_args,
+    atomic_path,
+    load_design_args,
+    to_jsonable,
+)
+from mrclutch.cli.errors import CLIError
+from mrclutch.cli.plots.fidelity import plot_fidelity
+from mrclutch.fidelity import measure, stderr_progress
 
 
 def register(sub: Any) -> None:
@@ -44,11 +52,6 @@ def rows_csv(rows: Any) -> str:
 def run(args: argparse.Namespace) -> int:
     import json
     from pathlib import Path
-
-    from mrclutch.cli import CLIError
-    from mrclutch.commands._common import atomic_path, to_jsonable
-    from mrclutch.fidelity import measure, stderr_progress
-    from mrclutch.plots.fidelity import plot_fidelity
 
     if args.repeats < 1:
         raise CLIError(f"--repeats = {args.repeats}: must be >= 1")

@@ -9,8 +9,9 @@ from typing import Any
 
 from geometry.atomic import atomic_path
 from geometry.params import DrumClutch
+from mrclutch.cli.errors import CLIError
+from mrclutch.cli.jsonio import to_jsonable
 from mrclutch.design import ClutchDesign, design_preset, load_design
-from mrclutch.jsonio import to_jsonable
 
 __all__ = [
     "add_design_args",
@@ -33,8 +34,6 @@ def add_design_args(p: argparse.ArgumentParser) -> None:
 def load_design_args(args: argparse.Namespace) -> ClutchDesign:
     """The ClutchDesign named by ``add_design_args`` options (default: the paper preset)."""
     if args.design is not None and args.preset is not None:
-        from mrclutch.cli import CLIError
-
         raise CLIError("give either a design file or --preset, not both")
     if args.design is not None:
         return load_design(args.design)

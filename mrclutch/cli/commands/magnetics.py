@@ -7,14 +7,18 @@ from __future__ import annotations
 
 import argparse
 
-from mrclutch.commands._common import add_design_args, atomic_path, load_clutch, print_json
+from geometry.section import build_section
+from geometry.validation import ParameterError, check_choice, check_range
+from magnetics.fem import FEMConvergenceError, solve_fem
+from magnetics.torque import torque_curve
+from mrclutch.cli.commands._common import add_design_args, atomic_path, load_clutch, print_json
+from mrclutch.cli.errors import CLIError
+from mrclutch.cli.plots.magnetics import plot_field, plot_torque
 
 
 def _parse_currents(text: str):  # type: ignore[no-untyped-def]
     """``A``, ``START:STOP:STEP`` (inclusive of STOP) or ``A,B,C`` in amperes."""
     import numpy as np
-
-    from mrclutch.cli import CLIError
 
     try:
         if ":" in text:
@@ -61,11 +65,6 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 def _torque(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from geometry.validation import ParameterError, check_choice, check_range
-    from magnetics.fem import FEMConvergenceError
-    from magnetics.torque import torque_curve
-    from mrclutch.cli import CLIError
-
     check_choice("--method", args.method, ("circuit", "fem", "both"))
     check_range("--speed-rpm", args.speed_rpm, 0.0, 1e5, " rpm")
     currents = _parse_currents(args.current)
@@ -79,8 +78,6 @@ def _torque(args: argparse.Namespace) -> int:
     except FloatingPointError as exc:  # pragma: no cover - defensive
         raise ParameterError(str(exc)) from None
     if args.plot:
-        from mrclutch.plots.magnetics import plot_torque
-
         with atomic_path(args.plot) as tmp:
             plot_torque(curves, tmp)
     # largest relative circuit-vs-FEM difference where the FEM torque is not ~0 (0 A)
@@ -115,18 +112,12 @@ def _curve_json(tc) -> dict:  # type: ignore[no-untyped-def]
             {"current_A": float(i), "torque_N_m": float(t)}
             for i, t in zip(tc.currents, tc.torque, strict=True)
         ],
-        "viscous_torque_N_m": tc.viscous_torque,
-        "damping_N_m_s": tc.damping,
+        "off_state_torque_N_m": tc.viscous_torque,
+        "viscous_damping_N_m_s": tc.damping,
     }
 
 
 def _field(args: argparse.Namespace) -> int:
-    from geometry.section import build_section
-    from geometry.validation import check_range
-    from magnetics.fem import FEMConvergenceError, solve_fem
-    from mrclutch.cli import CLIError
-    from mrclutch.plots.magnetics import plot_field
-
     check_range("--current", args.current, -1e4, 1e4, " A")
     size = None
     if args.size_mm is not None:

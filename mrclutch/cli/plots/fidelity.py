@@ -6,6 +6,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from geometry.atomic import atomic_path
+
 #: Errors below this are drawn at it (a log axis has no 0; the references sit there): the
 #: order of double-precision rounding, so no measured error is hidden under it.
 ERROR_FLOOR = 1e-16
@@ -20,8 +22,6 @@ def plot_fidelity(rows: Sequence[Any], path: str | Path, title: str = "") -> Non
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from geometry.atomic import atomic_path
 
     fig, ax = plt.subplots(figsize=(9, 6.5))
     seen: set[str] = set()

@@ -28,7 +28,18 @@ from typing import Any
 
 import numpy as np
 
+from geometry.export import export_clutch
+from geometry.section import build_section
+from geometry.validation import ParameterError
+from magnetics.torque import torque_curve
+from mrclutch.cli.jsonio import to_jsonable
+from mrclutch.cli.plots.design import section_figure
+from mrclutch.cli.plots.haptic import compare_figure
+from mrclutch.cli.plots.magnetics import plot_torque
+from mrclutch.cli.view import screenshot
 from mrclutch.design import ClutchDesign
+from mrclutch.outputs import CLUTCH_ROWS, HAND_ROWS, output, row_label
+from mrclutch.pipeline import evaluate
 
 #: Currents of the report's torque curve (A): the paper's Fig. 2b range.
 CURVE_CURRENTS = np.linspace(0.0, 7.0, 29)
@@ -51,13 +62,8 @@ def write_report(
     progress: Callable[[str], None] | None = None,
 ) -> Report:
     """Write the report of ``design`` into ``out_dir`` (see module docstring)."""
-    from mrclutch.jsonio import to_jsonable
-    from mrclutch.pipeline import evaluate
-
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
-        from geometry.validation import ParameterError
-
         raise ParameterError(f"--out {out}: exists and is not a directory")
     out.parent.mkdir(parents=True, exist_ok=True)
     tick = progress if progress is not None else (lambda _msg: None)
@@ -71,14 +77,10 @@ def write_report(
         tick("3D view")
         _view(design, tmp / "view.png")
         tick("section drawing")
-        from geometry.section import build_section
-        from mrclutch.plots.design import section_figure
-
         section_figure(build_section(design.clutch), tmp / "section.png")
         tick("torque–current curve (circuit and FEM)")
         curve = _torque(design, tmp / "torque.png")
         tick("haptic plots")
-        from mrclutch.plots.haptic import compare_figure
 
         k = float(ev.mr.k_max)
         compare_figure({"MR pair": ev.mr, "Maxon 136206 (equal force)": ev.motor}, k,
@@ -97,8 +99,6 @@ def write_report(
 
 
 def _cad(design: ClutchDesign, folder: Path) -> dict[str, Any]:
-    from geometry.export import export_clutch
-
     res = export_clutch(design.clutch, folder)
     return {
         "step": res.step.name,
@@ -108,15 +108,10 @@ def _cad(design: ClutchDesign, folder: Path) -> dict[str, Any]:
 
 
 def _view(design: ClutchDesign, path: Path) -> None:
-    from mrclutch.view import screenshot
-
     screenshot(design.clutch, path)
 
 
 def _torque(design: ClutchDesign, path: Path) -> dict[str, Any]:
-    from magnetics.torque import torque_curve
-    from mrclutch.plots.magnetics import plot_torque
-
     rpm = design.operating.input_speed_rpm
     circ = torque_curve(design.clutch, CURVE_CURRENTS, method="circuit", speed_rpm=rpm)
     fem = torque_curve(design.clutch, FEM_CHECK_CURRENTS, method="fem", speed_rpm=rpm)
@@ -177,30 +172,21 @@ def findings(m: dict[str, Any]) -> list[str]:
 
 def render_html(m: dict[str, Any]) -> str:
     """One page: findings, the clutch, the hand, the figures, the files."""
-    from mrclutch.pipeline import HAND_ROWS
-
     c, h, e = m["clutch"], m["haptic"], m["motor"]
     e_ = html.escape
     clutch_rows = [
-        ("max torque", _fmt(c["max_torque_N_m"]), f"N·m at {c['max_current_A']:.3g} A"),
-        ("rotor inertia", _fmt(c["rotor_inertia_kg_m2"], 1e7), "g·cm²"),
-        ("rotor mass", _fmt(c["rotor_mass_kg"], 1e3), "g"),
-        ("clutch mass (with fluid and coil)", _fmt(c["clutch_mass_kg"], 1e3), "g"),
-        ("envelope", f"Ø{c['envelope_m'][0] * 1e3:.3g} × {c['envelope_m'][1] * 1e3:.3g}", "mm"),
-        ("viscous damping", _fmt(c["viscous_damping_N_m_s"]), "N·m·s"),
-        ("off-state torque", _fmt(c["off_state_torque_N_m"], 1e3), "mN·m"),
-        ("torque / inertia", _fmt(c["torque_per_inertia_N_m_per_kg_m2"]), "N·m/(kg·m²)"),
-        ("coil", f"{_fmt(c['coil_resistance_ohm'], 1, 3)} Ω, "
-                 f"{_fmt(c['coil_power_W'], 1, 3)} W at max current", ""),
-    ]  # fmt: skip
+        (output(k).label, output(k).display(c[k]), output(k).shown_unit) for k in CLUTCH_ROWS
+    ]
+    d, length = c["envelope_m"]
+    clutch_rows.append(("envelope", f"Ø{d * 1e3:.3g} × {length * 1e3:.3g}", "mm"))
     rows1 = "".join(
         f"<tr><td>{e_(a)}</td><td class=n>{e_(b)}</td><td>{e_(u)}</td></tr>"
         for a, b, u in clutch_rows
     )
     rows2 = "".join(
-        f"<tr><td>{e_(label)}</td><td class=n>{_fmt(h[k], f)}</td>"
-        f"<td class=n>{_fmt(e[k], f)}</td></tr>"
-        for label, k, f in HAND_ROWS
+        f"<tr><td>{e_(row_label(k))}</td><td class=n>{output(k).display(h[k])}</td>"
+        f"<td class=n>{output(k).display(e[k])}</td></tr>"
+        for k in HAND_ROWS
     )
     items = "".join(f"<li>{e_(s)}</li>" for s in findings(m))
     stl = ", ".join(f'<a href="{e_(p)}">{e_(p)}</a>' for p in m["cad"]["stl"].values())

@@ -11,8 +11,14 @@ import math
 from pathlib import Path
 from typing import Any
 
+from geometry.cad import material_solids
+from geometry.export import export_clutch, read_step_parts
+from geometry.mass import analytic_mass, brep_mass, check_mesh, mesh_mass, weigh_mesh, weigh_shape
+from geometry.section import build_section
 from geometry.validation import ParameterError, check_positive
-from mrclutch.commands._common import add_design_args, load_clutch, print_json
+from mrclutch.cli.commands._common import add_design_args, load_clutch, print_json
+from mrclutch.cli.errors import CLIError
+from mrclutch.cli.view import screenshot, show
 
 CAD_SUFFIXES = (".step", ".stp", ".stl")
 DEFAULT_TOLERANCE_MM = 0.01
@@ -71,8 +77,6 @@ def _tolerance(args: argparse.Namespace) -> float:
 
 
 def cmd_export(args: argparse.Namespace) -> int:
-    from geometry.export import export_clutch
-
     clutch = load_clutch(args)
     res = export_clutch(clutch, args.out, _tolerance(args))
     print(f"{res.step}")
@@ -97,13 +101,7 @@ def cmd_inertia(args: argparse.Namespace) -> int:
     if args.design is not None and Path(args.design).suffix.lower() in CAD_SUFFIXES:
         return _weigh_file(args)
     if args.density is not None or args.part_density:
-        from mrclutch.cli import CLIError
-
         raise CLIError("--density/--part-density apply to a STEP/STL file only")
-    from geometry.cad import material_solids
-    from geometry.mass import analytic_mass, brep_mass, mesh_mass
-    from geometry.section import build_section
-
     clutch = load_clutch(args)
     tol = _tolerance(args)
     s = build_section(clutch)
@@ -161,12 +159,8 @@ def _densities(args: argparse.Namespace, names: list[str]) -> dict[str, float]:
 
 
 def _weigh_file(args: argparse.Namespace) -> int:
-    from geometry.mass import check_mesh, weigh_mesh, weigh_shape
-
     path = Path(args.design)
     if args.preset is not None:
-        from mrclutch.cli import CLIError
-
         raise CLIError("give either a CAD file or --preset, not both")
     if not path.is_file():
         raise ParameterError(f"{path}: not found")
@@ -185,8 +179,6 @@ def _weigh_file(args: argparse.Namespace) -> int:
         results[name] = {"mass_kg": pm.mass, "inertia_kg_m2": pm.inertia, "density_kg_m3": rho}
         method = "mesh"
     else:
-        from geometry.export import read_step_parts
-
         shapes = read_step_parts(path)
         dens = _densities(args, list(shapes))
         for name, shape in shapes.items():
@@ -212,8 +204,6 @@ def _weigh_file(args: argparse.Namespace) -> int:
 
 
 def cmd_view(args: argparse.Namespace) -> int:
-    from mrclutch.view import screenshot, show
-
     clutch = load_clutch(args)
     tol = None if args.tolerance_mm is None else _tolerance(args)
     if args.screenshot:

@@ -4,7 +4,22 @@ from __future__ import annotations
 
 import argparse
 
-from mrclutch.commands._common import add_design_args, load_design_args, print_json
+from geometry.validation import check_choice
+from mrclutch.cli.commands._common import add_design_args, atomic_path, load_design_args, print_json
+from mrclutch.cli.errors import CLIError
+from mrclutch.cli.plots.design import pareto_plot
+from mrclutch.cli.report import write_report
+from mrclutch.design import design_from_mapping, design_to_toml
+from mrclutch.optimize import Constraints, optimize, parse_bounds
+from mrclutch.outputs import CLUTCH_ROWS, HAND_ROWS, output, row_label
+from mrclutch.pipeline import (
+    BATCH_OUTPUTS,
+    FAST_BANDWIDTH_ERROR,
+    FIDELITIES,
+    BatchEvaluator,
+    evaluate,
+)
+from mrclutch.sweep import load_spec, run_sweep
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -93,12 +108,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _evaluate(args: argparse.Namespace) -> int:
-    from mrclutch.pipeline import evaluate
-
     design = load_design_args(args)
     if args.accuracy is not None and not 0 < args.accuracy < 1:
-        from mrclutch.cli import CLIError
-
         raise CLIError(f"--accuracy = {args.accuracy}: need 0 < accuracy < 1 (relative)")
     ev = evaluate(design, args.fidelity, accuracy=args.accuracy)
     data = ev.as_json()
@@ -113,39 +124,30 @@ def _evaluate(args: argparse.Namespace) -> int:
 
 def format_evaluation(data: dict) -> str:
     """A person's view of ``Evaluation.as_json()``."""
-    from mrclutch.pipeline import HAND_ROWS
-
     c = data["clutch"]
     lines = [
         f"design {data['design']}  (fidelity {data['fidelity']}: inertia by "
         f"{c['methods']['inertia']}, torque by {c['methods']['torque']})",
         "",
         "clutch",
-        f"  max torque        {c['max_torque_N_m']:.4g} N·m at {c['max_current_A']:.3g} A",
-        f"  rotor inertia     {c['rotor_inertia_kg_m2'] * 1e7:.4g} g·cm²"
-        f"   (mass {c['rotor_mass_kg'] * 1e3:.3g} g)",
-        f"  clutch mass       {c['clutch_mass_kg'] * 1e3:.4g} g   envelope "
-        f"Ø{c['envelope_m'][0] * 1e3:.3g} × {c['envelope_m'][1] * 1e3:.3g} mm",
-        f"  viscous damping   {c['viscous_damping_N_m_s']:.4g} N·m·s   off-state torque "
-        f"{c['off_state_torque_N_m'] * 1e3:.4g} mN·m",
-        f"  torque / inertia  {c['torque_per_inertia_N_m_per_kg_m2']:.4g} N·m/(kg·m²)",
+    ]
+    for key in CLUTCH_ROWS:
+        o = output(key)
+        lines.append(f"  {o.label:<30}{o.display(c[key]):>14} {o.shown_unit}")
+    d, length = c["envelope_m"]
+    lines += [
+        f"  {'envelope':<30}{f'Ø{d * 1e3:.3g} × {length * 1e3:.3g}':>14} mm",
         "",
         f"{'at the hand':<32}{'MR pair':>14}{'Maxon 136206':>14}",
     ]
     h, m = data["haptic"], data["motor"]
-    for label, key, f in HAND_ROWS:
-        hv, mv = (h[key], m[key]) if key != "passive" else (str(h[key]), str(m[key]))
-        lines.append(f"  {label:<30}{_num(hv, f):>14}{_num(mv, f):>14}")
+    for key in HAND_ROWS:
+        o = output(key)
+        lines.append(f"  {row_label(key):<30}{o.display(h[key]):>14}{o.display(m[key]):>14}")
     lines.append(f"  (motor geared ×{m['gearing']:.3g} to the MR pair's force)")
     g, gl = data["bandwidth_gain"], data["bandwidth_gain_lumped"]
     lines.append(f"bandwidth gain MR over motor: {_pct(gl)} lumped, {_pct(g)} on the full response")
     return "\n".join(lines)
-
-
-def _num(v: float | str | None, f: float) -> str:
-    if isinstance(v, str):
-        return v
-    return "—" if v is None or v != v else f"{v * f:.4g}"  # None or NaN: none
 
 
 def _pct(v: float | None) -> str:
@@ -153,10 +155,6 @@ def _pct(v: float | None) -> str:
 
 
 def _report(args: argparse.Namespace) -> int:
-    from geometry.validation import check_choice
-    from mrclutch.pipeline import FIDELITIES
-    from mrclutch.report import write_report
-
     design = load_design_args(args)
     check_choice("fidelity", args.fidelity, FIDELITIES)
     steps = 7
@@ -178,11 +176,6 @@ def _report(args: argparse.Namespace) -> int:
 
 def _sweep(args: argparse.Namespace) -> int:
     from concurrent.futures import ProcessPoolExecutor
-
-    from mrclutch.cli import CLIError
-    from mrclutch.design import design_from_mapping
-    from mrclutch.pipeline import BATCH_OUTPUTS, BatchEvaluator
-    from mrclutch.sweep import load_spec, run_sweep
 
     spec, rest = load_spec(args.spec)
     base = design_from_mapping({"clutch": spec.base.to_mm(), **rest}, where=args.spec)
@@ -218,8 +211,6 @@ def _sweep(args: argparse.Namespace) -> int:
         + (f" (resumed at {res.resumed_from})" if res.resumed_from else "")
     )
     if args.pareto:
-        from mrclutch.plots.design import pareto_plot
-
         pareto_plot(res.path, args.pareto)
         print(f"Pareto front: {args.pareto}")
     return 0
@@ -227,12 +218,6 @@ def _sweep(args: argparse.Namespace) -> int:
 
 def _optimize(args: argparse.Namespace) -> int:
     import time
-
-    from mrclutch.cli import CLIError
-    from mrclutch.commands._common import atomic_path
-    from mrclutch.design import design_to_toml
-    from mrclutch.optimize import Constraints, optimize, parse_bounds
-    from mrclutch.pipeline import FAST_BANDWIDTH_ERROR, evaluate
 
     base = load_design_args(args)
     try:

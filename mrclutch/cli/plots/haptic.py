@@ -8,6 +8,15 @@ from typing import Any
 
 import numpy as np
 
+from mrclutch.haptics.model import (
+    BAND_HZ,
+    bandwidth,
+    closed_loop_impedance,
+    effective_impedance,
+    passive_impedance,
+    rendering_area,
+)
+
 
 def compare_figure(
     sides: dict[str, Any],
@@ -25,15 +34,6 @@ def compare_figure(
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from mrclutch.haptics.model import (
-        BAND_HZ,
-        bandwidth,
-        closed_loop_impedance,
-        effective_impedance,
-        passive_impedance,
-        rendering_area,
-    )
 
     band = BAND_HZ if band is None else band
     f = np.logspace(np.log10(band[0]), np.log10(band[1]), 1500)

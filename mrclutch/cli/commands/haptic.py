@@ -8,7 +8,17 @@ import math
 from dataclasses import replace
 from typing import Any
 
-from geometry.validation import check_nonnegative, check_positive
+from geometry.validation import check_choice, check_nonnegative, check_positive
+from mrclutch.cli.commands._common import atomic_path, print_json
+from mrclutch.cli.plots.haptic import compare_figure
+from mrclutch.haptics.actuator import (
+    TABLE2_EM_136206,
+    TABLE2_MR,
+    actuator,
+    reflect,
+    transmission_for,
+)
+from mrclutch.haptics.model import bandwidth, is_stable, metrics
 
 ACTUATOR_NAMES = ("mr-paper", "maxon-118890", "maxon-136206", "maxon-136209")
 
@@ -67,11 +77,6 @@ def _edge(args: argparse.Namespace) -> tuple[float | None, float | None, float]:
 
 
 def run_haptic(args: argparse.Namespace) -> int:
-    from geometry.validation import check_choice
-    from mrclutch.commands._common import print_json
-    from mrclutch.haptics.actuator import actuator, reflect, transmission_for
-    from mrclutch.haptics.model import metrics
-
     K, delay, workspace = _edge(args)
     lever = check_positive("--lever-mm", args.lever_mm, " mm") * 1e-3
     gearing = check_positive("--gearing", args.gearing)
@@ -92,8 +97,6 @@ def compare_params(
     K: float | None = None, delay: float | None = None, workspace: float = 0.05
 ) -> tuple[Any, Any, float]:
     """(MR params, EM params, K): Table 2 MR set vs the 136206 through the EM bench."""
-    from mrclutch.haptics.actuator import TABLE2_EM_136206, TABLE2_MR
-
     mr = replace(TABLE2_MR, workspace=workspace)
     em = replace(TABLE2_EM_136206, workspace=workspace)
     if delay is not None:
@@ -105,8 +108,6 @@ def compare_params(
 
 def compare_result(mr: Any, em: Any, K: float) -> dict[str, Any]:
     """The ``compare --json`` object."""
-    from mrclutch.haptics.model import bandwidth, is_stable, metrics
-
     m_mr, m_em = metrics(mr, K), metrics(em, K)
     bw_nodelay = float(bandwidth(replace(mr, delay=0.0), K))
     return {
@@ -121,14 +122,10 @@ def compare_result(mr: Any, em: Any, K: float) -> dict[str, Any]:
 
 
 def run_compare(args: argparse.Namespace) -> int:
-    from mrclutch.commands._common import atomic_path, print_json
-
     K, delay, workspace = _edge(args)
     mr, em, K = compare_params(K, delay, workspace)
     res = compare_result(mr, em, K)
     if args.plot:
-        from mrclutch.plots.haptic import compare_figure
-
         with atomic_path(args.plot) as tmp:
             compare_figure({"MR pair (Table 2)": mr, "Maxon 136206": em}, K, tmp)
     if args.json:

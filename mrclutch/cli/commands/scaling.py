@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from mrclutch.commands._common import add_design_args, load_design_args, print_json
+from mrclutch.cli.commands._common import add_design_args, load_design_args, print_json
+from mrclutch.scaling import PAPER_TOTAL_INERTIA_INCREASE_2X, as_json, scaling_study
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -22,8 +23,6 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _scale(args: argparse.Namespace) -> int:
-    from mrclutch.scaling import PAPER_TOTAL_INERTIA_INCREASE_2X, as_json, scaling_study
-
     design = load_design_args(args)
     base, routes, notes = scaling_study(design, args.factor)
     if args.json:

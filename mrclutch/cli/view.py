@@ -13,7 +13,9 @@ from pathlib import Path
 from typing import Any
 
 from geometry.atomic import atomic_path
+from geometry.cad import MATERIAL_COLOURS, material_solids, tessellate
 from geometry.params import DrumClutch
+from geometry.section import build_section
 from geometry.validation import ParameterError, check_positive
 
 #: Default window of the view and screenshots (pixels).
@@ -38,8 +40,6 @@ def view_tolerance(clutch: DrumClutch, window_size: tuple[int, int] = WINDOW_SIZ
     """Chord height [m] the view needs: one pixel when the whole clutch fills the window
     (its larger envelope side over the window's smaller side). A finer tessellation adds
     triangles no one can see; a coarser one shows facets."""
-    from geometry.section import build_section
-
     if min(window_size) < 1:
         raise ParameterError(f"window_size = {window_size!r}: need positive pixel counts")
     return max(build_section(clutch).envelope) / min(window_size)
@@ -52,8 +52,6 @@ def scene_meshes(
     ``tolerance`` [m] defaults to :func:`view_tolerance` of the default window."""
     import numpy as np
     import pyvista as pv
-
-    from geometry.cad import material_solids, tessellate
 
     tolerance = view_tolerance(clutch) if tolerance is None else tolerance
     check_positive("tolerance", tolerance, " m")
@@ -81,8 +79,6 @@ def build_plotter(
     if off_screen:
         _prepare_offscreen()
     import pyvista as pv
-
-    from geometry.cad import MATERIAL_COLOURS
 
     plotter = pv.Plotter(off_screen=off_screen, window_size=list(window_size))
     plotter.set_background("white")

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from geometry.atomic import atomic_path
+from mrclutch.sweep import pareto_front
 
 
 def read_results(path: str | Path) -> dict[str, np.ndarray]:
@@ -23,12 +24,10 @@ def pareto_plot(results: str | Path, out: str | Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from mrclutch.sweep import pareto_front
-
     r = read_results(results)
     ok = r["valid"] == 1
     bw, tq = r["bandwidth_hz"][ok], r["max_torque_N_m"][ok]
-    damp, mass = r["damping_N_m_s"][ok], r["clutch_mass_kg"][ok] * 1e3
+    damp, mass = r["viscous_damping_N_m_s"][ok], r["clutch_mass_kg"][ok] * 1e3
     front = pareto_front(np.column_stack([bw, tq, damp]), [True, True, False])
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), constrained_layout=True)
     for ax, x, label in (

@@ -1,0 +1,181 @@
+"""Every number the tool outputs, named once: key (SI unit in the name), unit, meaning, and
+how a person reads it (label, display unit and scale).
+
+The evaluate JSON, the sweep CSV (its columns and the ``.meta.json`` beside it), the
+``mrclutch evaluate`` table and the HTML report all take their names from here, so the
+same quantity has the same name everywhere. The haptic model (a lower layer) writes its
+metrics under its own ``METRIC_KEYS``; each of them has its entry here
+(tests/mrclutch/test_outputs.py).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Output:
+    """One output quantity."""
+
+    key: str  # JSON key and CSV column, SI unit in the name
+    unit: str  # SI unit ("1" for a pure number, "" for a flag)
+    description: str
+    label: str  # what a person reads in a table
+    display_unit: str = ""  # unit shown beside the label ("" = the SI unit)
+    scale: float = 1.0  # SI value × scale = displayed value
+
+    @property
+    def shown_unit(self) -> str:
+        return self.display_unit or self.unit
+
+    def display(self, value: Any, digits: int = 4) -> str:
+        """The value as a person reads it: scaled, ``digits`` significant; yes/no for a
+        flag, — for none (None, NaN), ∞ for unbounded."""
+        if isinstance(value, str):
+            return value
+        if value is None:
+            return "—"
+        if isinstance(value, bool | np.bool_):
+            return "yes" if value else "no"
+        v = float(value)
+        if math.isnan(v):
+            return "—"
+        if math.isinf(v):
+            return "∞" if v > 0 else "−∞"
+        return f"{v * self.scale:.{digits}g}"
+
+
+_ALL = (
+    # ---- the clutch (one of the pair) ----------------------------------------------
+    Output("valid", "", "1 if the design passes DrumClutch's validation, else 0 (row NaN)",
+           "valid"),
+    Output("max_current_A", "A", "coil current limit: wire current density or amplifier",
+           "max current"),
+    Output("max_torque_N_m", "N·m", "yield + viscous torque at the current limit and the "
+           "input speed", "max torque"),
+    Output("yield_torque_N_m", "N·m", "field-dependent (yield-stress) torque at the current "
+           "limit", "yield torque"),
+    Output("rotor_inertia_kg_m2", "kg·m²", "output rotor + shaft inertia about the axis",
+           "rotor inertia", "g·cm²", 1e7),
+    Output("rotor_mass_kg", "kg", "output rotor + shaft mass", "rotor mass", "g", 1e3),
+    Output("clutch_mass_kg", "kg", "whole clutch with fluid and coil", "clutch mass", "g",
+           1e3),
+    Output("diameter_m", "m", "envelope diameter", "diameter", "mm", 1e3),
+    Output("length_m", "m", "envelope axial length", "length", "mm", 1e3),
+    Output("viscous_damping_N_m_s", "N·m·s", "dT/dω of the off-state drag (Newtonian "
+           "films)", "viscous damping"),
+    Output("off_state_torque_N_m", "N·m", "drag torque at the input speed, 0 A",
+           "off-state torque", "mN·m", 1e3),
+    Output("torque_per_inertia_N_m_per_kg_m2", "N·m/(kg·m²)", "max torque / rotor "
+           "inertia", "torque / inertia"),
+    Output("coil_resistance_ohm", "Ω", "coil resistance at the coil temperature",
+           "coil resistance"),
+    Output("coil_power_W", "W", "coil Joule power at the current limit", "coil power"),
+    Output("circuit_error_bound", "1", "largest |relative error| of the circuit's torque "
+           "against the FEM in the measured error map's cell of this design (NaN: off the "
+           "map)", "circuit error bound"),
+    Output("current_A", "A", "coil current of a torque-curve point", "current"),
+    Output("torque_N_m", "N·m", "clutch torque (yield + viscous) at a torque-curve point",
+           "torque"),
+    Output("speed_rpm", "rpm", "slip speed of the torque curve (input speed)", "speed"),
+    # ---- at the hand (the haptic model's metrics) ----------------------------------
+    Output("m1_kg", "kg", "actuator-side mass at the hand (Eq. 3)", "m1", "g", 1e3),
+    Output("m2_kg", "kg", "end-effector mass at the hand", "m2", "g", 1e3),
+    Output("b1_N_s_per_m", "N·s/m", "actuator-side damping at the hand (Eq. 3)", "b1"),
+    Output("k_N_per_m", "N/m", "transmission stiffness", "k"),
+    Output("b_N_s_per_m", "N·s/m", "transmission damping", "b"),
+    Output("K_N_per_m", "N/m", "rendered virtual stiffness (the MR pair's K_max = "
+           "F_max / workspace, Eq. 5)", "K rendered"),
+    Output("delay_s", "s", "actuator delay in the loop", "delay", "ms", 1e3),
+    Output("bandwidth_lumped_hz", "Hz", "rendering bandwidth √(K/(m1+m2))/2π (Eq. 1)",
+           "bandwidth, lumped √(K/m)"),
+    Output("bandwidth_hz", "Hz", "rendering bandwidth: first frequency where the "
+           "effective stiffness turns negative (full 2-DOF response)",
+           "bandwidth, full response"),
+    Output("resonance_hz", "Hz", "system (transmission) resonance", "system resonance"),
+    Output("rendering_area_dB_decade", "dB·decade", "area between the rendered and the "
+           "ideal impedance over 1–1000 Hz (Fig. 7)", "rendering area"),
+    Output("passive", "", "passive at the rendered K (delay included)", "passive at K"),
+    Output("max_passive_K_N_per_m", "N/m", "largest K rendered passively",
+           "largest passive K"),
+    Output("max_stable_K_N_per_m", "N/m", "largest K rendered stably (delay included)",
+           "largest stable K"),
+)  # fmt: skip
+
+#: Every output, by key.
+OUTPUTS: Mapping[str, Output] = MappingProxyType({o.key: o for o in _ALL})
+
+#: The clutch figures a person reads first (evaluate's table and the report).
+CLUTCH_ROWS: tuple[str, ...] = (
+    "max_torque_N_m",
+    "max_current_A",
+    "rotor_inertia_kg_m2",
+    "rotor_mass_kg",
+    "clutch_mass_kg",
+    "viscous_damping_N_m_s",
+    "off_state_torque_N_m",
+    "torque_per_inertia_N_m_per_kg_m2",
+    "coil_resistance_ohm",
+    "coil_power_W",
+)
+#: The haptic metrics compared side by side, MR pair against the motor.
+HAND_ROWS: tuple[str, ...] = (
+    "m1_kg",
+    "b1_N_s_per_m",
+    "m2_kg",
+    "k_N_per_m",
+    "K_N_per_m",
+    "bandwidth_lumped_hz",
+    "bandwidth_hz",
+    "resonance_hz",
+    "rendering_area_dB_decade",
+    "passive",
+    "max_passive_K_N_per_m",
+    "max_stable_K_N_per_m",
+)
+#: Columns of a sweep row, in order (fast path; ``max_passive_K_N_per_m`` is added where
+#: passivity is asked for).
+SWEEP_COLUMNS: tuple[str, ...] = (
+    "valid",
+    "rotor_inertia_kg_m2",
+    "rotor_mass_kg",
+    "clutch_mass_kg",
+    "diameter_m",
+    "length_m",
+    "max_torque_N_m",
+    "circuit_error_bound",
+    "viscous_damping_N_m_s",
+    "off_state_torque_N_m",
+    "m1_kg",
+    "b1_N_s_per_m",
+    "K_N_per_m",
+    "bandwidth_lumped_hz",
+    "bandwidth_hz",
+    "resonance_hz",
+    "rendering_area_dB_decade",
+)
+
+
+def output(key: str) -> Output:
+    """The output named ``key``; KeyError names the known keys."""
+    try:
+        return OUTPUTS[key]
+    except KeyError:
+        raise KeyError(f"no output named {key!r}; known: {', '.join(OUTPUTS)}") from None
+
+
+def row_label(key: str) -> str:
+    """``label (display unit)`` for a table row."""
+    o = output(key)
+    return f"{o.label} ({o.shown_unit})" if o.shown_unit else o.label
+
+
+def describe(keys: tuple[str, ...] | list[str]) -> dict[str, dict[str, str]]:
+    """Unit and meaning of each key (the sweep's ``.meta.json`` ``columns`` entry)."""
+    return {k: {"unit": output(k).unit, "description": output(k).description} for k in keys}
