@@ -20,6 +20,8 @@ import math
 from collections.abc import Iterable
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from geometry.materials import COIL, COLOUR, MRF, STAINLESS, STEEL
 from geometry.section import PARTS, Region, Section, build_section
 
@@ -153,7 +155,6 @@ def tessellate(shape: Any, tolerance_mm: float, angular_tolerance: float = 0.5) 
     at another tolerance; here any old triangulation is cleared first and the deflection is
     absolute, so the chord-height theory applies. Returns (vertices (n, 3) mm, faces (m, 3)).
     """
-    import numpy as np
     from OCP.BRep import BRep_Tool
     from OCP.BRepMesh import BRepMesh_IncrementalMesh
     from OCP.BRepTools import BRepTools

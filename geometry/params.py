@@ -359,6 +359,7 @@ FIELD_NAMES = tuple(f.name for f in fields(DrumClutch))
 INTEGER_FIELDS = frozenset({"n_drums", "coil_turns", "hub_holes"})
 LENGTH_FIELDS = frozenset(n for n in FIELD_NAMES if n not in INTEGER_FIELDS)
 
+
 # ---- arrays of designs -------------------------------------------------------------------
 def broadcast_fields(
     values: Mapping[str, ArrayLike], base: DrumClutch | None = None

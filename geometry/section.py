@@ -137,9 +137,7 @@ def build_section(c: DrumClutch) -> Section:
     """The region table (geometry/regions.py) evaluated at one design."""
     rg = table.evaluate(vars(c), c.n_drums)
     regs = tuple(Region(sp.name, sp.part, sp.material, *rg.bounds(sp)) for sp in rg)
-    gaps = tuple(
-        Gap(int(sp.name[3:]), *rg.bounds(sp), *sp.walls) for sp in rg.films("cylinder")
-    )
+    gaps = tuple(Gap(int(sp.name[3:]), *rg.bounds(sp), *sp.walls) for sp in rg.films("cylinder"))
     faces = tuple(
         FaceGap(sp.name.removeprefix("film_"), r0, r1, z1 - z0)
         for sp in rg.films("face")

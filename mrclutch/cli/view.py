@@ -12,6 +12,8 @@ import os
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from geometry.atomic import atomic_path
 from geometry.cad import MATERIAL_COLOURS, material_solids, tessellate
 from geometry.params import DrumClutch
@@ -50,7 +52,6 @@ def scene_meshes(
 ) -> list[tuple[str, str, Any]]:
     """(part, material, pyvista.PolyData in mm) for every solid; half of each if ``cut``.
     ``tolerance`` [m] defaults to :func:`view_tolerance` of the default window."""
-    import numpy as np
     import pyvista as pv
 
     tolerance = view_tolerance(clutch) if tolerance is None else tolerance

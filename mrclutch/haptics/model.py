@@ -64,6 +64,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.polynomial import polynomial as P
 
 from geometry.validation import ParameterError, check_nonnegative
 from mrclutch.haptics.actuator import HapticParams
@@ -440,7 +441,6 @@ def _crossings(
 
     if tau == 0.0:
         # Im[−jωNum(jω)(k − jbω)] is a polynomial in ω: its positive real roots, exactly.
-        from numpy.polynomial import polynomial as P
 
         c = np.array(a[::-1], dtype=complex) * (1j ** np.arange(4))  # Num(jω) in ω
         poly = P.polymul(P.polymul([0, -1j], c), [p.k, -1j * p.b])

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
 
 from geometry.validation import check_choice
 from mrclutch.cli.commands._common import add_design_args, atomic_path, load_design_args, print_json
@@ -175,8 +178,6 @@ def _report(args: argparse.Namespace) -> int:
 
 
 def _sweep(args: argparse.Namespace) -> int:
-    from concurrent.futures import ProcessPoolExecutor
-
     spec, rest = load_spec(args.spec)
     base = design_from_mapping({"clutch": spec.base.to_mm(), **rest}, where=args.spec)
     if args.workers < 0:
@@ -198,8 +199,6 @@ def _sweep(args: argparse.Namespace) -> int:
         if executor is not None:
             executor.shutdown(cancel_futures=True)
     if not res.complete:
-        import sys
-
         print(
             f"mrclutch sweep: interrupted after {res.rows} of {spec.n_designs} designs; "
             f"rows kept in {res.path}; run again with --resume to carry on",
@@ -217,8 +216,6 @@ def _sweep(args: argparse.Namespace) -> int:
 
 
 def _optimize(args: argparse.Namespace) -> int:
-    import time
-
     base = load_design_args(args)
     try:
         drums = tuple(int(x) for x in args.drums.split(","))

@@ -4,6 +4,10 @@ the reference, the chart and the table. Imports nothing heavy at module level.""
 from __future__ import annotations
 
 import argparse
+import csv
+import io
+import json
+from pathlib import Path
 from typing import Any
 
 from mrclutch.cli.commands._common import (
@@ -36,9 +40,6 @@ def register(sub: Any) -> None:
 
 def rows_csv(rows: Any) -> str:
     """The table as CSV (quantity, method, setting, time_s, value, unit, error_rel)."""
-    import csv
-    import io
-
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(["quantity", "method", "setting", "time_s", "value", "unit", "error_rel"])
@@ -50,9 +51,6 @@ def rows_csv(rows: Any) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    import json
-    from pathlib import Path
-
     if args.repeats < 1:
         raise CLIError(f"--repeats = {args.repeats}: must be >= 1")
     design = load_design_args(args)

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import argparse
 
+import numpy as np
+
 from geometry.section import build_section
 from geometry.validation import ParameterError, check_choice, check_range
 from magnetics.fem import FEMConvergenceError, solve_fem
@@ -18,8 +20,6 @@ from mrclutch.cli.plots.magnetics import plot_field, plot_torque
 
 def _parse_currents(text: str):  # type: ignore[no-untyped-def]
     """``A``, ``START:STOP:STEP`` (inclusive of STOP) or ``A,B,C`` in amperes."""
-    import numpy as np
-
     try:
         if ":" in text:
             a, b, s = (float(x) for x in text.split(":"))
@@ -63,8 +63,6 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def _torque(args: argparse.Namespace) -> int:
-    import numpy as np
-
     check_choice("--method", args.method, ("circuit", "fem", "both"))
     check_range("--speed-rpm", args.speed_rpm, 0.0, 1e5, " rpm")
     currents = _parse_currents(args.current)

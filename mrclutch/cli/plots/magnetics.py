@@ -6,6 +6,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 
 def plot_torque(curves: Sequence[Any], path: str | Path, title: str = "") -> None:
     """Torque (N·m) against current (A) for one or more TorqueCurve objects."""
@@ -35,7 +37,6 @@ def plot_field(section: Any, sol: Any, path: str | Path) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    import numpy as np
     from matplotlib.patches import Rectangle
 
     r, z = sol.r_nodes, sol.z_nodes

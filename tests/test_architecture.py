@@ -1,0 +1,159 @@
+"""The layers of docs/architecture.md, read from the source (AST), lazy imports included.
+
+    geometry  ←  magnetics  ←  mrclutch.haptics  ←  mrclutch (application)  ←  mrclutch.cli
+
+A module imports only from its own layer or a lower one; the module graph has no cycle;
+imports inside functions are only for the heavy third-party packages below, so every
+project dependency is visible at the top of its module.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = ("geometry", "magnetics", "mrclutch")
+LAYERS = ("geometry", "magnetics", "mrclutch.haptics", "mrclutch (application)", "mrclutch.cli")
+#: Third-party packages a function may import lazily, and why.
+LAZY_OK = {
+    "build123d": "≈ 6 s to import (OpenCascade)",
+    "OCP": "OpenCascade bindings, as build123d",
+    "skfem": "FEM only on the reference path",
+    "pyvista": "VTK, only for the 3-D view",
+    "vtk": "as pyvista",
+    "trimesh": "only for mesh inertia",
+    "matplotlib": "only where a figure is drawn",
+    "scipy": "≈ 0.3–0.4 s; the CLI and the analytic commands start without it",
+    "tqdm": "progress bars only on long work",
+}
+
+
+def _modules() -> dict[str, Path]:
+    out = {}
+    for pkg in PACKAGES:
+        for f in sorted((ROOT / pkg).rglob("*.py")):
+            parts = list(f.relative_to(ROOT).with_suffix("").parts)
+            if parts[-1] == "__init__":
+                parts.pop()
+            out[".".join(parts)] = f
+    return out
+
+
+MODULES = _modules()
+
+
+def layer(module: str) -> int:
+    if module == "mrclutch.__main__" or module.startswith("mrclutch.cli"):
+        return 4
+    if module.startswith("mrclutch.haptics"):
+        return 2
+    return {"geometry": 0, "magnetics": 1, "mrclutch": 3}[module.split(".")[0]]
+
+
+def _package_of(module: str) -> str:
+    is_pkg = MODULES[module].name == "__init__.py"
+    return module if is_pkg else module.rpartition(".")[0]
+
+
+def imports(module: str, source: str | None = None) -> list[tuple[str, int, bool]]:
+    """(imported module, line, inside a function) for every project import in ``module``
+    and every import inside its functions."""
+    tree = ast.parse(MODULES[module].read_text() if source is None else source)
+    lazy_lines = {
+        s.lineno
+        for n in ast.walk(tree)
+        if isinstance(n, ast.FunctionDef | ast.AsyncFunctionDef)
+        for s in ast.walk(n)
+        if isinstance(s, ast.Import | ast.ImportFrom)
+    }
+    out = []
+    for node in ast.walk(tree):
+        names: list[str] = []
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:  # relative import
+                pkg = _package_of(module).split(".")
+                base = ".".join(pkg[: len(pkg) - node.level + 1] + ([base] if base else []))
+            # `from pkg import mod` imports the module pkg.mod
+            names = [f"{base}.{a.name}" if f"{base}.{a.name}" in MODULES else base
+                     for a in node.names]  # fmt: skip
+        for name in names:
+            if name.split(".")[0] in PACKAGES:
+                while name not in MODULES:  # an attribute path: its module
+                    name = name.rpartition(".")[0]
+                out.append((name, node.lineno, node.lineno in lazy_lines))
+            elif node.lineno in lazy_lines:
+                out.append((name, node.lineno, True))
+    return out
+
+
+def test_the_package_tree_is_found() -> None:
+    assert {"geometry.regions", "magnetics.circuit", "mrclutch.haptics.model",
+            "mrclutch.pipeline", "mrclutch.cli.main"} <= set(MODULES)  # fmt: skip
+
+
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_imports_go_down_the_layers_only(module: str) -> None:
+    up = [
+        f"{module}:{line} imports {target} ({LAYERS[layer(target)]} above {LAYERS[layer(module)]})"
+        for target, line, _ in imports(module)
+        if target.split(".")[0] in PACKAGES and layer(target) > layer(module)
+    ]
+    assert not up, "\n".join(up)
+
+
+@pytest.mark.parametrize("module", sorted(MODULES))
+def test_functions_import_only_heavy_third_party_packages(module: str) -> None:
+    bad = [
+        f"{module}:{line} imports {target} inside a function"
+        for target, line, lazy in imports(module)
+        if lazy and target.split(".")[0] not in LAZY_OK
+    ]
+    assert not bad, "\n".join(bad)
+
+
+def find_cycle(graph: dict[str, list[str]]) -> list[str] | None:
+    """One cycle of the directed graph (as a closed path), or None."""
+    state: dict[str, int] = {}  # 1 on the stack, 2 done
+    path: list[str] = []
+
+    def visit(m: str) -> list[str] | None:
+        state[m] = 1
+        path.append(m)
+        for t in graph[m]:
+            if state.get(t) == 1:
+                return [*path[path.index(t) :], t]
+            if t not in state and (c := visit(t)):
+                return c
+        path.pop()
+        state[m] = 2
+        return None
+
+    for m in graph:
+        if m not in state and (c := visit(m)):
+            return c
+    return None
+
+
+def test_the_module_graph_has_no_cycle() -> None:
+    graph = {m: sorted({t for t, _, _ in imports(m) if t in MODULES and t != m}) for m in MODULES}
+    cycle = find_cycle(graph)
+    assert cycle is None, "import cycle: " + " → ".join(cycle or [])
+
+
+def test_a_planted_lazy_upward_import_and_a_cycle_are_caught() -> None:
+    """The checks can fail: a lazy import of the CLI from the physics is seen, as upward
+    and as lazy, and a two-module cycle is found."""
+    src = (
+        "import numpy as np\n\ndef f():\n    from mrclutch.cli.main import main\n    return main\n"
+    )
+    found = imports("magnetics.torque", src)
+    assert found == [("mrclutch.cli.main", 4, True)]
+    assert layer("mrclutch.cli.main") > layer("magnetics.torque")
+    assert find_cycle({"a": ["b"], "b": ["c"], "c": ["a"]}) == ["a", "b", "c", "a"]
+    assert find_cycle({"a": ["b"], "b": [], "c": ["a"]}) is None
