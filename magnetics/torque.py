@@ -33,6 +33,7 @@ from magnetics.circuit import (
     solve_flux,
     solve_path,
 )
+from magnetics.fem import solve_fem
 from magnetics.materials import FLUIDS, MATERIALS, Magnetic, MRFluid, magnetic
 
 FloatArray = NDArray[np.float64]
@@ -163,8 +164,6 @@ def torque_curve(
         per = _gap_torque(path, np.abs(res.flux), res.radial_mmf, materials, fluid)[0]
         labels = res.gap_label
     else:
-        from magnetics.fem import solve_fem
-
         sols = [solve_fem(section, float(i), materials=materials, size=fem_size) for i in cur]
         per = np.array([s.gap_yield_torque(fluid) for s in sols])
         labels = tuple(f"gap{g.index}" for g in section.gaps)
