@@ -99,7 +99,10 @@ class MagneticPath:
 
 
 def _leak_permeance(
-    mu_fluid: float, band: FloatArray, fluid_area: FloatArray, nonmag_stack: FloatArray,
+    mu_fluid: float,
+    band: FloatArray,
+    fluid_area: FloatArray,
+    nonmag_stack: FloatArray,
     window: FloatArray,
 ) -> FloatArray:
     # Axial permeance μA/l of the band region (Roters ch. 5); fluid and stainless inside the
@@ -107,9 +110,7 @@ def _leak_permeance(
     return (0.5 * (mu_fluid * fluid_area + MU0 * nonmag_stack) + MU0 * window) / band
 
 
-def path_from_regions(
-    rg: Regions, materials: Mapping[str, Magnetic] | None = None
-) -> MagneticPath:
+def path_from_regions(rg: Regions, materials: Mapping[str, Magnetic] | None = None) -> MagneticPath:
     """The loop of the designs of one region table (S designs of one drum count).
 
     Read from the table, not laid out again: a gap's walls are the steel regions that share

@@ -33,7 +33,7 @@ from magnetics.circuit import (
     solve_flux,
     solve_path,
 )
-from magnetics.fem import solve_fem
+from magnetics.fem import build_grid, solve_fem
 from magnetics.materials import FLUIDS, MATERIALS, Magnetic, MRFluid, magnetic
 
 FloatArray = NDArray[np.float64]
@@ -164,7 +164,11 @@ def torque_curve(
         per = _gap_torque(path, np.abs(res.flux), res.radial_mmf, materials, fluid)[0]
         labels = res.gap_label
     else:
-        sols = [solve_fem(section, float(i), materials=materials, size=fem_size) for i in cur]
+        grid = build_grid(section, fem_size, materials)  # one grid, Newton warm-started
+        sols, psi = [], None
+        for i in cur:
+            sols.append(solve_fem(section, float(i), materials=materials, grid=grid, psi0=psi))
+            psi = sols[-1].psi
         per = np.array([s.gap_yield_torque(fluid) for s in sols])
         labels = tuple(f"gap{g.index}" for g in section.gaps)
     ty = per.sum(axis=-1)
