@@ -161,7 +161,7 @@ def weigh_mesh(
     mesh: trimesh.Trimesh, density: float, axis: str = "z", scale: float = MM
 ) -> PartMass:
     """Mass and inertia about ``axis`` through the origin of a closed mesh (units × scale = m)."""
-    props = mesh.mass_properties  # divergence theorem over the triangles (Mirtich 1996)
+    props = mesh.mass_properties  # divergence theorem over the triangles [mirtich1996]
     e = np.asarray(AXES[axis], float)
     c = np.asarray(props["center_mass"])
     vol = float(props["volume"])

@@ -22,7 +22,7 @@ DENSITY: Mapping[str, float] = MappingProxyType(
     {
         STEEL: 7870.0,  # AISI 1018, FEMM 4.2 material library [materials]
         STAINLESS: 8000.0,  # AISI 304/316 [materials]
-        MRF: 3050.0,  # LORD MRF-132DG datasheet, ≈ 3.05 g/cm³ [mrf132dg]
+        MRF: 3050.0,  # LORD MRF-132DG datasheet, ≈ 3.05 g/cm³ [lord-mrf132dg]
     }
 )
 #: How a person reads each material's name, and its display colour (RGB 0..1): the STEP

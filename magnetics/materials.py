@@ -186,7 +186,7 @@ class BHCurve:
 Magnetic = LinearMaterial | BHCurve
 
 # AISI 1018 steel. Source: FEMM 4.2 material library (matlib.dat, "1018 Steel"),
-# shared/reference/materials.md.
+# [femm-matlib] (docs/references.md).
 STEEL_1018 = BHCurve(
     STEEL,
     (0.2503, 0.925, 1.25, 1.39, 1.525, 1.71, 1.87, 1.955, 2.02, 2.11, 2.225, 2.43),
@@ -196,7 +196,7 @@ STEEL_1018 = BHCurve(
 )  # fmt: skip
 
 # LORD MRF-132DG. Source: manufacturer's B–H curve as digitised in the public FEMM
-# material "LORD MRF 132-DG" (shared/reference/materials.md); H converted kA/m → A/m.
+# material "LORD MRF 132-DG" [femm-matlib]; H converted kA/m → A/m.
 MRF_132DG_BH = BHCurve(
     MRF,
     (0.103, 0.160, 0.229, 0.309, 0.372, 0.424, 0.481, 0.556, 0.607, 0.682, 0.722, 0.785,
@@ -242,8 +242,8 @@ MRF_132DG = MRFluid(MRF, 0.32, 1.0, 0.112, "Carlson/LORD closed form; datasheet 
 MRF_132DG_DATASHEET_TAU = ((18e3, 4.64e3), (46e3, 13.77e3), (80e3, 23.47e3))
 
 AIR = LinearMaterial("air", 1.0, "vacuum")
-STAINLESS_304 = LinearMaterial(STAINLESS, 1.0, "austenitic, μr≈1 (materials.md)")
-COIL_MATERIAL = LinearMaterial(COIL, 1.0, "copper + epoxy, μr≈1 (materials.md)")
+STAINLESS_304 = LinearMaterial(STAINLESS, 1.0, "austenitic, μr≈1 [materials]")
+COIL_MATERIAL = LinearMaterial(COIL, 1.0, "copper + epoxy, μr≈1 [materials]")
 
 #: Magnetic materials keyed by the section's material names.
 MATERIALS: Mapping[str, Magnetic] = MappingProxyType(

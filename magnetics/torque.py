@@ -1,10 +1,10 @@
 """Yield torque from the gap fields, viscous drag from the gaps' shear, coil properties.
 
 Yield torque of a sheared cylindrical interface of mid-radius r: T = 2π r² ∫ τy(H(z)) dz
-(Bingham plastic at yield, e.g. Carlson & Jolly, Mechatronics 10 (2000) eq. 1, integrated
-over the field-carrying length). Viscous torque of a cylindrical gap of width g and
-wetted length L at slip speed ω: 2π η ω r³ L / g (Couette flow, thin gap); of a face film
-of height h between radii r0, r1: π η ω (r1⁴ − r0⁴) / (2h) (Newtonian disk shear). Both
+(Bingham plastic at yield, [carlson-jolly2000] eq. 1, integrated over the field-carrying
+length). Viscous torque of a cylindrical gap of width g and wetted length L at slip speed
+ω: 2π η ω r³ L / g (thin-gap Couette flow, [white-viscous]); of a face film of height h
+between radii r0, r1: π η ω (r1⁴ − r0⁴) / (2h) (Newtonian disk shear). Both
 are linear in ω, so the damping c = dT/dω = T/ω exactly.
 """
 
@@ -37,8 +37,8 @@ from magnetics.fem import build_grid, solve_fem
 from magnetics.materials import FLUIDS, MATERIALS, Magnetic, MRFluid, magnetic
 
 FloatArray = NDArray[np.float64]
-RHO_CU_20 = 1.72e-8  # Ω·m at 20 °C (shared/reference/materials.md)
-ALPHA_CU = 0.00393  # 1/K, copper resistivity temperature coefficient (materials.md)
+RHO_CU_20 = 1.72e-8  # Ω·m at 20 °C [materials] (docs/references.md)
+ALPHA_CU = 0.00393  # 1/K, copper resistivity temperature coefficient [materials]
 METHODS = ("circuit", "fem")
 
 
@@ -111,7 +111,7 @@ def coil_properties(clutch: DrumClutch, current: float, temperature: float = 20.
     """Resistance, Joule power and current density of the coil."""
     i = check_finite("current", current, " A")
     t = check_range("temperature", temperature, -273.15, 1000.0, " °C")
-    rho = RHO_CU_20 * (1 + ALPHA_CU * (t - 20.0))  # linear copper law, materials.md
+    rho = RHO_CU_20 * (1 + ALPHA_CU * (t - 20.0))  # linear copper law [materials]
     length = clutch.coil_turns * math.pi * (clutch.coil_inner_radius + clutch.coil_outer_radius)
     area = math.pi * clutch.wire_diameter**2 / 4
     r = rho * length / area  # R = ρ l / A

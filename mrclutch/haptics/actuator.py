@@ -1,7 +1,7 @@
 """Actuators, the cable transmission and the 2-DOF haptic parameters they reflect to.
 
 Reference: Lebel et al., "Performance Study of Low Inertia Magnetorheological Actuators
-for Kinesthetic Haptic Devices" (``../shared/paper``), Eq. 3–4, Table 1 and Table 2.
+for Kinesthetic Haptic Devices" [lebel] (docs/references.md), Eq. 3–4, Table 1 and Table 2.
 
 * :class:`Actuator` — rotor inertia, rotary damping, maximum torque, delay, mass (SI, at
   the actuator shaft). The catalogue :data:`ACTUATORS` holds Table 1 (max torque rule: a

@@ -1,4 +1,4 @@
-"""Lebel et al. (paper in ../shared/paper): Table 2, Fig. 6 and Fig. 7 figures reproduced
+"""Lebel et al. [lebel] (docs/references.md): Table 2, Fig. 6 and Fig. 7 figures reproduced
 with the tolerances of issue 2."""
 
 from dataclasses import replace
