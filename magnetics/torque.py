@@ -133,14 +133,6 @@ class TorqueCurve:
     damping: float  # N·m·s
 
 
-def yield_torque_from_h(
-    r_mid: ArrayLike, length: ArrayLike, h: ArrayLike, fluid: MRFluid
-) -> FloatArray:
-    """2π r² L τy(H) for uniform H along each gap (broadcasting)."""
-    r = np.asarray(r_mid, dtype=float)
-    return 2 * np.pi * r**2 * np.asarray(length, dtype=float) * fluid.tau_y(h)
-
-
 def torque_curve(
     clutch: DrumClutch | Section,
     currents: ArrayLike,
