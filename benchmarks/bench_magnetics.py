@@ -1,7 +1,7 @@
 """Magnetics speed and speed-vs-accuracy.
 
-    python -m pytest benchmarks/bench_magnetics.py --benchmark-enable
-    python benchmarks/bench_magnetics.py [OUT.png]   # table + log-log chart of error vs time
+python -m pytest benchmarks/bench_magnetics.py --benchmark-enable
+python benchmarks/bench_magnetics.py [OUT.png]   # table + log-log chart of error vs time
 """
 
 from __future__ import annotations
@@ -40,10 +40,12 @@ def test_fem_paper_default_resolution_one_current(benchmark):  # goal < 5 s
 
 def accuracy_table(sizes=(1.0e-3, 0.5e-3, 0.35e-3, 0.25e-3), ref=0.12e-3, currents=(2.0, 4.0, 7.0)):
     s = build_section(PAPER)
+
     def fem_t(h):
         t0 = time.perf_counter()
         t = [solve_fem(s, i, size=h).gap_yield_torque(MRF_132DG).sum() for i in currents]
         return np.array(t), (time.perf_counter() - t0) / len(currents)
+
     t_ref, _ = fem_t(ref)
     rows = []
     for h in sizes:

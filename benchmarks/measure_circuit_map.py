@@ -145,8 +145,14 @@ def write(
         "errors": [num(e) for e in errs],
         "fem_error_bound": {repr(s): round(v, 5) for s, v in fem_bound.items()},
         "checks": [
-            [c["n_drums"], c["gap"], c["zone_length"], c["drum_inner_diameter"],
-             c["drum_thickness"], num(e)]
+            [
+                c["n_drums"],
+                c["gap"],
+                c["zone_length"],
+                c["drum_inner_diameter"],
+                c["drum_thickness"],
+                num(e),
+            ]
             for c, e in checks
         ],
         "range_factor": math.ceil(factor * 100) / 100,

@@ -85,6 +85,8 @@ def test_batch_solvers_match_the_design_solve():
     t = torque_curve(PAPER, [0.5, 3.0, 7.0]).yield_torque
     np.testing.assert_allclose(max_torque_batch({}, [0.5, 3.0, 7.0][2]), t[2], rtol=1e-8)
     np.testing.assert_allclose(torque_grid_batch({}, [0.5, 3.0, 7.0])[0], t, rtol=1e-3)
+
+
 def test_robust_extreme_currents_finite_monotone():
     tc = torque_curve(PAPER, [0.0, 1e-6, 1.0, 7.0, 100.0, 1000.0])
     assert np.all(np.isfinite(tc.torque))
