@@ -4,7 +4,7 @@ Three methods (see README "Speed against accuracy"):
 
 * ``analytic`` — exact integrals over the section's rectangles (revolved annuli):
   V = π (r1² − r0²) Δz,  I_z = ρ π (r1⁴ − r0⁴) Δz / 2  (thick-walled tube, any dynamics
-  text, e.g. Meriam & Kraige, Appendix B). Exact for the axisymmetric body; blind to the
+  text, e.g. [meriam-kraige] Appendix B). Exact for the axisymmetric body; blind to the
   non-axisymmetric hub features, which it reports rather than hides.
 * ``mesh`` — trimesh on the tessellated CAD (tolerance-dependent, see geometry/cad.py),
   guarded: a mesh that is not closed is refused, and the chord-height error is estimated
@@ -75,7 +75,7 @@ class MassReport:
 
 def tube(rho: Any, r0: Any, r1: Any, dz: Any) -> tuple[Any, Any]:
     """Mass and axial inertia of a revolved rectangle (thick-walled tube; any dynamics text,
-    e.g. Meriam & Kraige, Appendix B): ρπ(r1²−r0²)Δz and ρπ(r1⁴−r0⁴)Δz/2."""
+    e.g. [meriam-kraige] Appendix B): ρπ(r1²−r0²)Δz and ρπ(r1⁴−r0⁴)Δz/2."""
     a0, a1 = r0 * r0, r1 * r1
     m = rho * np.pi * (a1 - a0) * dz
     return m, m * (a1 + a0) / 2

@@ -20,7 +20,7 @@ MRF = "mrf_132dg"  # the MR fluid
 #: kg/m³. The coil's density depends on its fill: see ``coil_density``.
 DENSITY: Mapping[str, float] = MappingProxyType(
     {
-        STEEL: 7870.0,  # AISI 1018, FEMM 4.2 material library [materials]
+        STEEL: 7870.0,  # AISI 1018, FEMM 4.2 material library [femm-matlib] [materials]
         STAINLESS: 8000.0,  # AISI 304/316 [materials]
         MRF: 3050.0,  # LORD MRF-132DG datasheet, ≈ 3.05 g/cm³ [lord-mrf132dg]
     }

@@ -39,8 +39,8 @@ from geometry.validation import (
 )
 
 #: Smallest fluid gap we accept. Turned and ground drums of this size hold ~0.02–0.05 mm
-#: runout; a gap below 0.1 mm would be closed by runout and particle chains (LORD
-#: MRF-132DG particles are up to ~10 µm). Exonetik-type drum clutches use 0.2–0.5 mm.
+#: runout; a gap below 0.1 mm would be closed by runout and particle chains (MR-fluid
+#: particles are 3–10 µm, [lebel] §II-A). Exonetik-type drum clutches use 0.2–0.5 mm.
 MIN_GAP = 0.1e-3
 #: Thinnest drum the geometry accepts (razor-thin drums are allowed so that the methods
 #: can be shown failing on them; the CAD tolerance checks catch what the mesh cannot see).
@@ -145,7 +145,7 @@ class DrumClutch:
     sleeve_thickness: float = 0.3e-3
     coil_depth: float = 2.5e-3
     coil_turns: int = 140
-    wire_diameter: float = 0.321e-3
+    wire_diameter: float = 0.321e-3  # 28 AWG, bare [materials]
     wire_insulation: float = 0.02e-3
     shaft_radius: float = 2.0e-3
     shaft_length: float = 5.0e-3
@@ -411,7 +411,7 @@ def valid(p: Mapping[str, np.ndarray]) -> NDArray[np.bool_]:
     return ok
 
 
-#: The paper's clutch (Lebel et al., Table 1: 0.4 N·m, 2.7 g·cm², 85 g, 30×30×40 mm,
+#: The paper's clutch ([lebel] Table 1: 0.4 N·m, 2.7 g·cm², 85 g, 30×30×40 mm,
 #: 140 turns of 28 AWG). The paper gives no drum dimensions; ours are chosen in
 #: README "The paper preset" so that the rotor inertia, the mass, the envelope and the
 #: torque at 7 A with MRF-132DG match Table 1 and Fig. 2b.

@@ -3,8 +3,8 @@
 One flux loop: core (axial) → zone A (every gap and steel drum wall radially) → pole A
 (radially) → back iron (axial) → pole B → zone B → core. Each element's MMF drop is
 ``∫ H(B(r)) dr`` with ``B = Φ/(2π r L)`` for radial elements (Gauss–Legendre in ln r:
-exact for a linear material, whose reluctance is ln(r1/r0)/(2π μ L) — Roters, *Electro-
-magnetic Devices*, 1941, ch. 5) and ``H(Φ/A)·l`` for axial ones.
+exact for a linear material, whose reluctance is ln(r1/r0)/(2π μ L) — [roters1941],
+ch. 5) and ``H(Φ/A)·l`` for axial ones.
 
 Gap length: a gap carries the zone's flux where its two steel walls face each other (the
 overlap of the walls' steel, inside the gap's wetted length). For the outermost gap in
@@ -26,10 +26,10 @@ Band field (torque only): over the non-magnetic band the magnetic potential betw
 core and the pole radius falls linearly from the zone's radial MMF ``F_r`` at the zone's
 end to 0 at the band's centre (the coil is a uniform current sheet between the poles, and
 the band's centre is the plane of antisymmetry). This is Roters' linear-potential
-assumption for the leakage between the pole faces of a distributed winding (Roters 1941,
-ch. 5 "leakage flux", the field of a uniformly wound coil; also Hanselman, *Brushless
-Permanent Magnet Motor Design*, §2.6 for the same 1-D treatment). Radially the band stack
-is a series of fluid gaps and stainless drum walls, so a gap at radius r sees
+assumption for the leakage between the pole faces of a distributed winding ([roters1941],
+ch. 5 "leakage flux", the field of a uniformly wound coil; also [hanselman] §2.6 for the
+same 1-D treatment). Radially the band stack is a series of fluid gaps and stainless drum
+walls, so a gap at radius r sees
 ``B(x) = F_r·(1 − 2x/b)/(r·S_b)`` with ``S_b = Σ ln(ro/ri)/μ`` over the band's layers (fluid
 at its initial μ); that field's yield stress adds torque over the band (the FEM shows it is
 ~10 % of the total). It is not fed back into the loop (its flux is part of the leakage).
@@ -105,7 +105,7 @@ def _leak_permeance(
     nonmag_stack: FloatArray,
     window: FloatArray,
 ) -> FloatArray:
-    # Axial permeance μA/l of the band region (Roters ch. 5); fluid and stainless inside the
+    # Axial permeance μA/l of the band region ([roters1941] ch. 5); fluid and stainless inside the
     # stack at half weight (linear potential drop across the stack), sleeve + coil at full.
     return (0.5 * (mu_fluid * fluid_area + MU0 * nonmag_stack) + MU0 * window) / band
 
@@ -307,7 +307,7 @@ def solve_flux(
 ) -> FloatArray:
     """Gap flux Φ (Wb), shape (S, C), solving N·I = F(Φ) for ``ampere_turns`` (S, C).
 
-    Safeguarded Newton (Numerical Recipes §9.4 "rtsafe") on the strictly increasing F,
+    Safeguarded Newton ([numerical-recipes] §9.4 "rtsafe") on the strictly increasing F,
     started at the linear (unsaturated) circuit's flux: the bracket [lo, hi] always
     contains the root and shrinks every step; a Newton step that would leave it is
     replaced by bisection, so it cannot diverge. Negative N·I is solved by symmetry.

@@ -2,7 +2,7 @@
 
 Every magnetic material offers ``h_of_b(b)``, ``b_of_h(h)`` and ``dh_db(b)`` on floats or
 arrays (SI: T and A/m). Non-linear materials are B–H tables interpolated with a monotone
-cubic (PCHIP, Fritsch–Carlson) of H(B) through the origin, pre-sampled on a dense grid so
+cubic (PCHIP, [fritsch-carlson1980]) of H(B) through the origin, pre-sampled on a dense grid so
 that evaluation is a vectorised ``np.interp``; beyond the last point the curve continues
 with slope μ0 (the material's polarisation is saturated: dB/dH → μ0). The registry
 ``MATERIALS`` is keyed by the material names that ``geometry.section`` writes on its
@@ -31,10 +31,9 @@ _FAR_B = 1e6  # T: the μ0 extension point (no clutch field comes near)
 def pchip(x: FloatArray, y: FloatArray, xq: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Monotone piecewise-cubic Hermite interpolant through (x, y) and its derivative at xq.
 
-    Slopes as scipy's PchipInterpolator: Fritsch & Butland (1984) weighted harmonic mean
-    inside, the shape-preserving three-point formula at the ends (Moler, *Numerical
-    Computing with MATLAB*, 2004, §3.4). Written in numpy so importing the materials does
-    not import scipy (≈ 0.4 s).
+    Slopes as scipy's PchipInterpolator: [fritsch-butland1984] weighted harmonic mean
+    inside, the shape-preserving three-point formula at the ends ([moler2004] §3.4). Written
+    in numpy so importing the materials does not import scipy (≈ 0.4 s).
     """
     hk = np.diff(x)
     mk = np.diff(y) / hk
@@ -42,7 +41,7 @@ def pchip(x: FloatArray, y: FloatArray, xq: FloatArray) -> tuple[FloatArray, Flo
     w1, w2 = 2 * hk[1:] + hk[:-1], hk[1:] + 2 * hk[:-1]
     same = (np.sign(mk[1:]) == np.sign(mk[:-1])) & (mk[1:] != 0) & (mk[:-1] != 0)
     with np.errstate(divide="ignore", invalid="ignore"):
-        harm = (w1 + w2) / (w1 / mk[:-1] + w2 / mk[1:])  # Fritsch–Butland
+        harm = (w1 + w2) / (w1 / mk[:-1] + w2 / mk[1:])  # [fritsch-butland1984]
     d[1:-1] = np.where(same, harm, 0.0)
     for end, (h0, h1, m0, m1) in ((0, (hk[0], hk[1], mk[0], mk[1])),
                                   (-1, (hk[-1], hk[-2], mk[-1], mk[-2]))):  # fmt: skip
@@ -126,7 +125,7 @@ class BHCurve:
         bb = np.concatenate([[0.0], b])
         hh = np.concatenate([[0.0], h])
         grid = np.linspace(0.0, b[-1], _DENSE)
-        hp, dp = pchip(bb, hh, grid)  # Fritsch–Carlson monotone cubic of H(B)
+        hp, dp = pchip(bb, hh, grid)  # monotone cubic of H(B) [fritsch-carlson1980]
         hs = np.maximum.accumulate(hp)
         dh = np.maximum(dp, 0.0)
         # One far point continues the curve with slope 1/μ0, so a single np.interp
@@ -223,7 +222,7 @@ class MRFluid:
 
     @property
     def tau_y_max(self) -> float:
-        # Carlson (LORD, "MR fluid devices"), τy,sat = C·271700·φ^1.5239 Pa
+        # Carlson (LORD) [carlson], τy,sat = C·271700·φ^1.5239 Pa
         return self.carrier_c * 271700.0 * self.phi**1.5239
 
     def tau_y(self, h: ArrayLike) -> FloatArray:
@@ -231,14 +230,14 @@ class MRFluid:
         return self.tau_y_max * np.tanh(6.33e-6 * np.abs(np.asarray(h, dtype=float)))
 
 
-# MRF-132DG rheology. Source: Carlson closed form (LORD), φ = 0.32, C = 1.0
-# (hydrocarbon carrier); η = 0.112 Pa·s at 40 °C (LORD datasheet, slope 800–1200 1/s).
+# MRF-132DG rheology. Source: Carlson closed form (LORD) [carlson], φ = 0.32, C = 1.0
+# (hydrocarbon carrier); η = 0.112 Pa·s at 40 °C [lord-mrf132dg] (slope 800–1200 1/s).
 # Chosen over interpolating the three datasheet points 4.64/13.77/23.47 kPa at
 # 18/46/80 kA/m because it saturates physically (~48 kPa) beyond the points; it is
 # +17 %, −1 %, −4.6 % off those points (tests/magnetics/test_materials.py).
 MRF_132DG = MRFluid(MRF, 0.32, 1.0, 0.112, "Carlson/LORD closed form; datasheet η")
 
-#: Datasheet yield stress of MRF-132DG (H in A/m, τy in Pa), for comparison only.
+#: Datasheet yield stress of MRF-132DG [lord-mrf132dg] (H in A/m, τy in Pa), comparison only.
 MRF_132DG_DATASHEET_TAU = ((18e3, 4.64e3), (46e3, 13.77e3), (80e3, 23.47e3))
 
 AIR = LinearMaterial("air", 1.0, "vacuum")

@@ -9,8 +9,8 @@ their error can be measured against it (``mrclutch fidelity``):
   closed loop becomes the polynomial χ_n(s) = s Num(s) P_n(−sτ) + K P_n(sτ)(bs + k), whose
   roots are found by ``numpy.roots``.
 * **Time stepping at h = τ/N**: the 2-DOF equations discretised exactly over one step
-  with the delayed force linearly interpolated (first-order hold, Franklin, Powell &
-  Workman, *Digital Control*, §6.3.2) — the scheme of tests/mrclutch/test_haptic.py. The
+  with the delayed force linearly interpolated (first-order hold, [franklin-powell-workman]
+  §6.3.2) — the scheme of tests/mrclutch/test_haptic.py. The
   simulation's asymptotic growth per step is the spectral radius of its one-step map on
   the state [x1, ẋ1, x2, ẋ2, x2(t−h), …, x2(t−Nh)]; stable iff it is < 1. (Running the
   simulation and fitting its envelope measures the same number, more slowly and with a
@@ -136,7 +136,7 @@ def step_map(p: HapticParams, K: float, steps_per_delay: int) -> np.ndarray:
     )  # Eq. 1-2 equations of motion (mrclutch.haptics.model module docstring)
     B = np.array([0, 1 / p.m1, 0, 0])
     h = tau / N
-    M = np.zeros((6, 6))  # FOH discretisation by one matrix exponential (Franklin et al.)
+    M = np.zeros((6, 6))  # FOH discretisation by one matrix exponential [franklin-powell-workman]
     M[:4, :4], M[:4, 4], M[4, 5] = A * h, B * h, 1.0
     E = expm(M)
     Phi, G1, G2 = E[:4, :4], E[:4, 4], E[:4, 5]

@@ -1,4 +1,4 @@
-"""The 2-DOF haptic lever model (Lebel et al., Eq. 1–4): impedances, bandwidth, rendering
+"""The 2-DOF haptic lever model ([lebel] Eq. 1–4): impedances, bandwidth, rendering
 area, passivity and stability. Pure functions on :class:`HapticParams`, SI units, angular
 frequencies ``w`` in rad/s, results in Hz where the name says ``_hz``.
 
@@ -25,9 +25,9 @@ x1 = (bs + k − K E) x2 / D1 and::
 At K = 0 it is Eq. 2. It is evaluated exactly (no Padé). The free lever's characteristic
 quasi-polynomial is χ(s) = s Num(s) + K E(s)(bs + k).
 
-**Effective impedance** (the decomposition of Mehling, Colgate & Peshkin, the paper's
-[5]): with F/X = s Z at s = jω, effective stiffness k_eff = Re(jωZ) [N/m], effective
-damping b_eff = Re Z [N·s/m], effective mass m_eff = Im(Z)/ω = −k_eff/ω² [kg].
+**Effective impedance** (the decomposition of Mehling, Colgate & Peshkin [mehling2005],
+the paper's [5]): with F/X = s Z at s = jω, effective stiffness k_eff = Re(jωZ) [N/m],
+effective damping b_eff = Re Z [N·s/m], effective mass m_eff = Im(Z)/ω = −k_eff/ω² [kg].
 
 **Rendering bandwidth.** Lumped: ω*_s = √(K/(m1+m2)) (Eq. 1). Full: the first frequency
 where k_eff crosses zero from positive (spring-like) to negative (mass-like), i.e. the
@@ -154,7 +154,7 @@ def _hold(p: HapticParams, w: Any, sample_period: Any) -> Any:
     E = np.exp(-1j * w * p.delay)
     if np.any(np.asarray(T) > 0):
         x = w * T
-        # ZOH: (1 − e^{−jωT})/(jωT) = e^{−jωT/2} sinc(ωT/2)  (Franklin, Powell & Workman)
+        # ZOH: (1 − e^{−jωT})/(jωT) = e^{−jωT/2} sinc(ωT/2)  [franklin-powell-workman]
         E = E * np.exp(-0.5j * x) * np.sinc(x / TWO_PI)
     return E
 
@@ -194,7 +194,7 @@ class EffectiveImpedance:
 def effective_impedance(
     p: HapticParams, K: Any, w: Any, sample_period: float | None = None
 ) -> EffectiveImpedance:
-    """Mehling et al. decomposition of F/X = jωZ: k_eff = Re(jωZ), b_eff = Re Z,
+    """[mehling2005] decomposition of F/X = jωZ: k_eff = Re(jωZ), b_eff = Re Z,
     m_eff = Im(Z)/ω = −k_eff/ω²."""
     w = np.asarray(w, dtype=float)
     z = closed_loop_impedance(p, K, w, sample_period)
@@ -231,7 +231,7 @@ def _illinois(
     f: Any, lo: np.ndarray, hi: np.ndarray, flo: np.ndarray, fhi: np.ndarray, rtol: float
 ) -> np.ndarray:
     """Roots of f in the brackets [lo, hi] (f(lo), f(hi) of opposite signs), all at once:
-    the Illinois variant of regula falsi (Dowell & Jarratt 1971; superlinear, bracketed).
+    the Illinois variant of regula falsi ([dowell-jarratt1971]; superlinear, bracketed).
     ``f(act, x)`` evaluates the functions of the brackets ``act`` at ``x``. Each bracket
     is refined until hi − lo ≤ rtol·|hi| (or f = 0 exactly); returns the midpoints."""
     lo, hi, flo, fhi = (np.array(a, dtype=float) for a in (lo, hi, flo, fhi))
@@ -243,7 +243,7 @@ def _illinois(
         lo_a, hi_a, flo_a, fhi_a, sd = lo[act], hi[act], flo[act], fhi[act], side[act]
         x = hi_a - fhi_a * (hi_a - lo_a) / (fhi_a - flo_a)
         x = np.where(np.isfinite(x), x, 0.5 * (lo_a + hi_a))
-        # at least δ from either end (Brent's minimum step, Numerical Recipes §9.3): a root
+        # at least δ from either end (Brent's minimum step, [numerical-recipes] §9.3): a root
         # within δ of an end is then straddled by the next bracket, of width ≤ δ
         d = 0.4 * rtol * np.abs(hi_a)
         x = np.clip(x, lo_a + d, hi_a - d)
@@ -372,7 +372,7 @@ def bandwidth(p: HapticParams, K: Any, *, rtol: float = 1e-8) -> Any:
     A, B, C = _k_eff_parts(m1, b1, k, b, m2, Kf)
     lead = -m2 * m1 * m1  # ω⁶ coefficient of A; B and C have degree ≤ 3
     rest = [np.abs(c) for c in _padd(A[:-1], B, C)]
-    # Fujiwara's bound (1916) on the positive root of |lead| ω⁶ − Σ|c_j| ω^j
+    # Fujiwara's bound [fujiwara1916] on the positive root of |lead| ω⁶ − Σ|c_j| ω^j
     w_up = 2.0 * np.max([(r / np.abs(lead)) ** (1.0 / (6 - j)) for j, r in enumerate(rest)],
                         axis=0)  # fmt: skip
     f = _KeffSign(A, B, C, tau)
@@ -465,7 +465,7 @@ def resonance(p: HapticParams) -> Any:
     shape = p.shape
     a3, a2, a1, a0 = (np.ravel(np.broadcast_to(c, shape)) for c in _num_coeffs(p))
     b_, c_, d_ = a2 / a3, a1 / a3, a0 / a3  # monic cubic s³ + b s² + c s + d
-    # discriminant of the cubic (Abramowitz & Stegun 3.8.2): < 0 ⇔ one real root + a pair
+    # discriminant of the cubic ([abramowitz-stegun] 3.8.2): < 0 ⇔ one real root + a pair
     disc = 18 * b_ * c_ * d_ - 4 * b_**3 * d_ + b_**2 * c_**2 - 4 * c_**3 - 27 * d_**2
     # Cardano on the depressed cubic t³ + P t + Q (s = t − b/3), then two Newton steps
     P = c_ - b_**2 / 3.0

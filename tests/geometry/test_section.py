@@ -64,7 +64,7 @@ def test_analytic_inertia_of_a_single_drum_closed_form():
 
 
 def test_paper_preset_matches_table_1():
-    """Lebel et al. Table 1: 2.7 g·cm² (±10 %), 85 g (±15 %), within 30×30×40 mm."""
+    """Lebel et al. [lebel] Table 1: 2.7 g·cm² (±10 %), 85 g (±15 %), within 30×30×40 mm."""
     s = build_section(preset("paper"))
     m = analytic_mass(s)
     assert m.rotor_inertia == pytest.approx(2.7e-7, rel=0.10)

@@ -32,7 +32,7 @@ def test_h_of_b_is_odd_monotone_and_inverted_by_b_of_h(bs):
 
 
 def test_carlson_yield_stress_against_datasheet():
-    """Carlson closed form vs LORD datasheet: +17 % at 18 kA/m, within 5 % at 46/80 kA/m."""
+    """[carlson] closed form vs [lord-mrf132dg]: +17 % at 18 kA/m, within 5 % at 46/80 kA/m."""
     h, tau = np.array(MRF_132DG_DATASHEET_TAU).T
     ratio = MRF_132DG.tau_y(h) / tau
     assert 1.10 < ratio[0] < 1.20

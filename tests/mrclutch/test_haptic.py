@@ -234,7 +234,7 @@ def _simulate_growth(p, K, t_end=1.0, steps_per_delay=50):
     )
     B = np.array([0, 1 / p.m1, 0, 0])
     h = p.delay / steps_per_delay
-    M = np.zeros((6, 6))  # Franklin, Powell & Workman: FOH discretisation by one expm
+    M = np.zeros((6, 6))  # [franklin-powell-workman]: FOH discretisation by one expm
     M[:4, :4], M[:4, 4], M[4, 5] = A * h, B * h, 1.0
     E = expm(M)
     Phi, G1, G2 = E[:4, :4], E[:4, 4], E[:4, 5]

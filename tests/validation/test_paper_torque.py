@@ -1,4 +1,4 @@
-"""Lebel et al., Fig. 2b and Table 2, against the `paper` preset (circuit model)."""
+"""Lebel et al. [lebel], Fig. 2b and Table 2, against the `paper` preset (circuit model)."""
 
 import numpy as np
 import pytest
