@@ -22,7 +22,8 @@ from pathlib import Path
 import numpy as np
 
 from mrclutch.design import design_preset
-from mrclutch.pipeline import BATCH_OUTPUTS, BatchEvaluator, evaluate_batch
+from mrclutch.outputs import SWEEP_COLUMNS
+from mrclutch.pipeline import BatchEvaluator, evaluate_batch
 from mrclutch.sweep import ParamRange, SweepSpec, run_sweep
 
 N = 100_000
@@ -81,7 +82,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp, ProcessPoolExecutor(2) as pool:
         list(pool.map(BatchEvaluator(base), [{"gap": [0.3e-3]}] * 2))  # warm workers
         t = time.perf_counter()
-        run_sweep(spec, Path(tmp) / "r.csv", BatchEvaluator(base), BATCH_OUTPUTS,
+        run_sweep(spec, Path(tmp) / "r.csv", BatchEvaluator(base), SWEEP_COLUMNS,
                   executor=pool, progress=False)  # fmt: skip
         t2 = time.perf_counter() - t
     print(f"run_sweep, 2 processes, CSV: {N / t2:,.0f} designs/s ({t2:.2f} s per 10^5)")

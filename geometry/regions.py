@@ -141,20 +141,15 @@ def table(n: int) -> tuple[RegionSpec, ...]:
             drums[kind].append((i, j))
     # Output drums (rotor) hang from the hub; input drums from the back cap. Steel in the
     # zones, stainless over the band so the flux cannot short-circuit along the drums.
-    for i, j in drums["out"]:
-        for seg, mat, z0, z1 in (
-            ("A", STEEL, "hub_back", "zone_A1"),
-            ("band", STAINLESS, "zone_A1", "zone_B0"),
-            ("B", STEEL, "zone_B0", "zone_B1"),
-        ):
-            rows.append(R(f"out{i}_{seg}", "rotor", mat, rho(j), rho(j + 1), z0, z1))
-    for i, j in drums["in"]:
-        for seg, mat, z0, z1 in (
-            ("A", STEEL, "zone_A0", "zone_A1"),
-            ("band", STAINLESS, "zone_A1", "zone_B0"),
-            ("B", STEEL, "zone_B0", "cap_back"),
-        ):
-            rows.append(R(f"in{i}_{seg}", "input", mat, rho(j), rho(j + 1), z0, z1))
+    for kind, part, z_first, z_last in (("out", "rotor", "hub_back", "zone_B1"),
+                                        ("in", "input", "zone_A0", "cap_back")):  # fmt: skip
+        for i, j in drums[kind]:
+            for seg, mat, z0, z1 in (
+                ("A", STEEL, z_first, "zone_A1"),
+                ("band", STAINLESS, "zone_A1", "zone_B0"),
+                ("B", STEEL, "zone_B0", z_last),
+            ):
+                rows.append(R(f"{kind}{i}_{seg}", part, mat, rho(j), rho(j + 1), z0, z1))
     # Housing: the steel core and shell (poles + back iron over the coil) with the coil
     # between them, joined by stainless end caps.
     rows += [

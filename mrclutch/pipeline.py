@@ -252,9 +252,6 @@ def evaluate(
 
 # ---- the vectorised fast path for sweeps -----------------------------------------------
 
-#: Columns of a sweep row (mrclutch.outputs names them once).
-BATCH_OUTPUTS: tuple[str, ...] = SWEEP_COLUMNS
-
 
 @dataclass(frozen=True)
 class BatchEvaluator:
@@ -275,7 +272,7 @@ class BatchEvaluator:
 def evaluate_batch(
     fields: Mapping[str, ArrayLike], base: ClutchDesign | None = None, *, passivity: bool = False
 ) -> dict[str, np.ndarray]:
-    """The fast path for S designs at once; returns arrays under ``BATCH_OUTPUTS``
+    """The fast path for S designs at once; returns arrays under ``SWEEP_COLUMNS``
     (and ``max_passive_K_N_per_m`` with ``passivity=True``).
 
     The same physics as ``evaluate(design, "fast")``, on arrays: per drum count, the region

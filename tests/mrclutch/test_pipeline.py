@@ -9,7 +9,8 @@ from geometry import preset
 from mrclutch.design import ClutchDesign, design_preset
 from mrclutch.haptics.actuator import HapticParams
 from mrclutch.haptics.model import metrics
-from mrclutch.pipeline import BATCH_OUTPUTS, evaluate, evaluate_batch
+from mrclutch.outputs import SWEEP_COLUMNS
+from mrclutch.pipeline import evaluate, evaluate_batch
 
 DESIGNS = [
     {},
@@ -56,7 +57,7 @@ def test_batch_equals_single_design_fast_path(batch, i):
 def test_invalid_rows_are_flagged_and_blank():
     out = evaluate_batch({"gap": np.array([0.3e-3, 0.01e-3, np.nan]), "n_drums": 2})
     assert out["valid"].tolist() == [1.0, 0.0, 0.0]
-    for key in BATCH_OUTPUTS[1:]:
+    for key in SWEEP_COLUMNS[1:]:
         assert np.isfinite(out[key][0]) or key == "resonance_hz", key
         assert np.isnan(out[key][1:]).all(), key
 

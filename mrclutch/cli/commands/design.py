@@ -14,9 +14,8 @@ from mrclutch.cli.plots.design import pareto_plot
 from mrclutch.cli.report import write_report
 from mrclutch.design import design_from_mapping, design_to_toml
 from mrclutch.optimize import Constraints, optimize, parse_bounds
-from mrclutch.outputs import CLUTCH_ROWS, HAND_ROWS, output, row_label
+from mrclutch.outputs import CLUTCH_ROWS, HAND_ROWS, SWEEP_COLUMNS, output, row_label
 from mrclutch.pipeline import (
-    BATCH_OUTPUTS,
     FAST_BANDWIDTH_ERROR,
     FIDELITIES,
     BatchEvaluator,
@@ -189,7 +188,7 @@ def _sweep(args: argparse.Namespace) -> int:
             spec,
             args.out,
             evaluator,
-            BATCH_OUTPUTS,
+            SWEEP_COLUMNS,
             executor=executor,
             resume=args.resume,
             overwrite=args.overwrite,
