@@ -15,6 +15,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -208,17 +209,41 @@ MRF_132DG_BH = BHCurve(
 
 @dataclass(frozen=True)
 class MRFluid:
-    """Rheology of an MR fluid: Carlson's yield-stress closed form and a Newtonian η."""
+    """Rheology and bulk data of an MR fluid: Carlson's yield-stress closed form, the
+    off-state (plastic) viscosity at its reference temperature and the carrier's
+    viscosity–temperature line that carries it to other temperatures.
+
+    Temperature law: the particles' contribution to the viscosity depends on their volume
+    fraction, not on temperature, so η(T) = η(T_ref)·ν_c(T)/ν_c(T_ref) with ν_c the
+    carrier's kinematic viscosity (the carrier's density change, < 2 % over the range,
+    is neglected). ν_c(T) is the Walther line through two points [astm-d341].
+    """
 
     name: str
     phi: float  # iron volume fraction
     carrier_c: float  # Carlson's carrier coefficient (1.0 hydrocarbon)
-    viscosity: float  # Pa·s, off-state plastic viscosity
+    viscosity: float  # Pa·s, off-state plastic viscosity at viscosity_temperature
     source: str
+    viscosity_temperature: float = 40.0  # °C at which ``viscosity`` was measured
+    #: carrier kinematic viscosity (°C, m²/s) at two temperatures: the Walther line
+    carrier_points: tuple[tuple[float, float], tuple[float, float]] = (
+        (40.0, 19.0e-6),
+        (100.0, 4.1e-6),
+    )
+    carrier: str = "carrier"  # what the carrier points are
+    temperature_range: tuple[float, float] = (-40.0, 130.0)  # °C, maker's operating range
+    thermal_conductivity: float = 0.65  # W/(m·K)
+    specific_heat: float = 800.0  # J/(kg·K)
 
     def __post_init__(self) -> None:
         check_positive(f"{self.name}.phi", self.phi)
         check_positive(f"{self.name}.viscosity", self.viscosity, " Pa·s")
+        (t0, n0), (t1, n1) = self.carrier_points
+        if not (t1 > t0 and n0 > n1 > 0):
+            raise ParameterError(
+                f"{self.name}.carrier_points = {self.carrier_points!r}: need two (°C, m²/s) "
+                "points, the hotter one less viscous"
+            )
 
     @property
     def tau_y_max(self) -> float:
@@ -229,13 +254,48 @@ class MRFluid:
         """Yield stress τy(|H|), Pa. Carlson: τy = C·271700·φ^1.5239·tanh(6.33e-6·H)."""
         return self.tau_y_max * np.tanh(6.33e-6 * np.abs(np.asarray(h, dtype=float)))
 
+    def carrier_viscosity(self, temperature: ArrayLike) -> Any:
+        """Carrier kinematic viscosity ν_c (m²/s) at ``temperature`` (°C): the Walther
+        line log log(ν + 0.7) = A − B log T through the two carrier points [astm-d341]
+        (ν in mm²/s, T in K)."""
+        (t0, n0), (t1, n1) = self.carrier_points
+
+        def w(nu: Any) -> Any:
+            return np.log10(np.log10(nu * 1e6 + 0.7))
+
+        x0, x1 = np.log10(t0 + 273.15), np.log10(t1 + 273.15)
+        slope = (w(n1) - w(n0)) / (x1 - x0)
+        wt = w(n0) + slope * (np.log10(np.asarray(temperature, dtype=float) + 273.15) - x0)
+        return (10.0 ** (10.0**wt) - 0.7) * 1e-6
+
+    def viscosity_at(self, temperature: ArrayLike) -> Any:
+        """Off-state plastic viscosity η (Pa·s) at ``temperature`` (°C; floats or arrays):
+        η(T_ref)·ν_c(T)/ν_c(T_ref) (class docstring)."""
+        t = np.asarray(temperature, dtype=float)
+        lo, hi = self.temperature_range
+        if np.any(~np.isfinite(t) | (t < lo) | (t > hi)):
+            bad = t[~np.isfinite(t) | (t < lo) | (t > hi)].flat[0]
+            raise ParameterError(
+                f"fluid_temperature = {bad:g} °C: outside {self.name}'s range [{lo:g}, {hi:g}] °C"
+            )
+        ratio = self.carrier_viscosity(t) / self.carrier_viscosity(self.viscosity_temperature)
+        out = self.viscosity * ratio
+        return float(out) if np.ndim(out) == 0 else out
+
 
 # MRF-132DG rheology. Source: Carlson closed form (LORD) [carlson], φ = 0.32, C = 1.0
 # (hydrocarbon carrier); η = 0.112 Pa·s at 40 °C [lord-mrf132dg] (slope 800–1200 1/s).
 # Chosen over interpolating the three datasheet points 4.64/13.77/23.47 kPa at
 # 18/46/80 kA/m because it saturates physically (~48 kPa) beyond the points; it is
 # +17 %, −1 %, −4.6 % off those points (tests/magnetics/test_materials.py).
-MRF_132DG = MRFluid(MRF, 0.32, 1.0, 0.112, "Carlson/LORD closed form; datasheet η")
+# The carrier is "hydrocarbon" [lord-mrf132dg], grade not disclosed: its temperature
+# law is taken as a 4 mm²/s poly-alpha-olefin's, ν = 19.0 / 4.1 mm²/s at 40 / 100 °C
+# [pao4] (the least certain input of the drag: docs/drag.md). Thermal conductivity
+# 0.25–1.06 W/(m·K) (middle taken) and specific heat 0.80 J/(g·K) at 25 °C [lord-mrf132dg].
+MRF_132DG = MRFluid(
+    MRF, 0.32, 1.0, 0.112, "Carlson/LORD closed form; datasheet η", 40.0,
+    ((40.0, 19.0e-6), (100.0, 4.1e-6)), "PAO 4 (assumed carrier grade)",
+)  # fmt: skip
 
 #: Datasheet yield stress of MRF-132DG [lord-mrf132dg] (H in A/m, τy in Pa), comparison only.
 MRF_132DG_DATASHEET_TAU = ((18e3, 4.64e3), (46e3, 13.77e3), (80e3, 23.47e3))

@@ -1,11 +1,9 @@
-"""Yield torque from the gap fields, viscous drag from the gaps' shear, coil properties.
+"""Yield torque from the gap fields, the torque–current curve, coil properties.
 
 Yield torque of a sheared cylindrical interface of mid-radius r: T = 2π r² ∫ τy(H(z)) dz
 (Bingham plastic at yield, [carlson-jolly2000] eq. 1, integrated over the field-carrying
-length). Viscous torque of a cylindrical gap of width g and wetted length L at slip speed
-ω: 2π η ω r³ L / g (thin-gap Couette flow, [white-viscous]); of a face film of height h
-between radii r0, r1: π η ω (r1⁴ − r0⁴) / (2h) (Newtonian disk shear). Both
-are linear in ω, so the damping c = dT/dω = T/ω exactly.
+length). The clutch's torque at a current is that plus its off-state drag at the slip
+speed: every drag term (films, bearings, seal) is in ``magnetics.drag``.
 """
 
 from __future__ import annotations
@@ -18,7 +16,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from geometry.materials import MRF
 from geometry.params import DrumClutch, broadcast_fields, valid
 from geometry.regions import Regions, per_topology
 from geometry.section import Section, build_section
@@ -33,55 +30,17 @@ from magnetics.circuit import (
     solve_flux,
     solve_path,
 )
+from magnetics.drag import ROOM_TEMPERATURE, Drag, Support, clutch_drag
 from magnetics.fem import build_grid, solve_fem
 from magnetics.materials import FLUIDS, MATERIALS, Magnetic, MRFluid, magnetic
+from magnetics.thermal import Network, coil_resistance, continuous_current
 
 FloatArray = NDArray[np.float64]
-RHO_CU_20 = 1.72e-8  # Ω·m at 20 °C [materials] (docs/references.md)
-ALPHA_CU = 0.00393  # 1/K, copper resistivity temperature coefficient [materials]
 METHODS = ("circuit", "fem")
 
 
 def rpm_to_rad_s(rpm: float) -> float:
     return rpm * 2 * math.pi / 60.0
-
-
-@dataclass(frozen=True)
-class Drag:
-    """Off-state (viscous) drag at one slip speed."""
-
-    slip_speed: float  # rad/s
-    torque: float  # N·m, all films
-    damping: float  # N·m·s, dT/dω
-    gap_torque: tuple[float, ...]  # per cylindrical gap, N·m
-    face_torque: tuple[float, ...]  # per face film, N·m
-
-
-def film_damping(rg: Regions, viscosity: float) -> tuple[list[Any], list[Any]]:
-    """dT/dω (N·m·s) of every cylindrical gap and every face film of a region table (floats
-    for one design, arrays for many): the viscous drag, written once."""
-    gaps = []
-    for sp in rg.films("cylinder"):
-        r0, r1, z0, z1 = rg.bounds(sp)
-        # Couette: T = 2π η ω r³ L / g (thin cylindrical gap at mid-radius)
-        gaps.append(2 * np.pi * viscosity * ((r0 + r1) / 2) ** 3 * (z1 - z0) / (r1 - r0))
-    faces = []
-    for sp in rg.films("face"):
-        r0, r1, z0, z1 = rg.bounds(sp)
-        # Disk film: T = π η ω (r1⁴ − r0⁴) / (2h)
-        faces.append(np.pi * viscosity * (r1**4 - r0**4) / (2 * (z1 - z0)))
-    return gaps, faces
-
-
-def viscous_drag(section: Section, slip_speed: float, fluid: MRFluid | None = None) -> Drag:
-    """Viscous torque of every sheared film of ``section`` at ``slip_speed`` (rad/s)."""
-    w = check_finite("slip_speed", slip_speed, " rad/s")
-    if section.table is None:
-        raise ParameterError("section: built by hand, without a region table; no drag")
-    c_gap, c_face = film_damping(section.table, _fluid(section, fluid).viscosity)
-    damping = float(sum(c_gap) + sum(c_face))
-    return Drag(w, damping * w, damping, tuple(float(c * w) for c in c_gap),
-                tuple(float(c * w) for c in c_face))  # fmt: skip
 
 
 def _fluid(section: Section, fluid: MRFluid | None) -> MRFluid:
@@ -111,10 +70,10 @@ def coil_properties(clutch: DrumClutch, current: float, temperature: float = 20.
     """Resistance, Joule power and current density of the coil."""
     i = check_finite("current", current, " A")
     t = check_range("temperature", temperature, -273.15, 1000.0, " °C")
-    rho = RHO_CU_20 * (1 + ALPHA_CU * (t - 20.0))  # linear copper law [materials]
-    length = clutch.coil_turns * math.pi * (clutch.coil_inner_radius + clutch.coil_outer_radius)
+    r_in, r_out = clutch.coil_inner_radius, clutch.coil_outer_radius
+    r = float(coil_resistance(vars(clutch), r_in, r_out, t))  # R = ρ(T) l / A
+    length = clutch.coil_turns * math.pi * (r_in + r_out)
     area = math.pi * clutch.wire_diameter**2 / 4
-    r = rho * length / area  # R = ρ l / A
     return Coil(i, t, r, i * i * r, length, i / area, clutch.coil_turns * i)
 
 
@@ -129,8 +88,9 @@ class TorqueCurve:
     gap_labels: tuple[str, ...]
     gap_torque: FloatArray  # (C, K) yield torque per gap (and zone for the circuit)
     speed_rpm: float
-    viscous_torque: float  # N·m at speed_rpm
-    damping: float  # N·m·s
+    off_state_torque: float  # N·m: every drag term at speed_rpm (magnetics.drag)
+    damping: float  # N·m·s: dT/dω of the drag
+    drag: Drag
 
 
 def torque_curve(
@@ -140,9 +100,11 @@ def torque_curve(
     speed_rpm: float = 530.0,
     materials: Mapping[str, Magnetic] | None = None,
     fem_size: float | None = None,
+    temperature: float = ROOM_TEMPERATURE,
+    support: Support | None = None,
 ) -> TorqueCurve:
     """Torque of ``clutch`` (or its already built section) at ``currents`` (A) by the
-    circuit or the FEM."""
+    circuit or the FEM, the drag at ``speed_rpm`` and fluid ``temperature`` (°C) added."""
     check_choice("method", method, METHODS)
     rpm = check_finite("speed_rpm", speed_rpm, " rpm")
     cur = np.atleast_1d(np.asarray(currents, dtype=float))
@@ -164,9 +126,11 @@ def torque_curve(
         per = np.array([s.gap_yield_torque(fluid) for s in sols])
         labels = tuple(f"gap{g.index}" for g in section.gaps)
     ty = per.sum(axis=-1)
-    drag = viscous_drag(section, rpm_to_rad_s(rpm), fluid)
+    if section.table is None:
+        raise ParameterError("section: built by hand, without a region table; no drag")
+    drag = clutch_drag(section.table, rpm_to_rad_s(rpm), temperature, support, fluid)
     return TorqueCurve(method, cur, ty + drag.torque, ty, labels, per, rpm, drag.torque,
-                       drag.damping)  # fmt: skip
+                       drag.damping, drag)  # fmt: skip
 
 
 # ---- arrays of designs: one batch per drum count (geometry.regions.per_topology) ----------
@@ -272,17 +236,32 @@ def _gap_torque(path, phi, radial, materials, fluid) -> FloatArray:  # type: ign
     return np.where(path.gap_mask[:, None, :], 2 * np.pi * rmid**2 * tau, 0.0)
 
 
-def film_damping_total(rg: Regions, viscosity: float) -> Any:
-    """dT/dω (N·m·s) of all films of the designs of a region table."""
-    c_gap, c_face = film_damping(rg, viscosity)
-    return sum(c_gap) + sum(c_face)
+def continuous_torque(
+    net: Network,
+    path: MagneticPath,
+    slip_speed: Any,
+    off_torque: Any,
+    wire_limit: float,
+    fluid_limit: float,
+    materials: Mapping[str, Magnetic] | None = None,
+    fluid: MRFluid | None = None,
+) -> tuple[Any, Any]:
+    """(current A, torque N·m), shape S: the largest torque the clutch holds forever while
+    slipping at ``slip_speed``, its coil's Joule heat and its slip heat T·ω both in the
+    thermal network, within the wire's and the fluid's limits.
 
-
-def viscous_batch(
-    fields: Mapping[str, ArrayLike], slip_speed: ArrayLike, fluid: MRFluid | None = None
-) -> tuple[FloatArray, FloatArray]:
-    """(off-state torque N·m, damping N·m·s), shape S: ``film_damping`` per drum count."""
-    p = broadcast_fields(fields)
-    eta = (FLUIDS[MRF] if fluid is None else fluid).viscosity
-    c = per_topology(p, valid(p), lambda rg, rows: {"c": film_damping_total(rg, eta)})["c"]
-    return c * np.asarray(slip_speed, dtype=float), c
+    I_a: the continuous current with the drag's slip heat only (an upper bound). One
+    circuit solve gives T(I_a); below I_a the torque is taken on the chord from
+    (0, T_off) to (I_a, T(I_a)) — under the concave torque curve, so conservative — and
+    the fixed point I = I_cont(ω·T(I)) is found by bisection on the closed forms."""
+    w = np.abs(np.asarray(slip_speed, dtype=float))
+    off = np.asarray(off_torque, dtype=float)
+    i_a = continuous_current(net, wire_limit, fluid_limit, off * w)
+    t_a = yield_torque_at(path, i_a, materials, fluid) + off
+    slope = np.where(i_a > 0, (t_a - off) / np.where(i_a > 0, i_a, 1.0), 0.0)
+    lo, hi = np.zeros_like(i_a), i_a
+    for _ in range(48):  # the bracket shrinks 2^48-fold
+        mid = 0.5 * (lo + hi)
+        ok = mid <= continuous_current(net, wire_limit, fluid_limit, (off + slope * mid) * w)
+        lo, hi = np.where(ok, mid, lo), np.where(ok, hi, mid)
+    return lo, np.where(i_a > 0, off + slope * lo, 0.0)

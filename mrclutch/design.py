@@ -10,10 +10,21 @@ the key name too::
 
     [operating]              # optional, defaults in `Operating`
     max_current_A = 7.0
-    max_current_density_A_per_mm2 = 30.0
+    max_current_density_A_per_mm2 = 30.0   # default: IEC 60949 adiabatic for peak_duration_s
     input_speed_rpm = 530
     delay_ms = 1.0
     coil_temperature_C = 20
+    fluid_temperature_C = 20
+    ambient_temperature_C = 20
+    wire_temperature_limit_C = 155
+    peak_duration_s = 1.0
+
+    [support]                # optional, defaults in `magnetics.drag.Support`
+    bearing = "618"          # SKF series, or "none"
+    bearings = 2
+    bearing_load_N = 10
+    grease_viscosity_mm2_per_s = 110
+    seal_torque_mN_m = 0
 
     [transmission]           # optional, defaults: the paper's MR bench (170 mm lever)
     lever_mm = 170
@@ -35,8 +46,12 @@ from typing import Any
 
 import numpy as np
 
+from geometry.materials import MRF
 from geometry.params import DrumClutch, preset
 from geometry.validation import ParameterError, check_positive, check_range
+from magnetics.drag import ROOM_TEMPERATURE, Support
+from magnetics.materials import FLUIDS
+from magnetics.thermal import adiabatic_current_density
 from mrclutch.haptics.actuator import MR_170, MR_DELAY, Transmission
 
 
@@ -45,18 +60,40 @@ class Operating:
     """Operating limits and conditions (SI; temperature in °C)."""
 
     max_current: float = 7.0  # A: Fig. 2b's range
-    max_current_density: float = math.inf  # A/m² in the copper; inf = no limit
+    #: A/m² in the copper; None = the IEC 60949 adiabatic limit for ``peak_duration``
+    #: from ``coil_temperature`` to ``wire_temperature_limit``; inf = no limit
+    max_current_density: float | None = None
     input_speed: float = 530 * 2 * math.pi / 60  # rad/s: Fig. 2b's 530 rpm
     delay: float = MR_DELAY  # s: paper §IV-B, 1 ms for MR actuators
-    coil_temperature: float = 20.0  # °C
+    coil_temperature: float = 20.0  # °C, for the coil's resistance at the peak current
+    fluid_temperature: float = ROOM_TEMPERATURE  # °C, sets the fluid's viscosity
+    ambient_temperature: float = 20.0  # °C, air around the clutch
+    wire_temperature_limit: float = 155.0  # °C: magnet wire of thermal class 155 [iec60085]
+    peak_duration: float = 1.0  # s the peak current is held (sets the default J limit)
 
     def __post_init__(self) -> None:
         check_range("max_current", self.max_current, 0.0, 1e4, " A", lo_open=True)
-        if not (math.isinf(self.max_current_density) and self.max_current_density > 0):
-            check_positive("max_current_density", self.max_current_density, " A/m²")
+        j = self.max_current_density
+        if j is not None and not (math.isinf(j) and j > 0):
+            check_positive("max_current_density", j, " A/m²")
         check_range("input_speed", self.input_speed, 0.0, 1e5, " rad/s", lo_open=True)
         check_range("delay", self.delay, 0.0, 1.0, " s")
         check_range("coil_temperature", self.coil_temperature, -60.0, 250.0, " °C")
+        lo, hi = FLUIDS[MRF].temperature_range
+        check_range("fluid_temperature", self.fluid_temperature, lo, hi, " °C")
+        check_range("ambient_temperature", self.ambient_temperature, -40.0, 100.0, " °C")
+        check_range("wire_temperature_limit", self.wire_temperature_limit,
+                    max(self.ambient_temperature, self.coil_temperature), 300.0, " °C",
+                    lo_open=True)  # fmt: skip
+        check_range("peak_duration", self.peak_duration, 0.0, 1e4, " s", lo_open=True)
+
+    @property
+    def current_density_limit(self) -> float:
+        """A/m²: ``max_current_density``, or by default the IEC 60949 adiabatic limit."""
+        if self.max_current_density is not None:
+            return self.max_current_density
+        return float(adiabatic_current_density(self.peak_duration, self.coil_temperature,
+                                               self.wire_temperature_limit))  # fmt: skip
 
     @property
     def input_speed_rpm(self) -> float:
@@ -71,6 +108,7 @@ class ClutchDesign:
     operating: Operating = field(default_factory=Operating)
     transmission: Transmission = MR_170
     name: str = "design"
+    support: Support = field(default_factory=Support)
 
     @property
     def current_limit(self) -> float:
@@ -81,7 +119,7 @@ class ClutchDesign:
 def current_limit(operating: Operating, wire_diameter: Any) -> Any:
     """max_current capped by the current-density limit in the copper (floats or arrays)."""
     wire_area = math.pi * wire_diameter**2 / 4
-    return np.minimum(operating.max_current, operating.max_current_density * wire_area)
+    return np.minimum(operating.max_current, operating.current_density_limit * wire_area)
 
 
 #: Named designs. "paper": the paper's clutch on the paper's MR bench (170 mm lever).
@@ -106,6 +144,16 @@ _OPERATING_KEYS: dict[str, tuple[str, float]] = {
     "input_speed_rpm": ("input_speed", 2 * math.pi / 60),
     "delay_ms": ("delay", 1e-3),
     "coil_temperature_C": ("coil_temperature", 1.0),
+    "fluid_temperature_C": ("fluid_temperature", 1.0),
+    "ambient_temperature_C": ("ambient_temperature", 1.0),
+    "wire_temperature_limit_C": ("wire_temperature_limit", 1.0),
+    "peak_duration_s": ("peak_duration", 1.0),
+}
+_SUPPORT_KEYS: dict[str, tuple[str, float]] = {
+    "bearings": ("bearings", 1.0),
+    "bearing_load_N": ("bearing_load", 1.0),
+    "grease_viscosity_mm2_per_s": ("grease_viscosity", 1e-6),
+    "seal_torque_mN_m": ("seal_torque", 1e-3),
 }
 _TRANSMISSION_KEYS: dict[str, tuple[str, float]] = {
     "ratio": ("ratio", 1.0),
@@ -138,7 +186,7 @@ def _read_table(
 
 def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> ClutchDesign:
     """Build a design from a parsed design file (see the module docstring)."""
-    known = {"clutch", "operating", "transmission", "name"}
+    known = {"clutch", "operating", "transmission", "support", "name"}
     for key in data:
         if key not in known and not isinstance(data[key], dict):
             raise ParameterError(f"{where}: {key}: not in a table; dimensions go under [clutch]")
@@ -154,15 +202,25 @@ def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> Clutc
     clutch = DrumClutch.from_mm(table, base=base, where=f"{where}: clutch")
     op_table = data["operating"] if "operating" in data else {}
     tr_table = data["transmission"] if "transmission" in data else {}
-    for name, t in (("operating", op_table), ("transmission", tr_table)):
+    sup_table = dict(data["support"]) if "support" in data else {}
+    for name, t in (("operating", op_table), ("transmission", tr_table), ("support", sup_table)):
         if not isinstance(t, dict):
             raise ParameterError(f"{where}: [{name}] must be a table")
     operating = Operating(**_read_table(op_table, _OPERATING_KEYS, f"{where}: operating"))
     transmission = replace(
         MR_170, **_read_table(tr_table, _TRANSMISSION_KEYS, f"{where}: transmission")
     )
+    bearing = sup_table.pop("bearing", Support.bearing)
+    if not isinstance(bearing, str):
+        raise ParameterError(f"{where}: support.bearing = {bearing!r}: must be a string")
+    sup = _read_table(sup_table, _SUPPORT_KEYS, f"{where}: support")
+    if "bearings" in sup:
+        if sup["bearings"] != int(sup["bearings"]):
+            raise ParameterError(f"{where}: support.bearings = {sup['bearings']:g}: whole number")
+        sup["bearings"] = int(sup["bearings"])
+    support = Support(bearing=bearing, **sup)  # type: ignore[arg-type]
     name = data["name"] if "name" in data else Path(where).stem
-    return ClutchDesign(clutch, operating, transmission, str(name))
+    return ClutchDesign(clutch, operating, transmission, str(name), support)
 
 
 def load_design(path: str | Path) -> ClutchDesign:
@@ -186,11 +244,14 @@ def design_to_toml(design: ClutchDesign) -> str:
     lines += [f"{k} = {_toml(v)}" for k, v in design.clutch.to_mm().items()]
     lines += ["", "[operating]"]
     for key, (name, factor) in _OPERATING_KEYS.items():
-        v = getattr(op, name) / factor
-        if math.isfinite(v):
-            lines.append(f"{key} = {_toml(v)}")
+        raw = getattr(op, name)
+        if raw is not None and math.isfinite(raw / factor):
+            lines.append(f"{key} = {_toml(raw / factor)}")
     lines += ["", "[transmission]"]
     lines += [f"{k} = {_toml(getattr(tr, n) / f)}" for k, (n, f) in _TRANSMISSION_KEYS.items()]
+    sup = design.support
+    lines += ["", "[support]", f"bearing = {_toml(sup.bearing)}"]
+    lines += [f"{k} = {_toml(getattr(sup, n) / f)}" for k, (n, f) in _SUPPORT_KEYS.items()]
     return "\n".join(lines) + "\n"
 
 

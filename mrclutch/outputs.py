@@ -68,10 +68,25 @@ _ALL = (
            1e3),
     Output("diameter_m", "m", "envelope diameter", "diameter", "mm", 1e3),
     Output("length_m", "m", "envelope axial length", "length", "mm", 1e3),
-    Output("viscous_damping_N_m_s", "N·m·s", "dT/dω of the off-state drag (Newtonian "
-           "films)", "viscous damping"),
-    Output("off_state_torque_N_m", "N·m", "drag torque at the input speed, 0 A",
+    Output("drag_damping_N_m_s", "N·m·s", "dT/dω of every drag term (films at the fluid "
+           "temperature, bearings) at the input speed", "drag damping"),
+    Output("off_state_torque_N_m", "N·m", "drag torque at the input speed, 0 A: every term",
            "off-state torque", "mN·m", 1e3),
+    Output("fluid_inertia_kg_m2", "kg·m²", "fluid the output carries (linear Couette "
+           "profiles)", "carried-fluid inertia", "g·cm²", 1e7),
+    Output("dynamic_range_dB", "dB", "20 log10(max torque / off-state torque)",
+           "dynamic range"),
+    Output("continuous_current_A", "A", "largest current held forever while slipping at "
+           "the input speed, within the wire's and the fluid's temperature limits",
+           "continuous current"),
+    Output("continuous_torque_N_m", "N·m", "torque at the continuous current (slip heat "
+           "included)", "continuous torque"),
+    Output("time_to_wire_limit_s", "s", "from ambient, at the peak current holding the "
+           "peak torque: time until the coil reaches the wire's limit", "time to wire limit"),
+    Output("time_to_fluid_limit_s", "s", "same, until the fluid reaches its limit",
+           "time to fluid limit"),
+    Output("thermal_time_constant_s", "s", "longest time constant of the thermal network",
+           "thermal time constant"),
     Output("torque_per_inertia_N_m_per_kg_m2", "N·m/(kg·m²)", "max torque / rotor "
            "inertia", "torque / inertia"),
     Output("coil_resistance_ohm", "Ω", "coil resistance at the coil temperature",
@@ -118,11 +133,18 @@ CLUTCH_ROWS: tuple[str, ...] = (
     "rotor_inertia_kg_m2",
     "rotor_mass_kg",
     "clutch_mass_kg",
-    "viscous_damping_N_m_s",
+    "fluid_inertia_kg_m2",
+    "drag_damping_N_m_s",
     "off_state_torque_N_m",
+    "dynamic_range_dB",
     "torque_per_inertia_N_m_per_kg_m2",
     "coil_resistance_ohm",
     "coil_power_W",
+    "continuous_current_A",
+    "continuous_torque_N_m",
+    "time_to_wire_limit_s",
+    "time_to_fluid_limit_s",
+    "thermal_time_constant_s",
 )
 #: The haptic metrics compared side by side, MR pair against the motor.
 HAND_ROWS: tuple[str, ...] = (
@@ -150,8 +172,11 @@ SWEEP_COLUMNS: tuple[str, ...] = (
     "length_m",
     "max_torque_N_m",
     "circuit_error_bound",
-    "viscous_damping_N_m_s",
+    "fluid_inertia_kg_m2",
+    "drag_damping_N_m_s",
     "off_state_torque_N_m",
+    "dynamic_range_dB",
+    "continuous_torque_N_m",
     "m1_kg",
     "b1_N_s_per_m",
     "K_N_per_m",

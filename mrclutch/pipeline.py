@@ -16,32 +16,31 @@ stiffness K = K_max of the MR system.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from geometry import regions
-from geometry.mass import analytic_mass, brep_mass, region_mass
+from geometry.mass import MassReport, analytic_mass, brep_mass, region_mass
 from geometry.materials import MRF
 from geometry.params import broadcast_fields, valid
 from geometry.section import build_section
 from geometry.validation import check_choice
-from magnetics.circuit import path_from_regions
+from magnetics import thermal
+from magnetics.circuit import path_from_regions, path_from_section
+from magnetics.drag import Drag, coupled_fluid_inertia, drag_terms, totals
 from magnetics.error_map import error_bound
 from magnetics.materials import FLUIDS
-from magnetics.torque import (
-    coil_properties,
-    film_damping_total,
-    torque_curve,
-    viscous_drag,
-    yield_torque_at,
-)
+from magnetics.torque import coil_properties, continuous_torque, torque_curve, yield_torque_at
 from mrclutch.design import ClutchDesign, current_limit
 from mrclutch.haptics.actuator import (
     EM_170,
+    TABLE2_MR,
     Actuator,
     HapticParams,
     Transmission,
@@ -77,18 +76,38 @@ class ClutchFigures:
     rotor_inertia: float  # kg·m²: output rotor + shaft
     rotor_mass: float  # kg
     clutch_mass: float  # kg: with fluid and coil
-    viscous_damping: float  # N·m·s: dT/dω of the off-state drag
-    off_state_torque: float  # N·m at the input speed, 0 A
+    fluid_inertia: float  # kg·m²: fluid carried by the output (linear Couette profiles)
+    drag: Drag  # every off-state drag term at the input speed and fluid temperature
     coil_resistance: float  # Ω at the coil temperature
     coil_power: float  # W at max_current
     diameter: float  # m, envelope
     length: float  # m, envelope
+    thermal: Mapping[str, float]  # THERMAL_KEYS
     methods: Mapping[str, str]
     notes: tuple[str, ...] = ()
+    inertia_parts: Mapping[str, float] = field(default_factory=dict)  # kg·m², output parts
+
+    @property
+    def drag_damping(self) -> float:
+        """N·m·s: dT/dω of all the drag terms at the operating slip."""
+        return self.drag.damping
+
+    @property
+    def off_state_torque(self) -> float:
+        return self.drag.torque
+
+    @property
+    def moving_inertia(self) -> float:
+        """kg·m²: what the output's motion accelerates — rotor, shaft and carried fluid."""
+        return self.rotor_inertia + self.fluid_inertia
 
     @property
     def torque_per_inertia(self) -> float:
         return self.max_torque / self.rotor_inertia
+
+    @property
+    def dynamic_range_db(self) -> float:
+        return float(dynamic_range_db(self.max_torque, self.off_state_torque))
 
     def as_json(self) -> dict[str, Any]:
         return {
@@ -98,11 +117,15 @@ class ClutchFigures:
             "rotor_inertia_kg_m2": self.rotor_inertia,
             "rotor_mass_kg": self.rotor_mass,
             "clutch_mass_kg": self.clutch_mass,
-            "viscous_damping_N_m_s": self.viscous_damping,
+            "fluid_inertia_kg_m2": self.fluid_inertia,
+            "drag_damping_N_m_s": self.drag_damping,
             "off_state_torque_N_m": self.off_state_torque,
+            "dynamic_range_dB": self.dynamic_range_db,
             "torque_per_inertia_N_m_per_kg_m2": self.torque_per_inertia,
             "coil_resistance_ohm": self.coil_resistance,
             "coil_power_W": self.coil_power,
+            **dict(self.thermal),
+            "drag": self.drag.as_json(),
             "envelope_m": [self.diameter, self.length],
             "methods": dict(self.methods),
             "notes": list(self.notes),
@@ -140,12 +163,17 @@ def clutch_figures(
     else:
         mass = brep_mass(c)
     i_max = design.current_limit
+    temp = op.fluid_temperature
     curve = torque_curve(
-        section, [i_max], method=torque_method, speed_rpm=op.input_speed_rpm, fem_size=fem_size
-    )
-    drag = viscous_drag(section, op.input_speed)
+        section, [i_max], method=torque_method, speed_rpm=op.input_speed_rpm, fem_size=fem_size,
+        temperature=temp, support=design.support,
+    )  # fmt: skip
+    drag = curve.drag
     coil = coil_properties(c, i_max, op.coil_temperature)
+    thermal = thermal_figures(design, section.table, path_from_section(section), drag.torque,
+                              float(curve.torque[0]))  # fmt: skip
     d, length = section.envelope
+    notes = tuple(mass.notes) + extra + drag.notes + _thermal_notes(design, thermal)
     return ClutchFigures(
         max_current=i_max,
         max_torque=float(curve.torque[0]),
@@ -153,26 +181,79 @@ def clutch_figures(
         rotor_inertia=mass.rotor_inertia,
         rotor_mass=mass.rotor_mass,
         clutch_mass=mass.clutch_mass,
-        viscous_damping=drag.damping,
-        off_state_torque=drag.torque,
+        fluid_inertia=float(coupled_fluid_inertia(section.table)),
+        drag=drag,
         coil_resistance=coil.resistance,
         coil_power=coil.power,
         diameter=d,
         length=length,
+        thermal=MappingProxyType(thermal),
         methods={
             "inertia": mass.method,
             "torque": torque_method if fem_size is None else f"fem@{fem_size * 1e3:g}mm",
-            "drag": "couette",
+            "drag": "terms (magnetics.drag)",
+            "thermal": "3-node network (magnetics.thermal)",
         },
-        notes=tuple(mass.notes) + extra,
+        notes=notes,
+        inertia_parts=MappingProxyType(_output_parts(mass)),
     )
+
+
+#: Thermal figures of a clutch (evaluate JSON keys, SI; temperatures in °C).
+THERMAL_KEYS: tuple[str, ...] = (
+    "continuous_current_A",
+    "continuous_torque_N_m",
+    "time_to_wire_limit_s",
+    "time_to_fluid_limit_s",
+    "thermal_time_constant_s",
+)
+
+
+def thermal_figures(design: ClutchDesign, rg: regions.Regions, path: Any, off_torque: float,
+                    peak_torque: float) -> dict[str, float]:  # fmt: skip
+    """Continuous rating and peak endurance of one design (``magnetics.thermal``): the same
+    closed forms as the sweeps' continuous torque, plus the transient at the peak current
+    holding the peak torque while slipping at the input speed."""
+    op = design.operating
+    lim = FLUIDS[MRF].temperature_range[1]
+    net = thermal.network(rg, op.ambient_temperature, lim)
+    i_c, t_c = continuous_torque(net, path, op.input_speed, off_torque,
+                                 op.wire_temperature_limit, lim)  # fmt: skip
+    t_wire, t_fluid = thermal.time_to_limits(
+        net, design.current_limit, peak_torque * op.input_speed, op.wire_temperature_limit, lim
+    )
+    return {
+        "continuous_current_A": float(np.ravel(i_c)[0]),
+        "continuous_torque_N_m": float(np.ravel(t_c)[0]),
+        "time_to_wire_limit_s": t_wire,
+        "time_to_fluid_limit_s": t_fluid,
+        "thermal_time_constant_s": float(thermal.time_constants(net)[0]),
+    }
+
+
+def _thermal_notes(design: ClutchDesign, th: Mapping[str, float]) -> tuple[str, ...]:
+    op = design.operating
+    if th["time_to_wire_limit_s"] < op.peak_duration:
+        return (f"the coil reaches {op.wire_temperature_limit:g} °C after "
+                f"{th['time_to_wire_limit_s']:.2g} s at the peak current, before the "
+                f"{op.peak_duration:g} s peak duration",)  # fmt: skip
+    return ()
+
+
+def dynamic_range_db(max_torque: Any, off_torque: Any) -> Any:
+    """Largest over smallest torque, in dB: 20 log10(T_max / T_off)."""
+    return 20 * np.log10(np.asarray(max_torque) / np.asarray(off_torque))
+
+
+def _output_parts(mass: MassReport) -> dict[str, float]:
+    return {p: float(mass.parts[p].inertia) for p in regions.OUTPUT_PARTS if p in mass.parts}
 
 
 def mr_actuator(design: ClutchDesign, figures: ClutchFigures) -> Actuator:
     """The paper's antagonistic pair of this clutch (both rotors move with the lever)."""
     return Actuator.mr_pair(
-        clutch_inertia=figures.rotor_inertia,
-        clutch_damping=figures.viscous_damping,
+        clutch_inertia=figures.moving_inertia,
+        clutch_damping=figures.drag_damping,
         clutch_max_torque=figures.max_torque,
         clutch_mass=figures.clutch_mass,
         delay=design.operating.delay,
@@ -209,6 +290,7 @@ class Evaluation:
     motor_gearing: float
     haptic: Mapping[str, Any]  # metrics of the MR pair at K_max
     motor_metrics: Mapping[str, Any]  # metrics of the motor at the same K
+    budget: Mapping[str, Any]  # b1 and m1 as named terms beside the paper's Table 2
 
     def as_json(self) -> dict[str, Any]:
         mr_m, em_m = dict(self.haptic), dict(self.motor_metrics)
@@ -217,6 +299,7 @@ class Evaluation:
             "fidelity": self.fidelity,
             "clutch": self.clutch.as_json(),
             "haptic": mr_m,
+            "budget": dict(self.budget),
             "motor": {**em_m, "actuator": MOTOR, "gearing": self.motor_gearing},
             "bandwidth_gain": _gain(mr_m["bandwidth_hz"], em_m["bandwidth_hz"]),
             "bandwidth_gain_lumped": _gain(
@@ -240,14 +323,67 @@ def evaluate(
     fig = clutch_figures(design, fidelity, accuracy)
     if accuracy is not None:
         fidelity = f"accuracy={accuracy:g}"
-    mr = mr_at_hand(design, fig.rotor_inertia, fig.viscous_damping, fig.max_torque,
+    mr = mr_at_hand(design, fig.moving_inertia, fig.drag_damping, fig.max_torque,
                     fig.clutch_mass)  # fmt: skip
     motor = actuator(MOTOR)
     em_tr = motor_transmission(mr, design.transmission, motor)
     em = reflect(motor, em_tr)
     k = float(mr.k_max)
-    mr_m, em_m = metrics_of([mr, em], [k, k])  # the motor at the MR system's K_max
-    return Evaluation(design, fidelity, fig, mr, em, em_tr.gearing, mr_m, em_m)
+    table2 = replace(mr, b1=TABLE2_MR.b1)  # the same pair with the paper's identified b1
+    mr_m, em_m, t2_m = metrics_of([mr, em, table2], [k, k, k])  # all at the MR pair's K_max
+    budget = hand_budget(design, fig, mr, t2_m)
+    return Evaluation(design, fidelity, fig, mr, em, em_tr.gearing, mr_m, em_m, budget)
+
+
+#: Why the budget of b1 may not reach the paper's identified value, least certain first.
+B1_UNCERTAIN = (
+    "the fluid's viscosity law: the carrier grade is not disclosed (a PAO 4 is assumed), "
+    "and the datasheet η is ±18 % at 40 °C",
+    "the gap: the paper's clutch gaps are not published (the preset's 0.7 mm was inferred); "
+    "the film damping scales as 1/gap",
+    "Table 2's b1 was fitted by eye to the bench's response (paper §III), lever and cable included",
+)
+
+
+def hand_budget(design: ClutchDesign, fig: ClutchFigures, mr: HapticParams,
+                table2: Mapping[str, Any]) -> dict[str, Any]:  # fmt: skip
+    """b1 and m1 at the hand as named terms (the pair's two clutches, Eq. 3), each with its
+    value, share and source, beside the paper's Table 2; the terms sum to the values the
+    haptic model uses. ``table2``: the pair's metrics with Table 2's b1 instead."""
+    r2 = 2 * design.transmission.reduction**2  # both clutches of the pair, Eq. 3
+    b_terms = [(k, t.damping * r2, t.source) for k, t in fig.drag.terms.items()]
+    labels = {"rotor": "output rotor (hub + drums)", "shaft": "output shaft"}
+    how = f"inertia by {fig.methods['inertia']}"
+    m_terms = [(labels.get(k, k), v * r2, how) for k, v in fig.inertia_parts.items()]
+    m_terms.append(("carried fluid", fig.fluid_inertia * r2, "linear Couette (magnetics.drag)"))
+
+    def table(terms: list[tuple[str, float, str]], total: float, paper: float) -> dict[str, Any]:
+        rows = [
+            {"name": n, "value": v, "share": v / total if total else math.nan, "source": src}
+            for n, v, src in terms
+        ]
+        return {
+            "terms": rows,
+            "total": total,
+            "paper_table2": paper,
+            "unexplained": paper - total,
+            "ratio_to_paper": total / paper,
+        }
+
+    b1, m1 = float(mr.b1), float(mr.m1)
+    return {
+        "b1_N_s_per_m": {
+            **table(b_terms, b1, float(TABLE2_MR.b1)),
+            "least_certain": list(B1_UNCERTAIN),
+        },
+        "m1_kg": table(m_terms, m1, float(TABLE2_MR.m1)),
+        "with_table2_b1": {
+            "b1_N_s_per_m": float(TABLE2_MR.b1),
+            "passive": bool(table2["passive"]),
+            "max_passive_K_N_per_m": table2["max_passive_K_N_per_m"],
+            "max_stable_K_N_per_m": table2["max_stable_K_N_per_m"],
+        },
+    }
 
 
 # ---- the vectorised fast path for sweeps -----------------------------------------------
@@ -277,7 +413,8 @@ def evaluate_batch(
 
     The same physics as ``evaluate(design, "fast")``, on arrays: per drum count, the region
     table gives the analytic mass (``region_mass``), the circuit (``path_from_regions``)
-    and the film drag (``film_damping_total``); the pair at the hand is ``mr_at_hand``.
+    the drag terms (``drag_terms``), the carried fluid (``coupled_fluid_inertia``) and the
+    continuous rating (``continuous_torque``); the pair at the hand is ``mr_at_hand``.
     Designs that fail DrumClutch's validation get ``valid = 0`` and NaN outputs; no invalid
     number reaches a solver."""
     base = base if base is not None else ClutchDesign()
@@ -285,20 +422,28 @@ def evaluate_batch(
     ok = valid(p)
     op = base.operating
     current = current_limit(op, p["wire_diameter"])
-    eta = FLUIDS[MRF].viscosity
+    lim = FLUIDS[MRF].temperature_range[1]
 
     def clutch(rg: regions.Regions, rows: np.ndarray) -> dict[str, Any]:
         out = region_mass(rg)
-        out["damping"] = film_damping_total(rg, eta)
-        out["yield_torque"] = yield_torque_at(path_from_regions(rg), current[rows])
+        terms = drag_terms(rg, op.input_speed, op.fluid_temperature, base.support)
+        out["off_torque"], out["damping"] = totals(terms)
+        out["fluid_inertia"] = coupled_fluid_inertia(rg)
+        path = path_from_regions(rg)
+        out["yield_torque"] = yield_torque_at(path, current[rows])
+        net = thermal.network(rg, op.ambient_temperature, lim)
+        out["continuous_torque"] = continuous_torque(
+            net, path, op.input_speed, out["off_torque"], op.wire_temperature_limit, lim
+        )[1]
         return out
 
     fig = regions.per_topology(p, ok, clutch)
-    off_torque = fig["damping"] * op.input_speed
+    off_torque = fig["off_torque"]
     torque = fig["yield_torque"] + off_torque
     hand = {}
     if ok.any():
-        hp = mr_at_hand(base, fig["rotor_inertia"][ok], fig["damping"][ok], torque[ok],
+        inertia = fig["rotor_inertia"] + fig["fluid_inertia"]
+        hp = mr_at_hand(base, inertia[ok], fig["damping"][ok], torque[ok],
                         fig["clutch_mass"][ok])  # fmt: skip
         hand = dict(metrics_batch(hp, limits=False))
         if passivity:
@@ -312,8 +457,11 @@ def evaluate_batch(
         "length_m": fig["length"],
         "max_torque_N_m": torque,
         "circuit_error_bound": np.where(ok, error_bound(p)[1], np.nan),
-        "viscous_damping_N_m_s": fig["damping"],
+        "fluid_inertia_kg_m2": fig["fluid_inertia"],
+        "drag_damping_N_m_s": fig["damping"],
         "off_state_torque_N_m": off_torque,
+        "dynamic_range_dB": dynamic_range_db(torque, off_torque),
+        "continuous_torque_N_m": fig["continuous_torque"],
     }
     extra = ("max_passive_K_N_per_m",) if passivity else ()
     columns = (*SWEEP_COLUMNS, *extra)

@@ -91,6 +91,7 @@ def scaling_study(
         m_tot = f["m1_kg"] + design.transmission.m2
         changes = {
             "rotor_inertia": f["rotor_inertia_kg_m2"] / base["rotor_inertia_kg_m2"] - 1,
+            "moving_inertia": _moving(f) / _moving(base) - 1,
             "total_moving_mass": m_tot / m_tot0 - 1,
             "damping_b1": f["b1_N_s_per_m"] / base["b1_N_s_per_m"] - 1,
             "clutch_mass": f["clutch_mass_kg"] / base["clutch_mass_kg"] - 1,
@@ -100,6 +101,11 @@ def scaling_study(
             Route(route, name, float(value), f["max_torque_N_m"] / base["max_torque_N_m"], changes)
         )
     return base, out, notes
+
+
+def _moving(f: Any) -> float:
+    """Rotor + the fluid it carries: what m1 reflects (Eq. 3)."""
+    return float(np.ravel(f["rotor_inertia_kg_m2"] + f["fluid_inertia_kg_m2"])[0])
 
 
 def as_json(

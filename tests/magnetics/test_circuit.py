@@ -92,7 +92,7 @@ def test_robust_extreme_currents_finite_monotone():
     assert np.all(np.isfinite(tc.torque))
     assert np.all(np.diff(tc.torque) >= 0)
     assert tc.yield_torque[0] == 0.0
-    assert tc.torque[0] == pytest.approx(tc.viscous_torque)
+    assert tc.torque[0] == pytest.approx(tc.off_state_torque)
 
 
 def test_saturation_is_reported_in_the_back_iron():

@@ -13,7 +13,7 @@ def test_torque_json_shape(capsys):
     assert [p["current_A"] for p in out["points"]] == [0, 1, 2, 3, 4, 5, 6, 7]
     t = [p["torque_N_m"] for p in out["points"]]
     assert t == sorted(t) and t[0] == pytest.approx(out["off_state_torque_N_m"])
-    assert out["viscous_damping_N_m_s"] > 0 and out["speed_rpm"] == 530
+    assert out["drag_damping_N_m_s"] > 0 and out["speed_rpm"] == 530
 
 
 def test_torque_plot_and_field_plot(tmp_path, capsys):

@@ -22,7 +22,7 @@ def test_every_haptic_metric_and_row_has_an_entry() -> None:
 def test_the_evaluate_json_and_the_sweep_columns_use_the_same_names() -> None:
     ev = evaluate_default()
     data = ev.as_json()
-    clutch_keys = set(data["clutch"]) - {"envelope_m", "methods", "notes"}
+    clutch_keys = set(data["clutch"]) - {"envelope_m", "methods", "notes", "drag"}
     assert clutch_keys <= set(OUTPUTS)
     assert set(data["haptic"]) <= set(OUTPUTS)
     row = evaluate_batch({"gap": np.array([0.3e-3])})

@@ -41,8 +41,11 @@ def test_batch_equals_single_design_fast_path(batch, i):
         "rotor_inertia_kg_m2": c.rotor_inertia,
         "clutch_mass_kg": c.clutch_mass,
         "max_torque_N_m": c.max_torque,
-        "viscous_damping_N_m_s": c.viscous_damping,
+        "fluid_inertia_kg_m2": c.fluid_inertia,
+        "drag_damping_N_m_s": c.drag_damping,
         "off_state_torque_N_m": c.off_state_torque,
+        "dynamic_range_dB": c.dynamic_range_db,
+        "continuous_torque_N_m": c.thermal["continuous_torque_N_m"],
         "m1_kg": h["m1_kg"],
         "b1_N_s_per_m": h["b1_N_s_per_m"],
         "K_N_per_m": h["K_N_per_m"],
@@ -68,8 +71,8 @@ def test_evaluation_feeds_the_haptic_model_as_by_hand():
     h = ev.haptic
     tr = ev.design.transmission
     r = tr.reduction
-    m1 = 2 * ev.clutch.rotor_inertia * r**2  # Eq. 3, both rotors of the pair
-    b1 = 2 * ev.clutch.viscous_damping * r**2
+    m1 = 2 * (ev.clutch.rotor_inertia + ev.clutch.fluid_inertia) * r**2  # Eq. 3, the pair
+    b1 = 2 * ev.clutch.drag_damping * r**2
     assert h["m1_kg"] == pytest.approx(m1, rel=1e-12)
     assert h["b1_N_s_per_m"] == pytest.approx(b1, rel=1e-12)
     by_hand = metrics(

@@ -36,9 +36,9 @@ def test_changes_are_consistent_with_the_model(study):
         m_tot = f["m1_kg"][0] + d.transmission.m2
         m_tot0 = base["m1_kg"] + d.transmission.m2
         assert r.changes["total_moving_mass"] == pytest.approx(m_tot / m_tot0 - 1, rel=1e-9)
-        # m1 is the pair's inertia reflected (Eq. 3): its change is the rotor inertia's
+        # m1 is the pair's moving inertia reflected (Eq. 3): rotor + carried fluid
         assert f["m1_kg"][0] / base["m1_kg"] - 1 == pytest.approx(
-            r.changes["rotor_inertia"], rel=1e-9
+            r.changes["moving_inertia"], rel=1e-9
         )
         assert r.changes["rotor_inertia"] >= 0 and r.changes["damping_b1"] >= 0
         if r.torque_ratio >= 2.0 - 1e-6:  # more torque from geometry costs inertia and drag

@@ -29,14 +29,18 @@ def test_fig_2b_torque_current_curve(method):
     assert t7 == pytest.approx(0.40, rel=0.10)
     assert r2 >= 0.98
     assert rise < 0.25
-    assert tc.yield_torque[0] == 0.0 and tc.torque[0] == pytest.approx(tc.viscous_torque)
+    assert tc.yield_torque[0] == 0.0 and tc.torque[0] == pytest.approx(tc.off_state_torque)
 
 
-def test_viscous_damping_against_table_2_b1():
+def test_drag_damping_against_table_2_b1():
     """b1 = 1.0 N·s/m for the pair at the 170 mm lever, pulley ratio n ≈ 7.3:
-    per clutch c = b1·l²/n²/2. The model (Newtonian films only) is lower; report ratio."""
+    per clutch c = b1·l²/n²/2. The honest budget (films at 20 °C, bearings) stays below it
+    (docs/drag.md explains the gap term by term); the films alone are linear in ω."""
     c_paper = 1.0 * 0.170**2 / 7.3**2 / 2
     tc = torque_curve(PAPER, [0.0], speed_rpm=530)
     ratio = tc.damping / c_paper
-    assert tc.viscous_torque == pytest.approx(tc.damping * rpm_to_rad_s(530))
-    assert 0.05 < ratio < 1.0  # seals, bearings and shear thinning are not modelled
+    films = [tc.drag.terms[k] for k in ("drum gaps", "end faces")]
+    for t in films:
+        assert t.torque == pytest.approx(t.damping * rpm_to_rad_s(530), rel=1e-12)
+    assert tc.off_state_torque == pytest.approx(sum(t.torque for t in tc.drag.terms.values()))
+    assert 0.2 < ratio < 0.35  # 0.27 measured: films at 20 °C, bearings; 1.0 = Table 2

@@ -149,7 +149,32 @@ def format_evaluation(data: dict) -> str:
     lines.append(f"  (motor geared ×{m['gearing']:.3g} to the MR pair's force)")
     g, gl = data["bandwidth_gain"], data["bandwidth_gain_lumped"]
     lines.append(f"bandwidth gain MR over motor: {_pct(gl)} lumped, {_pct(g)} on the full response")
+    lines += format_budget(data["budget"])
     return "\n".join(lines)
+
+
+def format_budget(budget: dict) -> list[str]:
+    """b1 and m1 of the MR pair as tables of named terms, beside the paper's Table 2."""
+    lines: list[str] = []
+    for key, unit, scale in (("b1_N_s_per_m", "N·s/m", 1.0), ("m1_kg", "g", 1e3)):
+        b = budget[key]
+        lines += ["", f"{key.split('_')[0]} of the MR pair at the hand ({unit})"]
+        for t in b["terms"]:
+            lines.append(f"  {t['name']:<28}{t['value'] * scale:>10.4g}{t['share'] * 100:>7.1f} %"
+                         f"  {t['source']}")  # fmt: skip
+        lines.append(f"  {'total':<28}{b['total'] * scale:>10.4g}")
+        lines.append(f"  {'paper, Table 2':<28}{b['paper_table2'] * scale:>10.4g}")
+        lines.append(f"  {'unexplained':<28}{b['unexplained'] * scale:>10.4g}"
+                     f"  ({b['ratio_to_paper'] * 100:.0f} % of Table 2 explained)")  # fmt: skip
+        lines += [f"  least certain: {why}" for why in b.get("least_certain", ())]
+    t2 = budget["with_table2_b1"]
+    lines.append(
+        f"with Table 2's b1 = {t2['b1_N_s_per_m']:g} N·s/m: passive at K "
+        f"{'yes' if t2['passive'] else 'no'}, largest passive K "
+        f"{t2['max_passive_K_N_per_m']:.4g} N/m, largest stable K "
+        f"{t2['max_stable_K_N_per_m']:.4g} N/m"
+    )
+    return lines
 
 
 def _pct(v: float | None) -> str:

@@ -11,6 +11,7 @@ import numpy as np
 
 from geometry.section import build_section
 from geometry.validation import ParameterError, check_choice, check_range
+from magnetics.drag import ROOM_TEMPERATURE
 from magnetics.fem import FEMConvergenceError, solve_fem
 from magnetics.torque import torque_curve
 from mrclutch.cli.commands._common import add_design_args, atomic_path, load_clutch, print_json
@@ -50,6 +51,12 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
         "curves, and the largest relative difference)",
     )
     p.add_argument("--speed-rpm", type=float, default=530.0, help="slip speed (rpm)")
+    p.add_argument(
+        "--fluid-temperature-C",
+        type=float,
+        default=ROOM_TEMPERATURE,
+        help="fluid temperature for its viscosity (°C, default room)",
+    )
     p.add_argument("--json", action="store_true", help="JSON on stdout")
     p.add_argument("--plot", metavar="FILE.png", help="write a torque-current chart")
     p.set_defaults(func=_torque)
@@ -69,8 +76,8 @@ def _torque(args: argparse.Namespace) -> int:
     clutch = load_clutch(args)
     methods = ("circuit", "fem") if args.method == "both" else (args.method,)
     try:
-        curves = [torque_curve(clutch, currents, method=m, speed_rpm=args.speed_rpm)
-                  for m in methods]  # fmt: skip
+        curves = [torque_curve(clutch, currents, method=m, speed_rpm=args.speed_rpm,
+                               temperature=args.fluid_temperature_C) for m in methods]  # fmt: skip
     except FEMConvergenceError as exc:
         raise CLIError(str(exc)) from None
     except FloatingPointError as exc:  # pragma: no cover - defensive
@@ -82,7 +89,7 @@ def _torque(args: argparse.Namespace) -> int:
     err = None
     if len(curves) == 2:
         c, f = curves[0].torque, curves[1].torque
-        keep = f > 10 * curves[1].viscous_torque
+        keep = f > 10 * curves[1].off_state_torque
         err = float(np.max(np.abs(c[keep] / f[keep] - 1))) if keep.any() else 0.0
     if args.json:
         data = {**_curve_json(curves[0])}
@@ -92,8 +99,10 @@ def _torque(args: argparse.Namespace) -> int:
         print_json(data)
         return 0
     for tc in curves:
-        print(f"method {tc.method}, {tc.speed_rpm:g} rpm: viscous {tc.viscous_torque:.4g} N·m, "
-              f"damping {tc.damping:.4g} N·m·s")  # fmt: skip
+        print(
+            f"method {tc.method}, {tc.speed_rpm:g} rpm, fluid at {tc.drag.temperature:g} °C: "
+            f"off-state {tc.off_state_torque:.4g} N·m, damping {tc.damping:.4g} N·m·s"
+        )
     print("current_A  " + "  ".join(f"{tc.method}_N_m" for tc in curves))
     for k, i in enumerate(curves[0].currents):
         print(f"{i:9.4g}  " + "  ".join(f"{tc.torque[k]:.5g}" for tc in curves))
@@ -110,8 +119,9 @@ def _curve_json(tc) -> dict:  # type: ignore[no-untyped-def]
             {"current_A": float(i), "torque_N_m": float(t)}
             for i, t in zip(tc.currents, tc.torque, strict=True)
         ],
-        "off_state_torque_N_m": tc.viscous_torque,
-        "viscous_damping_N_m_s": tc.damping,
+        "off_state_torque_N_m": tc.off_state_torque,
+        "drag_damping_N_m_s": tc.damping,
+        "drag": tc.drag.as_json(),
     }
 
 

@@ -27,7 +27,7 @@ def pareto_plot(results: str | Path, out: str | Path) -> Path:
     r = read_results(results)
     ok = r["valid"] == 1
     bw, tq = r["bandwidth_hz"][ok], r["max_torque_N_m"][ok]
-    damp, mass = r["viscous_damping_N_m_s"][ok], r["clutch_mass_kg"][ok] * 1e3
+    damp, mass = r["drag_damping_N_m_s"][ok], r["clutch_mass_kg"][ok] * 1e3
     front = pareto_front(np.column_stack([bw, tq, damp]), [True, True, False])
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), constrained_layout=True)
     for ax, x, label in (

@@ -1,0 +1,282 @@
+"""Heat: a lumped thermal network of the clutch, its continuous rating and its peak time.
+
+Three nodes with heat capacities from the region table, and the ambient air::
+
+    coil ──G_cc── core ──G_kh── housing ──G_ha── air
+      └───────────────G_ch─────────┘
+
+* **coil**: copper + epoxy of the coil window; Joule power I²R(T), R linear in T.
+* **core**: the inner stack — steel core, input and output drums, hub, shaft and the fluid;
+  it receives the slip power T·ω of the clutch. The fluid's temperature is taken as this
+  node's (the slip heat is made in the fluid; a lumped node cannot resolve the film).
+* **housing**: shell, sleeve and end caps; it loses heat to the air.
+
+Conductances (stated estimates, SI):
+
+* through the winding radially, half its depth to each side, with the transverse
+  conductivity of aligned conducting cylinders in the insulation + epoxy,
+  k_w = k_m (1 + f)/(1 − f) at copper fraction f [rayleigh1892];
+* radial cylindrical walls ln(r1/r0)/(2π k L) [incropera] for the sleeve and the stack of
+  fluid films and drums between the core and the poles (over the band length from the
+  coil, over the two zones to the housing's poles);
+* the core into the back cap (axial, half its thickness) and out through the cap to the
+  shell (radial) [incropera];
+* the housing's outer surface to still air: natural convection of a horizontal cylinder
+  (Churchill & Chu) [churchill-chu1975] at a film temperature difference of half the
+  fluid's allowed rise, plus radiation (emissivity 0.3, machined steel) [incropera]. The
+  housing's rotation and the mounts' conduction would cool more: neglected, so the rating
+  is conservative.
+
+Results: steady temperatures at a current (closed form — the coil's R(T) makes the
+network linear in T with one rank-one term, solved by Sherman–Morrison), the continuous
+current at the wire insulation's and the fluid's temperature limits (closed form), the
+network's time constants, and the time from ambient to each limit at a peak current
+(modal solution of the linear ODE).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import Any
+
+import numpy as np
+
+from geometry.materials import COIL, DENSITY, DENSITY_COPPER, DENSITY_EPOXY, MRF, STAINLESS, STEEL
+from geometry.regions import Regions, layer, n_layers, rho
+from magnetics.materials import FLUIDS
+
+RHO_CU_20 = 1.72e-8  # Ω·m at 20 °C [materials] (docs/references.md)
+ALPHA_CU = 0.00393  # 1/K, copper resistivity temperature coefficient [materials]
+
+#: J/(kg·K) [incropera] Table A.1 (plain carbon steel, AISI 304, pure copper); epoxy
+#: typical; the fluid [lord-mrf132dg].
+SPECIFIC_HEAT: Mapping[str, float] = MappingProxyType(
+    {STEEL: 434.0, STAINLESS: 477.0, "copper": 385.0, "epoxy": 1100.0,
+     MRF: FLUIDS[MRF].specific_heat}
+)  # fmt: skip
+#: W/(m·K) [incropera] Table A.1; epoxy + wire enamel typical; the fluid [lord-mrf132dg].
+CONDUCTIVITY: Mapping[str, float] = MappingProxyType(
+    {STEEL: 60.5, STAINLESS: 14.9, "copper": 401.0, "epoxy": 0.2,
+     MRF: FLUIDS[MRF].thermal_conductivity}
+)  # fmt: skip
+EMISSIVITY = 0.3  # machined steel, typical 0.2–0.4 [incropera]
+SIGMA = 5.670374419e-8  # W/(m²·K⁴), Stefan–Boltzmann
+# Air at 300 K [incropera] Table A.4: ν, thermal diffusivity, k, Pr
+AIR_NU, AIR_ALPHA, AIR_K, AIR_PR = 15.89e-6, 22.5e-6, 0.0263, 0.707
+#: IEC 60949 adiabatic short-time current: I²t = K² S² ln((θf + β)/(θi + β)), copper
+#: K = 226 A·s^½/mm², β = 234.5 K [iec60949].
+K_ADIABATIC_CU = 226e6  # A·s^½/m²
+BETA_CU = 234.5  # K
+
+
+def adiabatic_current_density(duration: Any, t_initial: Any, t_final: Any) -> Any:
+    """Current density [A/m²] that heats copper adiabatically from ``t_initial`` to
+    ``t_final`` (°C) in ``duration`` (s) [iec60949]."""
+    ratio = (np.asarray(t_final) + BETA_CU) / (np.asarray(t_initial) + BETA_CU)
+    return K_ADIABATIC_CU * np.sqrt(np.log(ratio) / np.asarray(duration))
+
+
+def coil_resistance(fields: Mapping[str, Any], r_in: Any, r_out: Any, temperature: Any) -> Any:
+    """Coil resistance [Ω] at ``temperature`` (°C): R = ρ(T) l / A, mean-turn length
+    π(r_in + r_out) (floats or arrays)."""
+    rho_e = RHO_CU_20 * (1 + ALPHA_CU * (np.asarray(temperature) - 20.0))  # [materials]
+    length = fields["coil_turns"] * np.pi * (r_in + r_out)
+    return rho_e * length / (np.pi * fields["wire_diameter"] ** 2 / 4)
+
+
+def _wall(r0: Any, r1: Any, k: float, length: Any) -> Any:
+    """Thermal resistance [K/W] of a cylindrical wall, ln(r1/r0)/(2π k L) [incropera]."""
+    return np.log(r1 / r0) / (2 * np.pi * k * length)
+
+
+def churchill_chu_h(diameter: Any, delta_t: Any, t_ambient: float) -> Any:
+    """Natural-convection coefficient [W/(m²·K)] of a horizontal cylinder in air,
+    Nu = {0.6 + 0.387 Ra^(1/6) / [1 + (0.559/Pr)^(9/16)]^(8/27)}² [churchill-chu1975]."""
+    beta = 1.0 / (t_ambient + 273.15 + np.asarray(delta_t) / 2)
+    ra = 9.81 * beta * np.asarray(delta_t) * diameter**3 / (AIR_NU * AIR_ALPHA)
+    nu = (0.6 + 0.387 * ra ** (1 / 6) / (1 + (0.559 / AIR_PR) ** (9 / 16)) ** (8 / 27)) ** 2
+    return nu * AIR_K / diameter
+
+
+@dataclass(frozen=True)
+class Network:
+    """The three-node network of S designs (or one): capacities C [J/K] (…, 3), the
+    conductance matrix G [W/K] (…, 3, 3) including the loss to air, the coil's resistance
+    at 20 °C [Ω] and the ambient temperature [°C]."""
+
+    capacity: Any
+    conductance: Any
+    to_air: Any  # W/K, housing to air
+    r20: Any
+    ambient: float
+    inverse: Any  # G⁻¹ (…, 3, 3)
+
+
+def network(rg: Regions, ambient: float = 20.0, fluid_limit: float = 130.0) -> Network:
+    """The network of the designs of ``rg`` (module docstring)."""
+    p, at = rg.fields, rg.at
+    # capacities: every region's mass × specific heat, lumped by node
+    cap = {"coil": 0.0, "core": 0.0, "housing": 0.0}
+    r_ci, r_co = at["coil_in"], at["coil_out"]
+    for sp in rg:
+        r0, r1, z0, z1 = rg.bounds(sp)
+        vol = np.pi * (r1**2 - r0**2) * (z1 - z0)
+        if sp.material == COIL:
+            frac = (
+                p["coil_turns"]
+                * (np.pi * p["wire_diameter"] ** 2 / 4)
+                / (p["coil_depth"] * p["band_length"])
+            )
+            c = vol * (frac * DENSITY_COPPER * SPECIFIC_HEAT["copper"]
+                       + (1 - frac) * DENSITY_EPOXY * SPECIFIC_HEAT["epoxy"])  # fmt: skip
+            cap["coil"] = cap["coil"] + c
+            continue
+        c = vol * DENSITY[sp.material] * SPECIFIC_HEAT[sp.material]
+        node = "housing" if sp.part == "housing" and sp.name != "core" else "core"
+        cap[node] = cap[node] + c
+    # conductances
+    frac = (
+        p["coil_turns"]
+        * (np.pi * p["wire_diameter"] ** 2 / 4)
+        / (p["coil_depth"] * p["band_length"])
+    )
+    k_m = CONDUCTIVITY["epoxy"]
+    k_w = k_m * (1 + frac) / (1 - frac)  # aligned cylinders, transverse [rayleigh1892]
+    band = p["band_length"]
+    r_cm = (r_ci + r_co) / 2
+    pole = rg.pole_radius
+    stack = 0.0  # K·m/W: the fluid/drum stack per unit length, core → poles
+    for j in range(n_layers(rg.n)):
+        kind = layer(j)[0]
+        k = CONDUCTIVITY[MRF] if kind == "gap" else CONDUCTIVITY[STEEL]
+        stack = stack + np.log(at[rho(j + 1)] / at[rho(j)]) / (2 * np.pi * k)
+    r_coil_core = (_wall(r_ci, r_cm, k_w, band) + _wall(pole, r_ci, CONDUCTIVITY[STAINLESS], band)
+                   + stack / band)  # fmt: skip
+    r_coil_housing = _wall(r_cm, r_co, k_w, band)
+    t_cap = p["end_cap_thickness"]
+    r_core = rg.core_radius
+    r_cap = (t_cap / 2) / (CONDUCTIVITY[STAINLESS] * np.pi * r_core**2) + _wall(
+        r_core, rg.outer_radius, CONDUCTIVITY[STAINLESS], t_cap
+    )
+    g_core_housing = 2 * p["zone_length"] / stack + 1 / r_cap
+    diameter = 2 * rg.outer_radius
+    length = at["back"] - at["front"]
+    area = np.pi * diameter * length + 2 * np.pi * rg.outer_radius**2
+    dt = (fluid_limit - ambient) / 2  # film temperature difference (module docstring)
+    t_s = ambient + dt + 273.15
+    t_a = ambient + 273.15
+    h_rad = EMISSIVITY * SIGMA * (t_s**2 + t_a**2) * (t_s + t_a)  # linearised radiation
+    to_air = (churchill_chu_h(diameter, dt, ambient) + h_rad) * area
+    g_cc, g_ch = 1 / r_coil_core, 1 / r_coil_housing
+    shape = np.shape(g_cc)
+    G = np.zeros((*shape, 3, 3))
+    for i, j, g in ((0, 1, g_cc), (0, 2, g_ch), (1, 2, g_core_housing)):
+        G[..., i, i] += g
+        G[..., j, j] += g
+        G[..., i, j] -= g
+        G[..., j, i] -= g
+    G[..., 2, 2] += to_air
+    capacity = np.stack(np.broadcast_arrays(cap["coil"], cap["core"], cap["housing"]), -1)
+    r20 = coil_resistance(p, r_ci, r_co, 20.0)
+    return Network(capacity, G, to_air, r20, ambient, np.linalg.inv(G))
+
+
+def steady(net: Network, current: Any, slip_power: Any = 0.0) -> Any:
+    """Steady node temperatures [°C] (…, 3) — coil, core, housing — at ``current`` [A]
+    with ``slip_power`` [W] into the core: (G − x a e0e0ᵀ) T = g T_amb + x c e0 + P e1,
+    x = I², a = R20 α, c = R20 (1 − 20 α) (R linear in T). inf where the coil runs away
+    (x a M00 ≥ 1)."""
+    M = net.inverse
+    x = np.asarray(current, dtype=float) ** 2
+    a, c = net.r20 * ALPHA_CU, net.r20 * (1 - 20 * ALPHA_CU)
+    base = _base(net, M, slip_power)
+    den = 1 - x * a * M[..., 0, 0]
+    t_coil = (base[..., 0] + x * c * M[..., 0, 0]) / den
+    rest = base[..., 1:] + (x * (c + a * t_coil))[..., None] * M[..., 1:, 0]
+    out = np.concatenate([t_coil[..., None], rest], -1)
+    return np.where((den > 0)[..., None], out, np.inf)
+
+
+def _base(net: Network, M: Any, slip_power: Any) -> Any:
+    """Node temperatures with no coil current: ambient + the slip power's rise."""
+    p = np.asarray(slip_power, dtype=float)
+    return net.ambient + p[..., None] * M[..., :, 1]
+
+
+def continuous_current(
+    net: Network, wire_limit: float, fluid_limit: float, slip_power: Any = 0.0
+) -> Any:
+    """Largest current [A] whose steady coil temperature stays at or below ``wire_limit``
+    and core (fluid) temperature at or below ``fluid_limit`` (°C), closed form from
+    ``steady``; 0 where the slip power alone breaks a limit."""
+    M = net.inverse
+    a, c = net.r20 * ALPHA_CU, net.r20 * (1 - 20 * ALPHA_CU)
+    base = _base(net, M, slip_power)
+    m00, m10 = M[..., 0, 0], M[..., 1, 0]
+    x_coil = (wire_limit - base[..., 0]) / (m00 * (c + a * wire_limit))
+    dt = fluid_limit - base[..., 1]
+    x_fluid = dt / (m10 * (c + a * base[..., 0]) + a * m00 * dt)
+    x = np.minimum(x_coil, x_fluid)
+    return np.sqrt(np.maximum(x, 0.0))
+
+
+def time_constants(net: Network) -> Any:
+    """The network's time constants [s] (…, 3), longest first (coil resistance at 20 °C
+    in its linear term left out: the current's own heating changes them little)."""
+    lam = np.linalg.eigvals(np.linalg.solve(_diag(net.capacity), net.conductance)).real
+    return np.sort(1 / lam, axis=-1)[..., ::-1]
+
+
+def _diag(c: Any) -> Any:
+    d = np.zeros((*np.shape(c), np.shape(c)[-1]))
+    idx = np.arange(np.shape(c)[-1])
+    d[..., idx, idx] = c
+    return d
+
+
+def time_to_limits(
+    net: Network, current: float, slip_power: float, wire_limit: float, fluid_limit: float
+) -> tuple[float, float]:
+    """Seconds from ambient until the coil reaches ``wire_limit`` and the core (fluid)
+    ``fluid_limit`` at a held ``current`` and ``slip_power`` (one design; inf if never):
+    the linear ODE C dT/dt = −(G − x a e0e0ᵀ) T + g T_amb + x c e0 + P e1 solved by modes."""
+    C = np.asarray(net.capacity, dtype=float)
+    G = np.asarray(net.conductance, dtype=float).copy()
+    x = float(current) ** 2
+    a, c = float(net.r20) * ALPHA_CU, float(net.r20) * (1 - 20 * ALPHA_CU)
+    G[0, 0] -= x * a
+    q = np.array([x * c, float(slip_power), float(net.to_air) * net.ambient])
+    A = -G / C[:, None]
+    b = q / C
+    lam, V = np.linalg.eig(A)  # real: A is similar to the symmetric −C^-½ G C^-½
+    lam, V = lam.real, V.real
+    Vi = np.linalg.inv(V)
+    t0 = np.full(3, net.ambient)
+    # T(t) = V diag(e^{λt}) V⁻¹ (T0 + A⁻¹b) − A⁻¹b
+    p = np.linalg.solve(A, b)
+    w0 = Vi @ (t0 + p)
+
+    def temps(t: np.ndarray) -> np.ndarray:
+        e = np.exp(np.minimum(np.outer(lam.real, t), 700.0))  # past e^700 every limit is crossed
+        return ((V @ (e * w0[:, None])).real - p[:, None]).T
+
+    grid = np.concatenate([[0.0], np.logspace(-3, 6, 400)])
+    tt = temps(grid)
+    out = []
+    for node, limit in ((0, wire_limit), (1, fluid_limit)):
+        above = np.nonzero(tt[:, node] >= limit)[0]
+        if above.size == 0:
+            out.append(math.inf)
+            continue
+        lo, hi = grid[above[0] - 1], grid[above[0]]
+        for _ in range(60):  # bisection to a relative 1e-12 of the bracket
+            mid = 0.5 * (lo + hi)
+            if temps(np.array([mid]))[0, node] >= limit:
+                hi = mid
+            else:
+                lo = mid
+        out.append(float(hi))
+    return out[0], out[1]

@@ -1,0 +1,133 @@
+"""The lumped thermal network: energy balance, closed forms, the transient against a
+direct integration, the adiabatic current limit and the continuous rating."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from geometry.params import broadcast_fields, preset
+from geometry.regions import evaluate as regions_of
+from geometry.section import build_section
+from magnetics.circuit import path_from_section
+from magnetics.drag import clutch_drag
+from magnetics.thermal import (
+    ALPHA_CU,
+    adiabatic_current_density,
+    churchill_chu_h,
+    continuous_current,
+    network,
+    steady,
+    time_constants,
+    time_to_limits,
+)
+from magnetics.torque import continuous_torque, yield_torque_at
+
+PAPER = preset("paper")
+W = 530 * 2 * math.pi / 60
+
+
+@pytest.fixture(scope="module")
+def net():
+    return network(build_section(PAPER).table)
+
+
+def test_steady_state_conserves_energy(net):
+    """Power in (coil at its own temperature + slip) = heat out to the air."""
+    for current, slip in ((0.3, 0.0), (0.5, 1.5), (0.8, 0.2)):
+        t = steady(net, current, slip)
+        p_coil = current**2 * net.r20 * (1 + ALPHA_CU * (t[0] - 20.0))
+        out = net.to_air * (t[2] - net.ambient)
+        assert p_coil + slip == pytest.approx(out, rel=1e-10)
+        assert t[0] >= t[2] and t[1] >= t[2] > net.ambient
+
+
+def test_coil_runaway_is_infinite_not_negative(net):
+    assert np.all(np.isinf(steady(net, 50.0)))
+
+
+def test_continuous_current_reaches_exactly_one_limit(net):
+    for slip in (0.0, 1.0, 2.0):
+        i = float(continuous_current(net, 155.0, 130.0, slip))
+        t = steady(net, i, slip)
+        assert t[0] <= 155.0 + 1e-8 and t[1] <= 130.0 + 1e-8
+        assert math.isclose(t[0], 155.0, rel_tol=1e-9) or math.isclose(t[1], 130.0, rel_tol=1e-9)
+    assert continuous_current(net, 155.0, 130.0, 100.0) == 0.0  # slip heat alone too much
+
+
+def test_transient_against_a_direct_integration(net):
+    """time_to_limits against implicit-Euler steps of C dT/dt = −G T + q(T)."""
+    i, slip = 3.0, 5.0
+    t_wire, t_fluid = time_to_limits(net, i, slip, 155.0, 130.0)
+    C, G = net.capacity, net.conductance
+    T = np.full(3, net.ambient)
+    dt, t = 1e-3, 0.0
+    hit = [None, None]
+    while t < 1.2 * t_fluid:
+        q = np.array([i**2 * net.r20 * (1 + ALPHA_CU * (T[0] - 20.0)), slip,
+                      net.to_air * net.ambient])  # fmt: skip
+        T = np.linalg.solve(np.diag(C / dt) + G, C / dt * T + q)
+        t += dt
+        for k, lim in ((0, 155.0), (1, 130.0)):
+            if hit[k] is None and T[k] >= lim:
+                hit[k] = t
+    assert hit[0] == pytest.approx(t_wire, rel=2e-3)
+    assert hit[1] == pytest.approx(t_fluid, rel=2e-3)
+
+
+def test_time_constants_are_positive_and_the_slowest_is_the_air(net):
+    tau = time_constants(net)
+    assert np.all(tau > 0) and tau[0] > 10 * tau[1]
+    total_c = float(np.sum(net.capacity))
+    # the slowest mode: the whole clutch against the air, τ ≈ ΣC / G_air
+    assert tau[0] == pytest.approx(total_c / net.to_air, rel=0.05)
+
+
+def test_adiabatic_limit_is_the_copper_heat_balance():
+    """IEC 60949's K = √(c_v (β + 20)/ρ20) for copper: 226 A·s^½/mm² within 1 %."""
+    c_v, rho20 = 3.45e6, 1.72e-8
+    assert math.sqrt(c_v * (234.5 + 20) / rho20) == pytest.approx(226e6, rel=0.01)
+    j = adiabatic_current_density(1.0, 20.0, 155.0)
+    assert j == pytest.approx(226e6 * math.sqrt(math.log(389.5 / 254.5)), rel=1e-12)
+    assert adiabatic_current_density(4.0, 20.0, 155.0) == pytest.approx(j / 2, rel=1e-12)
+
+
+def test_churchill_chu_value():
+    """A 25.8 mm cylinder 55 K above 20 °C air: Nu ≈ 6.8, h ≈ 7 W/(m²·K)."""
+    h = churchill_chu_h(0.0258, 55.0, 20.0)
+    assert 5.0 < h < 9.0
+
+
+def test_continuous_torque_chord_against_the_exact_fixed_point():
+    """The sweep's closed form (one circuit solve + chord) against bisection with a
+    circuit solve at every step: within 2 % on the preset."""
+    s = build_section(PAPER)
+    rg, path = s.table, path_from_section(s)
+    net = network(rg)
+    off = clutch_drag(rg, W).torque
+    i_fast, t_fast = continuous_torque(net, path, W, off, 155.0, 130.0)
+    lo, hi = 0.0, 5.0
+    for _ in range(50):
+        mid = 0.5 * (lo + hi)
+        t = float(yield_torque_at(path, mid)[0]) + off
+        if mid <= float(continuous_current(net, 155.0, 130.0, t * W)):
+            lo = mid
+        else:
+            hi = mid
+    t_exact = float(yield_torque_at(path, lo)[0]) + off
+    assert float(i_fast[0]) == pytest.approx(lo, rel=0.02)
+    assert float(t_fast[0]) == pytest.approx(t_exact, rel=0.02)
+
+
+def test_network_of_a_batch_equals_one_design_at_a_time():
+    gaps = np.array([0.3e-3, 0.7e-3])
+    p = broadcast_fields({"gap": gaps}, PAPER)
+    nb = network(regions_of(p, 2))
+    for i, g in enumerate(gaps):
+        from dataclasses import replace
+
+        n1 = network(build_section(replace(PAPER, gap=float(g))).table)
+        assert nb.conductance[i] == pytest.approx(n1.conductance, rel=1e-12)
+        assert nb.capacity[i] == pytest.approx(n1.capacity, rel=1e-12)
