@@ -258,6 +258,15 @@ def _radial(r0: FloatArray, r1: FloatArray, length: FloatArray, n: int, mask=Non
 
 
 def _kernels(path: MagneticPath) -> _Kernels:
+    """The path's integration kernels, built once per path (every solve on it reuses them)."""
+    cached = path.__dict__.get("_kernels_cache")
+    if cached is None:
+        cached = _build_kernels(path)
+        object.__setattr__(path, "_kernels_cache", cached)
+    return cached
+
+
+def _build_kernels(path: MagneticPath) -> _Kernels:
     gk, gw = _radial(path.gap_r0, path.gap_r1, path.gap_len, 1, path.gap_mask)
     dk, dw = _radial(path.drum_r0, path.drum_r1, path.drum_len, 1, path.drum_mask)
     pk, pw = _radial(path.pole_r0, path.pole_r1, path.pole_len, _POLE_POINTS)

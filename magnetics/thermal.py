@@ -212,15 +212,28 @@ def continuous_current(
     """Largest current [A] whose steady coil temperature stays at or below ``wire_limit``
     and core (fluid) temperature at or below ``fluid_limit`` (°C), closed form from
     ``steady``; 0 where the slip power alone breaks a limit."""
+    x = continuous_current_sq(net, wire_limit, fluid_limit)(slip_power)
+    return np.sqrt(np.maximum(x, 0.0))
+
+
+def continuous_current_sq(net: Network, wire_limit: float, fluid_limit: float) -> Any:
+    """P ↦ I²: the square of ``continuous_current`` as a function of the slip power, its
+    per-design constants computed once (the sweeps bisect on it). From ``steady``:
+    coil at the limit when I² = (L_w − T0)/(M00 (c + a L_w)); core at the limit when
+    I² = ΔT/(M10 (c + a T0) + a M00 ΔT), T0 and ΔT = L_f − T1 the no-current temperatures."""
     M = net.inverse
     a, c = net.r20 * ALPHA_CU, net.r20 * (1 - 20 * ALPHA_CU)
-    base = _base(net, M, slip_power)
-    m00, m10 = M[..., 0, 0], M[..., 1, 0]
-    x_coil = (wire_limit - base[..., 0]) / (m00 * (c + a * wire_limit))
-    dt = fluid_limit - base[..., 1]
-    x_fluid = dt / (m10 * (c + a * base[..., 0]) + a * m00 * dt)
-    x = np.minimum(x_coil, x_fluid)
-    return np.sqrt(np.maximum(x, 0.0))
+    m00, m10, m01, m11 = M[..., 0, 0], M[..., 1, 0], M[..., 0, 1], M[..., 1, 1]
+    k_coil = 1 / (m00 * (c + a * wire_limit))
+    amb = net.ambient
+
+    def x_of(slip_power: Any) -> Any:
+        p = np.asarray(slip_power, dtype=float)
+        t0 = amb + p * m01
+        dt = fluid_limit - (amb + p * m11)
+        return np.minimum((wire_limit - t0) * k_coil, dt / (m10 * (c + a * t0) + a * m00 * dt))
+
+    return x_of
 
 
 def time_constants(net: Network) -> Any:
