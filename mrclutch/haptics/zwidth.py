@@ -21,14 +21,15 @@ intersection of half-planes: convex. At a given B it is the interval [K_min(B), 
 K_max(0) = ``model.max_passive_stiffness`` and B_max = inf over {gB < 0} of R/(−gB) (the
 largest damper passive with K = 0). With a delay, gK > 0 at some frequencies, and P may
 extend past B_max with K_min > 0 (about 8 % of random designs): its right end B_top ≥ B_max
-is found by bisection on the frequency grid. The Z-width area is ∫_0^{B_top} (K_max − K_min)
-dB [N²·s/m²], trapezoid rule on a uniform grid of B (the integrand is concave, so the
-trapezoid is a lower bound; 17 points: within 0.5 % of 129 points on random designs,
-``tests/mrclutch/test_zwidth.py``). Every infimum is a dense log grid (1e-3 Hz – 1 MHz, 40
-per decade, as ``max_passive_stiffness``) zoomed on its minimum (the same 41-point zooms
-for K_max(0) and B_max, so K_max(0) equals ``max_passive_stiffness``; three 21-point zooms
-for the other B). Like ``max_passive_stiffness`` it is not certified against a dip narrower
-than the grid step between two grid points.
+is found by bisection on the frequency grid, then regula falsi on the refined bounds.
+The Z-width area is ∫_0^{B_top} (K_max − K_min) dB [N²·s/m²] on cosine-spaced nodes:
+the trapezoid rule (a lower bound, the width being concave) and the least of the nodes'
+tangents (slopes of the active constraints; an upper bound). On 10⁴ random designs with
+17 nodes the two differ by 0.8 % (median), 1.4 % (max). Every infimum is a dense log
+grid (1e-3 Hz – 1 MHz, 40 per decade, as ``max_passive_stiffness``) zoomed on its
+minimum: the same five 41-point zooms for K_max(0) and B_max (so K_max(0) equals
+``max_passive_stiffness``), three 21-point zooms at the other B. Like
+``max_passive_stiffness`` it is not certified against a dip narrower than the grid step.
 
 **Sampled-data passivity** ([colgate-schenkel1997], one rigid mass m with physical damping
 b, virtual environment H(z) = K + B(1 − z⁻¹)/T behind a zero-order hold, d whole samples
