@@ -1,0 +1,261 @@
+"""Z-width of the 2-DOF lever (mrclutch.haptics.zwidth): closed forms first (the rigid
+damped mass behind a pure delay, Colgate–Schenkel's d = 0 and B = 0 forms), then the
+invariants (agreement with max_passive_stiffness and is_stable, passivity at the
+boundary and its tightness, convexity of the passive set, the area's bracket)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from geometry.validation import ParameterError
+from mrclutch.haptics.actuator import TABLE2_MR, HapticParams
+from mrclutch.haptics.model import (
+    _num_coeffs,
+    is_stable,
+    max_passive_stiffness,
+    max_stable_stiffness,
+)
+from mrclutch.haptics.zwidth import (
+    ZWIDTH_KEYS,
+    encoder_stiffness_limit,
+    is_stable_spring_damper,
+    max_passive_damping,
+    passive_stiffness_interval,
+    sampled_max_passive_stiffness,
+    sampled_passivity_margin,
+    zwidth,
+)
+
+TAU = 1e-3
+B1 = 2.0
+
+
+def _random(n: int, seed: int = 1, sampled: bool = False) -> HapticParams:
+    rng = np.random.default_rng(seed)
+    return HapticParams(
+        m1=rng.uniform(0.3e-3, 50e-3, n),
+        m2=rng.uniform(1e-3, 50e-3, n),
+        b1=rng.uniform(0.03, 5.0, n),
+        k=rng.uniform(500.0, 2e4, n),
+        b=rng.uniform(0.05, 30.0, n),
+        delay=rng.uniform(0.0, 2e-3, n),
+        sample_period=rng.uniform(0.0, 1e-3, n) if sampled else 0.0,
+    )
+
+
+def _re_zcl(p: HapticParams, K: float, B: float, w: np.ndarray) -> np.ndarray:
+    """Re Z_cl with the spring–damper, straight from its definition (independent of the
+    module): [s Num + e^{−sτ}(K + Bs)(bs + k)] / (s D1), pure delay."""
+    s = 1j * w
+    a3, a2, a1, a0 = _num_coeffs(p)
+    num = ((a3 * s + a2) * s + a1) * s + a0
+    d1 = (p.m1 * s + (p.b1 + p.b)) * s + p.k
+    E = np.exp(-s * p.delay)
+    return ((s * num + E * (K + B * s) * (p.b * s + p.k)) / (s * d1)).real
+
+
+def _rigid_k_max(B: float) -> float:
+    """Closed form for Z = ms + b1 behind a pure delay: K_max(B) = min over x ∈ (0, π) of
+    x (b1 + B cos x)/(τ sin x) (x = ωτ; later lobes of sinc > 0 are larger)."""
+    x = np.linspace(1e-7, math.pi - 1e-9, 100_001)
+    return float(np.min(x * (B1 + B * np.cos(x)) / (TAU * np.sin(x))))
+
+
+def _stiff(k: float) -> HapticParams:
+    # k → ∞: Z_cl → (m1 + m2)s + b1 + (K/s + B)e^{−sτ}, Re = b1 + B cos ωτ − K sin(ωτ)/ω
+    return HapticParams(m1=1e-3, b1=B1, k=k, b=1.0, m2=0.05, delay=TAU)
+
+
+# --- closed forms ----------------------------------------------------------------------
+
+
+def test_stiff_transmission_reaches_the_rigid_closed_form() -> None:
+    r = zwidth(_stiff(1e9))
+    assert r["K_max_at_B0_N_per_m"] == pytest.approx(B1 / TAU, rel=1e-5)  # b/τ
+    assert r["B_max_at_K0_N_s_per_m"] == pytest.approx(B1, abs=1e-4)  # x = π: B ≤ b
+    assert r["B_top_N_s_per_m"] == pytest.approx(B1, abs=1e-4)
+    B, K = r["B_N_s_per_m"], r["K_max_N_per_m"]
+    cf = np.array([_rigid_k_max(b) for b in B[:-1]])
+    # within 1e-5 where K_max is flat, 5e-4 where it falls steeply to 0 at B = b
+    np.testing.assert_allclose(K[:-1], cf, rtol=1e-3)
+    np.testing.assert_allclose(K[:8], cf[:8], rtol=1e-5)
+    assert K[1] > K[0]  # a little virtual damping raises the passive spring
+    # area: ∫_0^b K_cf(B) dB on a fine grid (K_cf concave: trapezoid from below)
+    Bf = np.linspace(0.0, B1, 201)
+    area = np.trapezoid([_rigid_k_max(b) for b in Bf], Bf)
+    assert r["zwidth_area_N2_s_per_m2"] == pytest.approx(area, rel=1e-2)
+    assert r["zwidth_area_N2_s_per_m2"] <= area * (1 + 1e-4)
+    assert r["zwidth_area_upper_N2_s_per_m2"] >= area * (1 - 1e-4)
+
+
+def test_rigid_limit_error_falls_as_one_over_k() -> None:
+    errs = []
+    for k in (1e7, 1e8, 1e9):
+        r = zwidth(_stiff(k), n_b=5)
+        errs.append(abs(r["K_max_at_B0_N_per_m"] * TAU / B1 - 1.0))
+    assert errs[0] > 5 * errs[1] > 25 * errs[2]
+
+
+def test_colgate_schenkel_d0_closed_form() -> None:
+    rng = np.random.default_rng(3)
+    b = rng.uniform(0.5, 20.0, 200)
+    T = 10.0 ** rng.uniform(-4.5, -2.0, 200)
+    B = rng.uniform(-0.9, 0.9, 200) * b
+    K = sampled_max_passive_stiffness(b, T, B, 0)
+    np.testing.assert_allclose(K, 2.0 * (b - np.abs(B)) / T, rtol=1e-12)  # b > KT/2 + |B|
+    margin = sampled_passivity_margin(b, T, 0.7 * K, B, 0)
+    np.testing.assert_allclose(margin, b - 0.7 * K * T / 2 - np.abs(B), rtol=1e-9, atol=1e-12)
+
+
+def test_colgate_schenkel_zero_damping_any_delay() -> None:
+    b, T = 3.0, 1e-3
+    d = np.arange(6)
+    K = sampled_max_passive_stiffness(b, T, 0.0, d)
+    np.testing.assert_allclose(K, 2.0 * b / ((2 * d + 1) * T), rtol=1e-12)
+    assert np.all(np.diff(K) < 0)  # each sample of delay costs stiffness
+
+
+def test_sampled_margin_changes_sign_at_the_boundary() -> None:
+    b, T = 2.0, 5e-4
+    for d in (0, 1, 3):
+        for B in (0.0, 0.5, 1.5):
+            K = sampled_max_passive_stiffness(b, T, B, d)
+            assert sampled_passivity_margin(b, T, K * (1 - 1e-6), B, d) > 0
+            assert sampled_passivity_margin(b, T, K * (1 + 1e-6), B, d) < 0
+    assert math.isnan(sampled_max_passive_stiffness(b, T, 1.2 * b, 0))  # B > b: never
+
+
+def test_encoder_resolution_caps_stiffness() -> None:
+    assert encoder_stiffness_limit(0.1, 1e-5) == pytest.approx(2e4)  # 2 f_c/Δ
+    assert encoder_stiffness_limit(0.1, 0.0) == math.inf  # ideal encoder
+    free = sampled_max_passive_stiffness(5.0, 1e-4, 0.0)
+    capped = sampled_max_passive_stiffness(
+        5.0, 1e-4, 0.0, coulomb_friction=0.05, encoder_resolution=1e-5
+    )
+    assert free == pytest.approx(1e5) and capped == pytest.approx(1e4)
+    with pytest.raises(ParameterError):
+        sampled_max_passive_stiffness(5.0, 1e-4, 0.0, 0.5)  # d not an integer
+
+
+# --- invariants ------------------------------------------------------------------------
+
+
+def test_k_max_at_zero_damping_is_max_passive_stiffness() -> None:
+    for p in (_random(300), _random(300, seed=2, sampled=True)):
+        r = zwidth(p, n_b=3)
+        np.testing.assert_allclose(r["K_max_at_B0_N_per_m"], max_passive_stiffness(p), rtol=1e-12)
+        _, hi = passive_stiffness_interval(p, 0.0)
+        np.testing.assert_allclose(hi, max_passive_stiffness(p), rtol=1e-12)
+    assert set(ZWIDTH_KEYS) == set(r)
+
+
+def test_boundary_is_passive_and_tight() -> None:
+    p = _random(40, seed=4)
+    w = 2 * np.pi * np.logspace(-3, 6, 200_001)
+    B = max_passive_damping(p) * np.linspace(0.05, 0.95, 40)
+    lo, hi = passive_stiffness_interval(p, B)
+    for i in range(40):
+        q = p.item(i)
+        assert lo[i] == 0.0  # below B_max, K = 0 is passive
+        scale = float(np.max(np.abs(_re_zcl(q, hi[i], B[i], w[::100]))))
+        assert np.min(_re_zcl(q, hi[i] * (1 - 1e-6), B[i], w)) > -1e-9 * scale
+        assert np.min(_re_zcl(q, hi[i] * (1 + 1e-3), B[i], w)) < 0  # tight
+
+
+def test_damping_intercept() -> None:
+    p = _random(50, seed=5)
+    bm = max_passive_damping(p)
+    lo, hi = passive_stiffness_interval(p, bm * (1 - 1e-4))
+    assert np.all(lo == 0) and np.all(hi >= 0)
+    lo2, _ = passive_stiffness_interval(p, bm * (1 + 1e-3))
+    assert np.all(np.isnan(lo2) | (lo2 > 0))  # past B_max, K = 0 is not passive
+
+
+def test_passive_set_is_convex() -> None:
+    p = _random(200, seed=6)
+    r = zwidth(p, n_b=17)
+    B, K, Kmin = r["B_N_s_per_m"], r["K_max_N_per_m"], r["K_min_N_per_m"]
+    # divided differences on the (non-uniform) nodes: K_max concave, K_min convex
+    s = np.diff(K, axis=1) / np.diff(B, axis=1)
+    smin = np.diff(Kmin, axis=1) / np.diff(B, axis=1)
+    ok = np.all(np.isfinite(s), axis=1)
+    tol = 1e-6 * np.abs(s).max(axis=1, keepdims=True)
+    assert np.all(np.diff(s[ok], axis=1) <= tol[ok])
+    assert np.all(np.diff(smin[ok], axis=1) >= -tol[ok])
+    # midpoint of two boundary points is passive
+    i, j = 3, 12
+    mid_B = 0.5 * (B[:, i] + B[:, j])
+    mid_K = 0.5 * (K[:, i] + K[:, j])
+    _, hi = passive_stiffness_interval(p, mid_B)
+    assert np.all(mid_K <= hi * (1 + 1e-9))
+
+
+def test_area_is_bracketed_and_converges() -> None:
+    p = _random(200, seed=7)
+    a17 = zwidth(p, n_b=17)
+    a65 = zwidth(p, n_b=65)
+    lo17, up17 = a17["zwidth_area_N2_s_per_m2"], a17["zwidth_area_upper_N2_s_per_m2"]
+    lo65 = a65["zwidth_area_N2_s_per_m2"]
+    assert np.all(lo17 <= up17)
+    assert np.all(lo17 <= lo65 * (1 + 1e-9))  # trapezoid of a concave width: from below
+    assert np.all(lo65 <= up17 * (1 + 1e-9))
+    assert np.max(up17 / lo17 - 1) < 0.02
+    assert np.max(lo65 / lo17 - 1) < 0.01
+
+
+def test_extended_set_has_positive_k_min() -> None:
+    p = _random(300, seed=8)
+    r = zwidth(p, n_b=9)
+    ext = r["B_top_N_s_per_m"] > r["B_max_at_K0_N_s_per_m"] * (1 + 1e-6)
+    assert ext.any()  # with a delay, the set reaches past B_max in some designs
+    last = r["K_min_N_per_m"][ext, -1]
+    assert np.all(last > 0)
+    assert np.all(r["K_min_N_per_m"][~ext] == 0)
+
+
+def test_scalar_design_and_bad_input() -> None:
+    r = zwidth(TABLE2_MR)
+    assert r["B_N_s_per_m"].shape == (17,)
+    assert float(r["K_max_at_B0_N_per_m"]) == pytest.approx(max_passive_stiffness(TABLE2_MR))
+    with pytest.raises(ParameterError):
+        passive_stiffness_interval(TABLE2_MR, -1.0)
+    with pytest.raises(ParameterError):
+        zwidth(TABLE2_MR, n_b=1)
+
+
+# --- stability -------------------------------------------------------------------------
+
+
+def test_ray_at_zero_damping_matches_model() -> None:
+    for q in (TABLE2_MR, _random(3, seed=9).item(0)):
+        ks = max_stable_stiffness(q)
+        for f in (0.3, 0.9, 1.1, 3.0):
+            assert is_stable_spring_damper(q, f * ks, 0.0) == is_stable(q, f * ks)
+
+
+def test_ray_without_delay_matches_polynomial_roots() -> None:
+    rng = np.random.default_rng(10)
+    p = _random(20, seed=10)
+    for i in range(20):
+        q = HapticParams(m1=p.m1[i], b1=p.b1[i], k=p.k[i], b=p.b[i], m2=p.m2[i])
+        for _ in range(5):
+            K, B = 10.0 ** rng.uniform(1, 5), 10.0 ** rng.uniform(-1, 2)
+            # χ(s) = s Num + (K + Bs)(bs + k), a quartic
+            num = np.array(_num_coeffs(q), dtype=float)
+            chi = np.polyadd(np.append(num, 0.0), np.polymul([B, K], [q.b, q.k]))
+            stable = bool(np.all(np.roots(chi).real < 0))
+            assert is_stable_spring_damper(q, K, B) == stable
+
+
+def test_zwidth_boundary_points_stability() -> None:
+    # the MR bench (1 ms delay): the boundary points of its Z-width, checked one by one
+    r = zwidth(TABLE2_MR, n_b=9)
+    flags = [
+        is_stable_spring_damper(TABLE2_MR, float(k), float(b))
+        for k, b in zip(r["K_max_N_per_m"], r["B_N_s_per_m"], strict=True)
+    ]
+    assert all(flags)
+    assert not is_stable_spring_damper(TABLE2_MR, 10 * max_stable_stiffness(TABLE2_MR), 0.0)
