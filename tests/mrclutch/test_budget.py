@@ -102,3 +102,11 @@ def test_bad_support_key_is_one_line(tmp_path, capsys):
     f.write_text('[clutch]\nbase = "paper"\n[support]\nbearing = "6204"\n')
     assert main(["evaluate", str(f)]) == 2
     assert "bearing" in capsys.readouterr().err
+
+
+def test_report_page_shows_the_budget():
+    from mrclutch.cli.report import budget_html
+
+    page = budget_html(evaluate(design_preset("paper")).as_json()["budget"])
+    assert "Where b1 and m1 come from" in page and "carried fluid" in page
+    assert "unexplained" in page and "Table 2" in page
