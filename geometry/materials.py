@@ -42,8 +42,13 @@ DENSITY_COPPER = 8960.0  # [materials]
 DENSITY_EPOXY = 1200.0  # bonding epoxy of an epoxy-bonded coil (typical 1.1–1.3 g/cm³)
 
 
+def copper_fraction(turns: Any, wire_diameter: Any, window_area: Any) -> Any:
+    """Fraction of the coil window that is copper (floats or arrays)."""
+    return turns * (math.pi * wire_diameter**2 / 4) / window_area
+
+
 def coil_density(turns: Any, wire_diameter: Any, window_area: Any) -> Any:
     """Smeared density of the epoxy-bonded coil: copper fraction of the window, rest epoxy
     (floats or arrays)."""
-    frac = turns * (math.pi * wire_diameter**2 / 4) / window_area
+    frac = copper_fraction(turns, wire_diameter, window_area)
     return frac * DENSITY_COPPER + (1 - frac) * DENSITY_EPOXY

@@ -35,7 +35,8 @@ output's inertia, s the fraction of the way from the input wall to the output wa
 cylindrical film. The rest of the cavity's fluid also lies between output and input
 surfaces and is given the same 1/3 (an assumption: its flow is not a plain Couette
 profile). Quasi-steady holds while the film is thinner than the viscous penetration depth
-√(2ν/ω) at the motion's frequency (Stokes' second problem [white-viscous]).
+√(2ν/ω) at the motion's frequency (Stokes' second problem [white-viscous]): below
+``quasi_steady_hz``, reported with the drag.
 """
 
 from __future__ import annotations
@@ -240,11 +241,17 @@ def coupled_fluid_inertia(rg: Regions) -> Any:
     return total
 
 
-def penetration_depth(fluid: MRFluid | None, temperature: float, frequency_hz: float) -> float:
-    """Viscous penetration depth √(2ν/ω) [m] of an oscillating wall (Stokes' second
-    problem [white-viscous])."""
+def quasi_steady_hz(rg: Regions, temperature: Any, fluid: MRFluid | None = None) -> Any:
+    """Frequency [Hz] below which every cylindrical film is thinner than the viscous
+    penetration depth √(2ν/ω) (Stokes' second problem [white-viscous]): f = ν/(π h²) of the
+    widest film. Below it the carried fluid's linear profile (``coupled_fluid_inertia``)
+    holds; above it less fluid follows the output."""
     nu = fluid_of(fluid).viscosity_at(temperature) / DENSITY[MRF]
-    return math.sqrt(2 * nu / (2 * math.pi * frequency_hz))
+    widest = 0.0
+    for sp in rg.films("cylinder"):
+        r0, r1, _, _ = rg.bounds(sp)
+        widest = np.maximum(widest, r1 - r0)
+    return nu / (np.pi * widest**2)
 
 
 @dataclass(frozen=True)
@@ -259,6 +266,7 @@ class Drag:
     face_torque: tuple[float, ...]  # per face film, N·m
     taylor_ratio: float  # largest Ta/1708
     min_shear_rate: float  # 1/s
+    quasi_steady_hz: float  # the carried fluid's inertia holds below this frequency
     notes: tuple[str, ...]
 
     @property
@@ -277,6 +285,7 @@ class Drag:
             "terms": {k: _term_json(t) for k, t in self.terms.items()},
             "taylor_number_over_critical": self.taylor_ratio,
             "min_film_shear_rate_per_s": self.min_shear_rate,
+            "carried_fluid_quasi_steady_below_hz": self.quasi_steady_hz,
             "notes": list(self.notes),
         }
 
@@ -313,4 +322,4 @@ def clutch_drag(
         )
     return Drag(w, float(temperature), float(eta), MappingProxyType(terms),
                 tuple(float(c * w) for c in c_gap), tuple(float(c * w) for c in c_face),
-                ta, gmin, tuple(notes))  # fmt: skip
+                ta, gmin, float(quasi_steady_hz(rg, temperature, fl)), tuple(notes))  # fmt: skip

@@ -44,7 +44,16 @@ from typing import Any
 
 import numpy as np
 
-from geometry.materials import COIL, DENSITY, DENSITY_COPPER, DENSITY_EPOXY, MRF, STAINLESS, STEEL
+from geometry.materials import (
+    COIL,
+    DENSITY,
+    DENSITY_COPPER,
+    DENSITY_EPOXY,
+    MRF,
+    STAINLESS,
+    STEEL,
+    copper_fraction,
+)
 from geometry.regions import Regions, layer, n_layers, rho
 from magnetics.materials import FLUIDS
 
@@ -121,15 +130,11 @@ def network(rg: Regions, ambient: float = 20.0, fluid_limit: float = 130.0) -> N
     # capacities: every region's mass × specific heat, lumped by node
     cap = {"coil": 0.0, "core": 0.0, "housing": 0.0}
     r_ci, r_co = at["coil_in"], at["coil_out"]
+    frac = copper_fraction(p["coil_turns"], p["wire_diameter"], p["coil_depth"] * p["band_length"])
     for sp in rg:
         r0, r1, z0, z1 = rg.bounds(sp)
         vol = np.pi * (r1**2 - r0**2) * (z1 - z0)
         if sp.material == COIL:
-            frac = (
-                p["coil_turns"]
-                * (np.pi * p["wire_diameter"] ** 2 / 4)
-                / (p["coil_depth"] * p["band_length"])
-            )
             c = vol * (frac * DENSITY_COPPER * SPECIFIC_HEAT["copper"]
                        + (1 - frac) * DENSITY_EPOXY * SPECIFIC_HEAT["epoxy"])  # fmt: skip
             cap["coil"] = cap["coil"] + c
@@ -138,11 +143,6 @@ def network(rg: Regions, ambient: float = 20.0, fluid_limit: float = 130.0) -> N
         node = "housing" if sp.part == "housing" and sp.name != "core" else "core"
         cap[node] = cap[node] + c
     # conductances
-    frac = (
-        p["coil_turns"]
-        * (np.pi * p["wire_diameter"] ** 2 / 4)
-        / (p["coil_depth"] * p["band_length"])
-    )
     k_m = CONDUCTIVITY["epoxy"]
     k_w = k_m * (1 + frac) / (1 - frac)  # aligned cylinders, transverse [rayleigh1892]
     band = p["band_length"]

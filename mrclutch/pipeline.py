@@ -62,6 +62,9 @@ FIDELITIES: tuple[str, ...] = ("fast", "reference")
 #: optimiser's optimum in tests/mrclutch/test_pipeline.py.
 FAST_BANDWIDTH_ERROR = 0.05
 
+#: °C: the fluid's upper temperature limit, the maker's operating range [lord-mrf132dg].
+FLUID_LIMIT = FLUIDS[MRF].temperature_range[1]
+
 #: The motor of the paper's equal-force comparison (Fig. 7c).
 MOTOR = "maxon-136206"
 
@@ -82,7 +85,7 @@ class ClutchFigures:
     coil_power: float  # W at max_current
     diameter: float  # m, envelope
     length: float  # m, envelope
-    thermal: Mapping[str, float]  # THERMAL_KEYS
+    thermal: Mapping[str, float]  # thermal_figures: continuous rating, times to the limits
     methods: Mapping[str, str]
     notes: tuple[str, ...] = ()
     inertia_parts: Mapping[str, float] = field(default_factory=dict)  # kg·m², output parts
@@ -199,28 +202,21 @@ def clutch_figures(
     )
 
 
-#: Thermal figures of a clutch (evaluate JSON keys, SI; temperatures in °C).
-THERMAL_KEYS: tuple[str, ...] = (
-    "continuous_current_A",
-    "continuous_torque_N_m",
-    "time_to_wire_limit_s",
-    "time_to_fluid_limit_s",
-    "thermal_time_constant_s",
-)
-
-
 def thermal_figures(design: ClutchDesign, rg: regions.Regions, path: Any, off_torque: float,
                     peak_torque: float) -> dict[str, float]:  # fmt: skip
     """Continuous rating and peak endurance of one design (``magnetics.thermal``): the same
     closed forms as the sweeps' continuous torque, plus the transient at the peak current
     holding the peak torque while slipping at the input speed."""
     op = design.operating
-    lim = FLUIDS[MRF].temperature_range[1]
-    net = thermal.network(rg, op.ambient_temperature, lim)
+    net = thermal.network(rg, op.ambient_temperature, FLUID_LIMIT)
     i_c, t_c = continuous_torque(net, path, op.input_speed, off_torque,
-                                 op.wire_temperature_limit, lim)  # fmt: skip
+                                 op.wire_temperature_limit, FLUID_LIMIT)  # fmt: skip
     t_wire, t_fluid = thermal.time_to_limits(
-        net, design.current_limit, peak_torque * op.input_speed, op.wire_temperature_limit, lim
+        net,
+        design.current_limit,
+        peak_torque * op.input_speed,
+        op.wire_temperature_limit,
+        FLUID_LIMIT,
     )
     return {
         "continuous_current_A": float(np.ravel(i_c)[0]),
@@ -247,18 +243,6 @@ def dynamic_range_db(max_torque: Any, off_torque: Any) -> Any:
 
 def _output_parts(mass: MassReport) -> dict[str, float]:
     return {p: float(mass.parts[p].inertia) for p in regions.OUTPUT_PARTS if p in mass.parts}
-
-
-def mr_actuator(design: ClutchDesign, figures: ClutchFigures) -> Actuator:
-    """The paper's antagonistic pair of this clutch (both rotors move with the lever)."""
-    return Actuator.mr_pair(
-        clutch_inertia=figures.moving_inertia,
-        clutch_damping=figures.drag_damping,
-        clutch_max_torque=figures.max_torque,
-        clutch_mass=figures.clutch_mass,
-        delay=design.operating.delay,
-        name=design.name,
-    )
 
 
 def mr_at_hand(design: ClutchDesign, inertia: Any, damping: Any, torque: Any, mass: Any
@@ -422,7 +406,6 @@ def evaluate_batch(
     ok = valid(p)
     op = base.operating
     current = current_limit(op, p["wire_diameter"])
-    lim = FLUIDS[MRF].temperature_range[1]
 
     def clutch(rg: regions.Regions, rows: np.ndarray) -> dict[str, Any]:
         out = region_mass(rg)
@@ -431,9 +414,9 @@ def evaluate_batch(
         out["fluid_inertia"] = coupled_fluid_inertia(rg)
         path = path_from_regions(rg)
         out["yield_torque"] = yield_torque_at(path, current[rows])
-        net = thermal.network(rg, op.ambient_temperature, lim)
+        net = thermal.network(rg, op.ambient_temperature, FLUID_LIMIT)
         out["continuous_torque"] = continuous_torque(
-            net, path, op.input_speed, out["off_torque"], op.wire_temperature_limit, lim
+            net, path, op.input_speed, out["off_torque"], op.wire_temperature_limit, FLUID_LIMIT
         )[1]
         return out
 

@@ -161,3 +161,14 @@ def test_support_validation_names_the_parameter():
         Support(bearing="6204")
     with pytest.raises(ParameterError, match="seal_torque"):
         Support(seal_torque=-1.0)
+
+
+def test_quasi_steady_frequency_is_where_the_penetration_depth_is_the_widest_gap():
+    from magnetics.drag import quasi_steady_hz
+
+    rg = build_section(PAPER).table
+    f = quasi_steady_hz(rg, 20.0)
+    nu = MRF_132DG.viscosity_at(20.0) / DENSITY[MRF]
+    delta = math.sqrt(2 * nu / (2 * math.pi * f))  # Stokes' penetration depth at f
+    assert delta == pytest.approx(PAPER.gap, rel=1e-12)
+    assert clutch_drag(rg, W, 20.0).quasi_steady_hz == pytest.approx(f, rel=1e-15)
