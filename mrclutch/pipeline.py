@@ -48,6 +48,7 @@ from mrclutch.haptics.actuator import (
     reflect,
 )
 from mrclutch.haptics.model import max_passive_stiffness, metrics_batch, metrics_of
+from mrclutch.haptics.zwidth import ZWIDTH_KEYS, zwidth
 from mrclutch.outputs import SWEEP_COLUMNS
 from mrclutch.trust import choose, circuit_trust
 
@@ -275,6 +276,7 @@ class Evaluation:
     haptic: Mapping[str, Any]  # metrics of the MR pair at K_max
     motor_metrics: Mapping[str, Any]  # metrics of the motor at the same K
     budget: Mapping[str, Any]  # b1 and m1 as named terms beside the paper's Table 2
+    zwidth: Mapping[str, Any]  # label → the Z-width (``zwidth.zwidth``) of MR pair and motor
 
     def as_json(self) -> dict[str, Any]:
         mr_m, em_m = dict(self.haptic), dict(self.motor_metrics)
@@ -289,6 +291,7 @@ class Evaluation:
             "bandwidth_gain_lumped": _gain(
                 mr_m["bandwidth_lumped_hz"], em_m["bandwidth_lumped_hz"]
             ),
+            "zwidth": {k: dict(v) for k, v in self.zwidth.items()},
         }
 
 
@@ -316,7 +319,14 @@ def evaluate(
     table2 = replace(mr, b1=TABLE2_MR.b1)  # the same pair with the paper's identified b1
     mr_m, em_m, t2_m = metrics_of([mr, em, table2], [k, k, k])  # all at the MR pair's K_max
     budget = hand_budget(design, fig, mr, t2_m)
-    return Evaluation(design, fidelity, fig, mr, em, em_tr.gearing, mr_m, em_m, budget)
+    zw = zwidth(HapticParams.stack([mr, em]))
+    zws = {side: {key: zw[key][i] if np.ndim(zw[key]) > 1 else float(zw[key][i])
+                  for key in ZWIDTH_KEYS} for i, side in enumerate(ZWIDTH_SIDES)}  # fmt: skip
+    return Evaluation(design, fidelity, fig, mr, em, em_tr.gearing, mr_m, em_m, budget, zws)
+
+
+#: The sides of ``Evaluation.zwidth``: the MR pair and the equal-force motor.
+ZWIDTH_SIDES = ("mr", "motor")
 
 
 #: Why the budget of b1 may not reach the paper's identified value, least certain first.

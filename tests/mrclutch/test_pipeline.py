@@ -112,3 +112,19 @@ def test_fast_bandwidth_within_its_stated_error_of_reference(change):
     fast = evaluate(d, "fast").haptic["bandwidth_hz"]
     ref = evaluate(d, "reference").haptic["bandwidth_hz"]
     assert abs(fast / ref - 1) <= FAST_BANDWIDTH_ERROR
+
+
+def test_evaluation_carries_the_zwidth_of_both_sides():
+    """The Z-width's K intercept is the largest passive K of the metrics (two methods that
+    share no code path beyond the model), for the MR pair and for the motor; the rendered
+    K lies inside the MR pair's Z-width exactly when the pair is passive at K."""
+    ev = evaluate(design_preset("paper"))
+    for side, m in (("mr", ev.haptic), ("motor", ev.motor_metrics)):
+        zw = ev.zwidth[side]
+        assert zw["K_max_at_B0_N_per_m"] == pytest.approx(m["max_passive_K_N_per_m"], rel=1e-6)
+        assert zw["zwidth_area_N2_s_per_m2"] <= zw["zwidth_area_upper_N2_s_per_m2"]
+    inside = ev.haptic["K_N_per_m"] <= ev.zwidth["mr"]["K_max_at_B0_N_per_m"]
+    assert inside == ev.haptic["passive"]
+    # the geared motor's larger b1 buys it a far larger passive set [colgate-brown1994]
+    area = {side: zw["zwidth_area_N2_s_per_m2"] for side, zw in ev.zwidth.items()}
+    assert area["motor"] > area["mr"]

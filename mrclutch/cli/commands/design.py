@@ -149,8 +149,20 @@ def format_evaluation(data: dict) -> str:
     lines.append(f"  (motor geared ×{m['gearing']:.3g} to the MR pair's force)")
     g, gl = data["bandwidth_gain"], data["bandwidth_gain_lumped"]
     lines.append(f"bandwidth gain MR over motor: {_pct(gl)} lumped, {_pct(g)} on the full response")
+    lines += format_zwidth(data["zwidth"])
     lines += format_budget(data["budget"])
     return "\n".join(lines)
+
+
+def format_zwidth(zw: dict) -> list[str]:
+    """The Z-width (passive virtual springs and dampers, continuous time) of both sides."""
+    lines = ["Z-width: the (K, B) the device renders passively (mrclutch.haptics.zwidth)",
+             f"  {'':<30}{'MR pair':>14}{'Maxon 136206':>14}"]  # fmt: skip
+    for key, label in (("K_max_at_B0_N_per_m", "largest K at B = 0 (N/m)"),
+                       ("B_max_at_K0_N_s_per_m", "largest B at K = 0 (N·s/m)"),
+                       ("zwidth_area_N2_s_per_m2", "area ∫ΔK dB (N²·s/m²)")):  # fmt: skip
+        lines.append(f"  {label:<30}{zw['mr'][key]:>14.4g}{zw['motor'][key]:>14.4g}")
+    return lines
 
 
 def format_budget(budget: dict) -> list[str]:

@@ -68,3 +68,36 @@ def compare_figure(
         ax.legend(fontsize=8)
     fig.savefig(path, dpi=110, format="png")
     plt.close(fig)
+
+
+def zwidth_figure(sides: dict[str, dict[str, Any]], K: float, path: str | os.PathLike[str]) -> None:
+    """Write a PNG of the Z-width (label → ``zwidth`` result of one design): the passive set
+    {K_min(B) ≤ K ≤ K_max(B)} in the (K, B) plane, one panel per side (their scales differ
+    by orders of magnitude), with the rendered spring (K, 0) marked."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(sides), figsize=(5 * len(sides), 4.2), constrained_layout=True)
+    colors = ("tab:blue", "tab:red", "tab:green")
+    for ax, (label, zw), color in zip(np.atleast_1d(axes), sides.items(), colors, strict=False):
+        b = np.asarray(zw["B_N_s_per_m"], dtype=float)
+        hi = np.asarray(zw["K_max_N_per_m"], dtype=float)
+        lo = np.nan_to_num(np.asarray(zw["K_min_N_per_m"], dtype=float), nan=0.0)
+        ok = np.isfinite(hi)
+        ax.fill_betweenx(b[ok], lo[ok], hi[ok], color=color, alpha=0.25, label="passive")
+        ax.plot(hi[ok], b[ok], color=color, lw=1.5, label="K_max(B)")
+        if np.any(lo[ok] > 0):
+            ax.plot(lo[ok], b[ok], color=color, lw=1.0, ls="--", label="K_min(B)")
+        ax.plot([K], [0.0], "kx", ms=8, label=f"rendered K = {K:.0f} N/m")
+        area = float(zw["zwidth_area_N2_s_per_m2"])
+        ax.set_title(f"{label}: area {area:.4g} N²·s/m²", fontsize=10)
+        ax.set_xlabel("virtual stiffness K [N/m]")
+        ax.set_ylabel("virtual damping B [N·s/m]")
+        ax.set_xlim(0, 1.1 * max(float(np.nanmax(hi[ok], initial=0.0)), K))
+        ax.set_ylim(0, None)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.savefig(path, dpi=110, format="png")
+    plt.close(fig)
