@@ -3,8 +3,8 @@ frequencies in rad/s, frequencies in Hz where the name says so.
 
 **Coupled model.** The 2-DOF lever of [lebel] (Fig. 4b, ``mrclutch.haptics.model``) with
 the human hand/arm gripping the end effector x2, modelled as a mass–spring–damper to
-ground, Z_h(s) = m_h s + b_h + k_h/s [N·s/m] (the usual lumped model of a grasping limb
-[hogan1989], [dolan1993], [tsuji1995]). The hand's mass moves with x2; its damping and
+ground, Z_h(s) = m_h s + b_h + k_h/s [N·s/m], the usual lumped model of a grasping limb
+(as in [hogan1989], [dolan1993], [tsuji1995]). The hand's mass moves with x2; its damping and
 stiffness act between x2 and ground (the body), *not* between x1 and x2 like the
 transmission's b and k. With F_a = −K E(s) x2 (E = e^{−sτ} × the zero-order hold's
 fundamental, as ``model._hold``) and the hand's voluntary force set to zero::
@@ -61,7 +61,14 @@ from numpy.polynomial import polynomial as P
 
 from geometry.validation import ParameterError, check_int, check_nonnegative, check_positive
 from mrclutch.haptics.actuator import HapticParams
-from mrclutch.haptics.model import _FIELDS, _check_K, _hold, _illinois, _num_coeffs
+from mrclutch.haptics.model import (
+    _FIELDS,
+    _check_K,
+    _hold,
+    _illinois,
+    _num_coeffs,
+    max_passive_stiffness,
+)
 
 __all__ = [
     "DEFAULT_AMPLITUDE",
@@ -74,9 +81,9 @@ __all__ = [
     "backdrive_force",
     "coupled_stability",
     "felt_impedance",
+    "hand_figures",
     "is_stable_coupled",
     "max_stable_stiffness_coupled",
-    "paper_figures",
 ]
 
 TWO_PI = 2.0 * math.pi
@@ -401,20 +408,19 @@ def felt_impedance(p: HapticParams, frequency: Any = DEFAULT_FREQUENCY) -> FeltI
     return FeltImpedance(b, m)
 
 
-# --- paper preset ----------------------------------------------------------------------
+# --- figures of one design -----------------------------------------------------------
 
 
-def paper_figures(fidelity: str = "fast", n: int = 3) -> dict[str, Any]:
-    """The paper preset's pair at the hand (``pipeline.evaluate``) at its K_max (Eq. 4):
-    coupled stability over HAND_RANGE, the hands-off and passive limits, and the backdrive
-    force and felt impedance at the default motion."""
-    from mrclutch.design import design_preset
-    from mrclutch.haptics.model import max_passive_stiffness
-    from mrclutch.pipeline import evaluate
-
-    p = evaluate(design_preset("paper"), fidelity).mr
-    K = float(p.k_max)
-    cs = coupled_stability(p, K, HAND_RANGE, n)
+def hand_figures(
+    p: HapticParams, K: float | None = None, hand_range: HandRange = HAND_RANGE, n: int = 3
+) -> dict[str, Any]:
+    """One design's hand figures at K (default its K_max, Eq. 4): coupled stability over
+    ``hand_range``, the hands-off and passive limits ([colgate-hogan1988]: the passive one
+    bounds the coupled one from below), and the backdrive force and felt impedance at the
+    default motion. For the paper preset, pass ``pipeline.evaluate(...).mr`` (docs/hand.md)."""
+    _one(p)
+    K = float(p.k_max) if K is None else float(_check_K(K))
+    cs = coupled_stability(p, K, hand_range, n)
     felt = felt_impedance(p)
     return {
         "K_N_per_m": K,
@@ -433,8 +439,3 @@ def paper_figures(fidelity: str = "fast", n: int = 3) -> dict[str, Any]:
         "felt_mass_kg": felt.mass,
         "motion": {"amplitude_m": DEFAULT_AMPLITUDE, "frequency_hz": DEFAULT_FREQUENCY},
     }
-
-
-if __name__ == "__main__":  # pragma: no cover
-    for key, value in paper_figures().items():
-        print(f"{key}: {value}")

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from geometry.validation import ParameterError
+from mrclutch.design import design_preset
 from mrclutch.haptics.actuator import TABLE2_MR, HapticParams
 from mrclutch.haptics.hand import (
     HAND_RANGE,
@@ -25,9 +26,9 @@ from mrclutch.haptics.hand import (
     backdrive_force,
     coupled_stability,
     felt_impedance,
+    hand_figures,
     is_stable_coupled,
     max_stable_stiffness_coupled,
-    paper_figures,
 )
 from mrclutch.haptics.model import (
     _chi,
@@ -36,6 +37,7 @@ from mrclutch.haptics.model import (
     max_stable_stiffness,
     passive_impedance,
 )
+from mrclutch.pipeline import evaluate
 
 TAU = 1e-3
 
@@ -311,7 +313,7 @@ def test_backdrive_vectorised_and_linear_in_amplitude() -> None:
 
 
 def test_paper_preset_figures() -> None:
-    fig = paper_figures()
+    fig = hand_figures(evaluate(design_preset("paper"), "fast").mr)
     K = fig["K_N_per_m"]
     # hands off the pair is unstable at its K_max (253 < 363 N/m); any hand in the range
     # adds ≥ 2 N·s/m and makes it stable, with a wide margin
@@ -323,3 +325,7 @@ def test_paper_preset_figures() -> None:
     # free motion: 10 mm at 2 Hz costs a few tens of mN, mostly the drag b1
     assert 0.01 < fig["backdrive_force_N"] < 0.1
     assert fig["felt_mass_kg"] == pytest.approx(0.0155, rel=0.05)
+    # the table of docs/hand.md (to 1 %: it moves with the drag and inertia models)
+    assert fig["max_stable_K_hands_off_N_per_m"] == pytest.approx(253.4, rel=0.01)
+    assert fig["max_stable_K_all_hands_N_per_m"] == pytest.approx(2126.0, rel=0.01)
+    assert fig["backdrive_force_N"] == pytest.approx(0.0416, rel=0.01)
