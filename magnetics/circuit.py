@@ -37,6 +37,7 @@ at its initial μ); that field's yield stress adds torque over the band (the FEM
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -54,7 +55,6 @@ from magnetics.materials import MATERIALS, MU0, BHCurve, Magnetic, magnetic
 FloatArray = NDArray[np.float64]
 FLUID = MRF
 _POLE_POINTS = 3  # Gauss points in ln r for the thick pole rings
-_BAND_POINTS = 3  # Gauss points along the half band (linear potential fall)
 #: A steel element is reported saturated where its differential μr falls below this.
 SATURATION_MU_R = 100.0
 
@@ -231,6 +231,11 @@ class _Kernels:
     shell_wk: FloatArray
     leak: FloatArray
 
+    def rows(self, idx: np.ndarray) -> _Kernels:
+        """The kernels of the designs ``idx`` only (the solver drops converged rows)."""
+        return _Kernels(*(a[idx] if a.ndim == 2 else a[:, idx] for a in
+                          (getattr(self, f.name) for f in dataclasses.fields(self))))  # fmt: skip
+
 
 @functools.lru_cache(maxsize=8)
 def _gauss(n: int) -> tuple[FloatArray, FloatArray]:
@@ -313,8 +318,11 @@ def solve_flux(
     rtol: float = 1e-12,
     max_iter: int = 200,
     kernels: _Kernels | None = None,
+    start: FloatArray | None = None,
 ) -> FloatArray:
-    """Gap flux Φ (Wb), shape (S, C), solving N·I = F(Φ) for ``ampere_turns`` (S, C).
+    """Gap flux Φ (Wb), shape (S, C), solving N·I = F(Φ) for ``ampere_turns`` (S, C);
+    ``start`` (S, C), a first guess (e.g. the flux at a nearby current), replaces the
+    linear circuit's flux as the first iterate.
 
     Safeguarded Newton ([numerical-recipes] §9.4 "rtsafe") on the strictly increasing F,
     started at the linear (unsaturated) circuit's flux: the bracket [lo, hi] always
@@ -335,10 +343,14 @@ def solve_flux(
 
     # Linear (unsaturated) circuit: Φ = N·I / F'(0). Exact below the tables' first
     # segment, and the first Newton iterate otherwise.
-    slope0 = f(np.zeros((target.shape[0], 1)))[1]
-    x = target / slope0
+    if start is None:
+        x = target / f(np.zeros((target.shape[0], 1)))[1]
+    else:
+        x = np.broadcast_to(np.abs(np.asarray(start, dtype=float)), target.shape).copy()
     # |NI| < 1e-100 A (down to subnormals): the linear regime is exact to rounding.
     tiny = target < 1e-100
+    out = x.copy()
+    rows = np.arange(x.shape[0])  # the designs still iterating; converged ones are dropped
     lo, hi = np.zeros_like(x), np.full_like(x, np.inf)
     for _ in range(max_iter):
         fx, dfx = f(x)
@@ -348,14 +360,21 @@ def solve_flux(
         closed = np.isfinite(hi) & ((hi - lo) <= rtol * hi)
         done = (np.abs(fx) <= rtol * target) | closed | tiny
         if done.all():
+            out[rows] = x
             break
         newton = x - fx / np.where(dfx > 0, dfx, np.inf)
         ok = (newton > lo) & (newton < hi) & (dfx > 0)
         # no upper bound yet: double (F grows at least like Φ/μ0, so this brackets)
         fallback = np.where(np.isinf(hi), 2 * x, 0.5 * (lo + hi))
         x = np.where(done, x, np.where(ok, newton, fallback))
+        keep = ~done.all(axis=1)
+        if keep.sum() < 0.7 * keep.size:  # compact: later iterations cost only what is left
+            out[rows[~keep]] = x[~keep]
+            rows, x, lo, hi = rows[keep], x[keep], lo[keep], hi[keep]
+            target, tiny, kn = target[keep], tiny[keep], kn.rows(np.flatnonzero(keep))
     else:
         raise ParameterError(f"circuit: no convergence in {max_iter} iterations")
+    x = out
     return x * sign
 
 
@@ -419,14 +438,3 @@ def solve_path(
         sat = {k: np.zeros(v.shape, bool) for k, v in sb.items()}
     return CircuitResult(np.array(cur), phi, parts["phi_shell"], path.gap_label, rmid,
                          path.gap_len, b, h, 0.5 * parts["radial"], sb, sat)  # fmt: skip
-
-
-def band_h(path: MagneticPath, radial_mmf: FloatArray, mats: Mapping[str, Magnetic]):  # type: ignore[no-untyped-def]
-    """Radial H (S, C, K, P) in each gap entry's half band at the Gauss points, and the
-    points' weights·(b/2) (P,)·(S,1,1,1): B(u) = F_r·u/(r·S_b), u = 1 − 2x/b ∈ (0, 1)."""
-    x, wt = _gauss(_BAND_POINTS)
-    u, wu = 0.5 * (x + 1), 0.5 * wt
-    q = radial_mmf[:, :, None] / (path.gap_r_mid * path.band_reluctance[:, None])[:, None, :]
-    b = q[..., None] * u
-    h = magnetic(path.fluid, mats).h_dh(np.abs(b))[0]
-    return h, (0.5 * path.band_len)[:, None, None, None] * wu

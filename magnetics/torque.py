@@ -8,6 +8,7 @@ speed: every drag term (films, bearings, seal) is in ``magnetics.drag``.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -24,7 +25,6 @@ from magnetics.circuit import (
     MagneticPath,
     _kernels,
     _mmf,
-    band_h,
     path_from_regions,
     path_from_section,
     solve_flux,
@@ -145,12 +145,25 @@ def yield_torque_at(
 ) -> FloatArray:
     """Yield torque (N·m, shape S) of the S designs of ``path``, each at its current (flux
     solved to the relative tolerance ``rtol``)."""
+    return _torque_and_flux(path, current, materials, fluid, rtol)[0]
+
+
+def _torque_and_flux(
+    path: MagneticPath,
+    current: ArrayLike,
+    materials: Mapping[str, Magnetic] | None,
+    fluid: MRFluid | None,
+    rtol: float,
+    start: FloatArray | None = None,
+) -> tuple[FloatArray, FloatArray]:
+    """(yield torque (S,), gap flux (S, 1)) at ``current``; ``start``: first flux guess."""
     mats = MATERIALS if materials is None else materials
     cur = np.broadcast_to(np.asarray(current, dtype=float), path.turns.shape)
     kern = _kernels(path)
-    phi = np.abs(solve_flux(path, (path.turns * cur)[:, None], mats, rtol=rtol, kernels=kern))
+    phi = np.abs(solve_flux(path, (path.turns * cur)[:, None], mats, rtol=rtol, kernels=kern,
+                            start=start))  # fmt: skip
     radial = 0.5 * _mmf(path, mats, phi, kern)["radial"]
-    return _gap_torque(path, phi, radial, mats, fluid).sum(-1)[:, 0]
+    return _gap_torque(path, phi, radial, mats, fluid).sum(-1)[:, 0], phi
 
 
 def max_torque_batch(
@@ -226,16 +239,59 @@ def torque_table(
 
 def _gap_torque(path, phi, radial, materials, fluid) -> FloatArray:  # type: ignore[no-untyped-def]
     """Yield torque (S, C, K) of every gap entry at gap flux ``phi`` ≥ 0 (S, C): the zone
-    (uniform H over the steel overlap) plus the half band next to it (circuit docstring)."""
+    (uniform H over the steel overlap) plus the half band next to it, where the radial
+    potential falls linearly: B(u) = F_r·u/(r·R_b·…) = q·u, u ∈ (0, 1) (circuit docstring),
+    so the band's ∫ τy dz = (b/2)·∫0^1 τy(H(q u)) du = (b/2)·C(q)/q (``_yield_table``)."""
     mats = MATERIALS if materials is None else materials
-    fl = FLUIDS[path.fluid] if fluid is None else fluid
+    tab = _yield_table(magnetic(path.fluid, mats), FLUIDS[path.fluid] if fluid is None else fluid)
     rmid = path.gap_r_mid[:, None, :]
     length = path.gap_len[:, None, :]
     b = np.abs(phi[:, :, None] / (2 * np.pi * rmid * length))
-    h = magnetic(path.fluid, mats).h_dh(b)[0]
-    hb, wb = band_h(path, radial, mats)
-    tau = fl.tau_y(h) * length + (fl.tau_y(hb) * wb).sum(-1)  # ∫ τy dz, Pa·m
+    q = np.abs(radial[:, :, None] / (path.gap_r_mid * path.band_reluctance[:, None])[:, None, :])
+    band = (0.5 * path.band_len)[:, None, None]
+    tau = tab.tau(b) * length + band * tab.mean_tau(q)  # ∫ τy dz, Pa·m
     return np.where(path.gap_mask[:, None, :], 2 * np.pi * rmid**2 * tau, 0.0)
+
+
+@dataclass(frozen=True)
+class _YieldTable:
+    """τy(H(B)) of one fluid on a uniform B grid, and its running integral
+    C(B) = ∫0^B τy(H(b)) db (trapezoid on the grid); past the grid's end H ≥ 2 MA/m, where
+    tanh(6.33e-6·H) = 1 to 1e-11, so τy = τy,max there."""
+
+    step: float
+    tau_grid: FloatArray
+    cum: FloatArray
+    tau_max: float
+
+    def _at(self, table: FloatArray, x: FloatArray) -> FloatArray:
+        """Linear interpolation of ``table`` at x ≥ 0 by direct index (uniform grid);
+        x past the end gets the last value."""
+        t = x * (1.0 / self.step)
+        np.minimum(t, table.size - 1.0, out=t)
+        i = np.minimum(t.astype(np.intp), table.size - 2)
+        lo = table[i]
+        return lo + (t - i) * (table[i + 1] - lo)
+
+    def tau(self, b: FloatArray) -> FloatArray:
+        """τy(H(|B|)), Pa."""
+        return self._at(self.tau_grid, b)
+
+    def mean_tau(self, q: FloatArray) -> FloatArray:
+        """(1/q)·∫0^q τy(H(b)) db, Pa: τy averaged over a linear B ramp from 0 to q."""
+        past = np.maximum(q - self.step * (self.cum.size - 1), 0.0)
+        c = self._at(self.cum, q) + self.tau_max * past
+        return np.where(q > 0, c / np.where(q > 0, q, 1.0), 0.0)
+
+
+@functools.lru_cache(maxsize=16)
+def _yield_table(bh: Magnetic, fluid: MRFluid, n: int = 8192) -> _YieldTable:
+    """The table of ``bh``'s fluid with ``fluid``'s yield law, built once per pair."""
+    b_end = float(bh.b_of_h(2e6))
+    grid = np.linspace(0.0, b_end, n)
+    tau = fluid.tau_y(bh.h_of_b(grid))
+    cum = np.concatenate([[0.0], np.cumsum(0.5 * (tau[1:] + tau[:-1]) * np.diff(grid))])
+    return _YieldTable(float(grid[1]), tau, cum, fluid.tau_y_max)
 
 
 def continuous_torque(
@@ -247,26 +303,60 @@ def continuous_torque(
     fluid_limit: float,
     materials: Mapping[str, Magnetic] | None = None,
     fluid: MRFluid | None = None,
+    passes: int = 3,
 ) -> tuple[Any, Any]:
     """(current A, torque N·m), shape S: the largest torque the clutch holds forever while
     slipping at ``slip_speed``, its coil's Joule heat and its slip heat T·ω both in the
     thermal network, within the wire's and the fluid's limits.
 
-    I_a: the continuous current with the drag's slip heat only (an upper bound). One
-    circuit solve gives T(I_a); below I_a the torque is taken on the chord from
-    (0, T_off) to (I_a, T(I_a)) (within 2 % of the exact fixed point on the preset,
-    tests/magnetics/test_thermal.py), and the fixed point I = I_cont(ω·T(I)) is found by
-    bisection on the closed form of ``continuous_current``."""
+    I_a: the continuous current with the drag's slip heat only (an upper bound). Between
+    0 and I_a the yield torque is taken on the chord from the origin through the curve at
+    the last answer I_k (one circuit solve), and I_{k+1} = I_cont(ω·(T_off + T_k/I_k·I))
+    is found by bisection on the closed form of ``continuous_current``; ``passes`` chords.
+    Against the exact fixed point on 40 random designs of the sweep's ranges: 1 pass (the
+    chord through I_a alone) is off by up to 43 % in current, 2 passes 5.7 %, 3 passes
+    0.75 % (torque 0.33 %) (tests/magnetics/test_thermal.py)."""
+    mats = MATERIALS if materials is None else materials
     w = np.abs(np.asarray(slip_speed, dtype=float))
     off = np.asarray(off_torque, dtype=float)
     i_max_sq = continuous_current_sq(net, wire_limit, fluid_limit)
     i_a = np.sqrt(np.maximum(i_max_sq(off * w), 0.0))
-    # the chord is good to ~1 %: a 1e-4 flux tolerance is plenty
-    t_a = yield_torque_at(path, i_a, materials, fluid, rtol=1e-4) + off
-    slope = np.where(i_a > 0, (t_a - off) / np.where(i_a > 0, i_a, 1.0), 0.0)
-    lo, hi = np.zeros_like(i_a), i_a
-    for _ in range(32):  # the bracket shrinks 2^32-fold
-        mid = 0.5 * (lo + hi)
-        ok = mid * mid <= i_max_sq((off + slope * mid) * w)
-        lo, hi = np.where(ok, mid, lo), np.where(ok, hi, mid)
-    return lo, np.where(i_a > 0, off + slope * lo, 0.0)
+
+    def fixed_point(c1: FloatArray) -> FloatArray:
+        """The root of h(I) = I² − I_cont²(ω·(T_off + c1·I)) on [0, I_a] (h increasing:
+        I² grows, the closed form falls with the slip power) by regula falsi with the
+        Illinois modification ([numerical-recipes] §9.2), superlinear: 12 steps agree with
+        60 to 4e-8 on 4000 random designs."""
+
+        def h(i: FloatArray) -> FloatArray:
+            return i * i - i_max_sq((off + c1 * i) * w)
+
+        lo, hi = np.zeros_like(i_a), i_a.copy()
+        h_lo, h_hi = h(lo), h(hi)  # h(0) < 0 ≤ h(I_a) where I_a > 0
+        side = np.zeros(i_a.shape, dtype=np.int8)
+        for _ in range(12):
+            den = h_hi - h_lo
+            x = np.where(den > 0, hi - h_hi * (hi - lo) / np.where(den > 0, den, 1.0), lo)
+            x = np.clip(x, lo, hi)
+            hx = h(x)
+            right = hx > 0
+            # Illinois: halve the stale end's value when the same end moves twice
+            h_lo = np.where(right & (side == 1), 0.5 * h_lo, h_lo)
+            h_hi = np.where(~right & (side == -1), 0.5 * h_hi, h_hi)
+            lo, h_lo = np.where(right, lo, x), np.where(right, h_lo, hx)
+            hi, h_hi = np.where(right, x, hi), np.where(right, hx, h_hi)
+            side = np.where(right, 1, -1).astype(np.int8)
+        return np.where(i_a > 0, lo, 0.0)
+
+    # T(0) = 0 and T is concave past the knee: the fixed point on the chord through the
+    # curve at I_k lies at or above the true one, and the next chord goes through it; each
+    # solve starts from the last flux scaled to the new current (the flux is near linear)
+    i, c1, phi, ratio = i_a, np.zeros_like(i_a), None, np.ones_like(i_a)
+    for _ in range(passes):
+        start = None if phi is None else np.maximum(phi * ratio[:, None], 1e-30)
+        t, phi = _torque_and_flux(path, i, mats, fluid, 1e-3, start)
+        c1 = np.where(i > 0, t / np.where(i > 0, i, 1.0), 0.0)
+        i_next = fixed_point(c1)
+        ratio = np.where(i > 0, i_next / np.where(i > 0, i, 1.0), 1.0)
+        i = i_next
+    return i, np.where(i_a > 0, off + c1 * i, 0.0)
