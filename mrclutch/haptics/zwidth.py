@@ -317,7 +317,8 @@ def zwidth(p: HapticParams, n_b: int = 17) -> dict[str, np.ndarray]:
     top[fin] = np.where(ext, np.maximum(lo_b, b_max[fin]), b_max[fin])
 
     t = np.linspace(0.0, 1.0, n_b)
-    Bg = top[:, None] * 0.5 * (1.0 - np.cos(math.pi * t[None, :]))
+    fin_top = np.where(np.isfinite(top), top, 0.0)  # unbounded rows: NaN nodes (below)
+    Bg = fin_top[:, None] * 0.5 * (1.0 - np.cos(math.pi * t[None, :]))
     Bg[:, 0] = 0.0
     K_hi = np.full((n, n_b), np.nan)
     S_hi = np.zeros((n, n_b))
