@@ -502,15 +502,23 @@ def rendering_area(
     w = TWO_PI * 10.0**u
     w2 = w * w
     out = np.empty(m1.size)
+    # one delay for every design (a sweep's usual case): its phase terms once, exactly
+    shared = bool(np.all(tau == tau[0])) if tau.size else False
+    if shared:
+        cs_all, sn_all = np.cos(w * tau[0]), np.sin(w * tau[0])
+    coeffs = [np.broadcast_to(x, m1.shape) for x in _num_coeffs(HapticParams(m1, b1, k, b, m2))]
     for a in range(0, m1.size, 1024):
         sl = slice(a, a + 1024)
-        c3, c2, c1, c0 = (x[sl, None] for x in _num_coeffs(HapticParams(m1, b1, k, b, m2)))
+        c3, c2, c1, c0 = (x[sl, None] for x in coeffs)
         kk, bb, KK, tt = k[sl, None], b[sl, None], Kf[sl, None], tau[sl, None]
         # s Num(jω) = C + jD;  (bs + k) e^{−jωτ} = A + jB  (real arithmetic, Eq. 2 numerator)
         C = (c3 * w2 - c1) * w2
         D = (c0 - c2 * w2) * w
-        th = w * tt
-        cs, sn = np.cos(th), np.sin(th)
+        if shared:
+            cs, sn = cs_all, sn_all
+        else:
+            th = w * tt
+            cs, sn = np.cos(th), np.sin(th)
         bw = bb * w
         A = kk * cs + bw * sn
         B = bw * cs - kk * sn
