@@ -47,6 +47,7 @@ from mrclutch.haptics.actuator import (
     actuator,
     reflect,
 )
+from mrclutch.haptics.hand import hand_figures
 from mrclutch.haptics.model import max_passive_stiffness, metrics_batch, metrics_of
 from mrclutch.haptics.zwidth import ZWIDTH_KEYS, zwidth
 from mrclutch.outputs import SWEEP_COLUMNS
@@ -276,7 +277,8 @@ class Evaluation:
     haptic: Mapping[str, Any]  # metrics of the MR pair at K_max
     motor_metrics: Mapping[str, Any]  # metrics of the motor at the same K
     budget: Mapping[str, Any]  # b1 and m1 as named terms beside the paper's Table 2
-    zwidth: Mapping[str, Any]  # label → the Z-width (``zwidth.zwidth``) of MR pair and motor
+    zwidth: Mapping[str, Any]  # side → the Z-width (``zwidth.zwidth``) of MR pair and motor
+    hand: Mapping[str, Any]  # side → ``hand.hand_figures``: coupled stability, transparency
 
     def as_json(self) -> dict[str, Any]:
         mr_m, em_m = dict(self.haptic), dict(self.motor_metrics)
@@ -292,6 +294,7 @@ class Evaluation:
                 mr_m["bandwidth_lumped_hz"], em_m["bandwidth_lumped_hz"]
             ),
             "zwidth": {k: dict(v) for k, v in self.zwidth.items()},
+            "hand": {k: dict(v) for k, v in self.hand.items()},
         }
 
 
@@ -322,10 +325,11 @@ def evaluate(
     zw = zwidth(HapticParams.stack([mr, em]))
     zws = {side: {key: zw[key][i] if np.ndim(zw[key]) > 1 else float(zw[key][i])
                   for key in ZWIDTH_KEYS} for i, side in enumerate(ZWIDTH_SIDES)}  # fmt: skip
-    return Evaluation(design, fidelity, fig, mr, em, em_tr.gearing, mr_m, em_m, budget, zws)
+    hand = {side: hand_figures(p, k) for side, p in zip(ZWIDTH_SIDES, (mr, em), strict=True)}
+    return Evaluation(design, fidelity, fig, mr, em, em_tr.gearing, mr_m, em_m, budget, zws, hand)
 
 
-#: The sides of ``Evaluation.zwidth``: the MR pair and the equal-force motor.
+#: The sides of ``Evaluation.zwidth`` and ``.hand``: the MR pair and the equal-force motor.
 ZWIDTH_SIDES = ("mr", "motor")
 
 

@@ -144,11 +144,37 @@ def findings(m: dict[str, Any]) -> list[str]:
     h, e, c = m["haptic"], m["motor"], m["clutch"]
     out = []
     gain = m["bandwidth_gain"]
-    if gain is not None:
+    stable = h["K_N_per_m"] <= h["max_stable_K_N_per_m"] * (1 + 1e-9)
+    if gain is not None and stable:
         out.append(
             f"At K = {h['K_N_per_m']:.0f} N/m (K_max of the MR pair) the MR pair renders the "
             f"spring up to {h['bandwidth_hz']:.1f} Hz, the equal-force Maxon 136206 up to "
             f"{e['bandwidth_hz']:.1f} Hz ({gain * 100:+.0f} %)."
+        )
+    elif gain is not None:
+        out.append(
+            f"At K = {h['K_N_per_m']:.0f} N/m (K_max of the MR pair) the MR pair's loop is "
+            f"UNSTABLE when released (stable hands off only up to "
+            f"{h['max_stable_K_N_per_m']:.0f} N/m), so its rendering bandwidth "
+            f"({h['bandwidth_hz']:.1f} Hz, the first k_eff crossing) describes a loop that "
+            f"only a hand keeps stable; the equal-force Maxon 136206 renders up to "
+            f"{e['bandwidth_hz']:.1f} Hz."
+        )
+    hand = m.get("hand")
+    if hand is not None:
+        hm, he = hand["mr"], hand["motor"]
+        w = hm["worst_hand"]
+        verdict = "stable" if hm["coupled_stable"] else "NOT stable"
+        out.append(
+            f"Held by a hand (range in docs/hand.md) the MR pair is {verdict} at K, and stable "
+            f"up to {hm['max_stable_K_all_hands_N_per_m']:.0f} N/m for every hand checked "
+            f"(worst: {w['m_kg']:g} kg, {w['b_N_s_per_m']:g} N·s/m, {w['k_N_per_m']:g} N/m)."
+        )
+        mo = hm["motion"]
+        out.append(
+            f"In free motion (K = 0, ±{mo['amplitude_m'] * 1e3:g} mm at {mo['frequency_hz']:g} Hz)"
+            f" the hand feels {hm['backdrive_force_N'] * 1e3:.3g} mN from the MR pair against "
+            f"{he['backdrive_force_N'] * 1e3:.3g} mN from the motor."
         )
     if not h["passive"]:
         out.append(

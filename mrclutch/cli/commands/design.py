@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
@@ -150,8 +151,14 @@ def format_evaluation(data: dict) -> str:
     g, gl = data["bandwidth_gain"], data["bandwidth_gain_lumped"]
     lines.append(f"bandwidth gain MR over motor: {_pct(gl)} lumped, {_pct(g)} on the full response")
     lines += format_zwidth(data["zwidth"])
+    lines += format_hand(data["hand"])
     lines += format_budget(data["budget"])
     return "\n".join(lines)
+
+
+def _bounded(v: float | None) -> str:
+    """A Z-width figure; inf (or None, its JSON form) where the set is unbounded."""
+    return f"{v:.4g}" if v is not None and math.isfinite(v) else "unbounded"
 
 
 def format_zwidth(zw: dict) -> list[str]:
@@ -161,8 +168,36 @@ def format_zwidth(zw: dict) -> list[str]:
     for key, label in (("K_max_at_B0_N_per_m", "largest K at B = 0 (N/m)"),
                        ("B_max_at_K0_N_s_per_m", "largest B at K = 0 (N·s/m)"),
                        ("zwidth_area_N2_s_per_m2", "area ∫ΔK dB (N²·s/m²)")):  # fmt: skip
-        lines.append(f"  {label:<30}{zw['mr'][key]:>14.4g}{zw['motor'][key]:>14.4g}")
+        a, b = (_bounded(zw[side][key]) for side in ("mr", "motor"))
+        lines.append(f"  {label:<30}{a:>14}{b:>14}")
     return lines
+
+
+def format_hand(hand: dict) -> list[str]:
+    """Stability with a hand holding the lever, and the force felt in free motion."""
+    mr, em = hand["mr"], hand["motor"]
+    mo = mr["motion"]
+    h = mr["worst_hand"]
+    yes = {True: "yes", False: "no"}
+    return [
+        "With a hand on the lever (mrclutch.haptics.hand; hand range in docs/hand.md)",
+        f"  {'':<30}{'MR pair':>14}{'Maxon 136206':>14}",
+        f"  {'stable at K, any hand':<30}{yes[mr['coupled_stable']]:>14}"
+        f"{yes[em['coupled_stable']]:>14}",
+        f"  {'largest K stable, any hand':<30}{mr['max_stable_K_all_hands_N_per_m']:>14.4g}"
+        f"{em['max_stable_K_all_hands_N_per_m']:>14.4g}  N/m",
+        f"  {'largest K stable, hands off':<30}{mr['max_stable_K_hands_off_N_per_m']:>14.4g}"
+        f"{em['max_stable_K_hands_off_N_per_m']:>14.4g}  N/m",
+        f"  {'backdrive force (K = 0)':<30}{mr['backdrive_force_N'] * 1e3:>14.4g}"
+        f"{em['backdrive_force_N'] * 1e3:>14.4g}  mN at ±{mo['amplitude_m'] * 1e3:g} mm, "
+        f"{mo['frequency_hz']:g} Hz",
+        f"  {'felt mass (K = 0)':<30}{mr['felt_mass_kg'] * 1e3:>14.4g}"
+        f"{em['felt_mass_kg'] * 1e3:>14.4g}  g",
+        f"  {'felt damping (K = 0)':<30}{mr['felt_damping_N_s_per_m']:>14.4g}"
+        f"{em['felt_damping_N_s_per_m']:>14.4g}  N·s/m",
+        f"  worst hand for the MR pair: {h['m_kg']:g} kg, {h['b_N_s_per_m']:g} N·s/m, "
+        f"{h['k_N_per_m']:g} N/m ({mr['hands_checked']} hands checked)",
+    ]
 
 
 def format_budget(budget: dict) -> list[str]:

@@ -92,7 +92,12 @@ def zwidth_figure(sides: dict[str, dict[str, Any]], K: float, path: str | os.Pat
             ax.plot(lo[ok], b[ok], color=color, lw=1.0, ls="--", label="K_min(B)")
         ax.plot([K], [0.0], "kx", ms=8, label=f"rendered K = {K:.0f} N/m")
         area = float(zw["zwidth_area_N2_s_per_m2"])
-        ax.set_title(f"{label}: area {area:.4g} N²·s/m²", fontsize=10)
+        if np.isfinite(area):
+            ax.set_title(f"{label}: area {area:.4g} N²·s/m²", fontsize=10)
+        else:  # no delay: a damper alone is passive at any B (zwidth module docstring)
+            ax.set_title(f"{label}: unbounded in B", fontsize=10)
+            ax.axvline(float(zw["K_max_at_B0_N_per_m"]), color=color, lw=1.5,
+                       label="K_max at B = 0")  # fmt: skip
         ax.set_xlabel("virtual stiffness K [N/m]")
         ax.set_ylabel("virtual damping B [N·s/m]")
         ax.set_xlim(0, 1.1 * max(float(np.nanmax(hi[ok], initial=0.0)), K))
