@@ -177,27 +177,28 @@ def optimize(
         )
         return res.population[np.argsort(res.population_energies)].T
 
-    def best_of(pop: np.ndarray, n: int) -> tuple[float, np.ndarray] | None:
-        """The best member of a population meeting every limit, stability included."""
+    def best_of(pop: np.ndarray, n: int) -> tuple[tuple[float, np.ndarray] | None, bool]:
+        """The best member of a population meeting every limit, stability included, and
+        whether some member met every limit but stability."""
         r = results(pop, n, stability=cons.stable)
         v = cons.violation(r)
-        score = np.where(v == 0, sign * np.asarray(r[key], dtype=float), -np.inf)
-        score = np.nan_to_num(score, nan=-np.inf)
+        value = sign * np.asarray(r[key], dtype=float)
+        score = np.where((v == 0) & ~np.isnan(value), value, -np.inf)
         j = int(np.argmax(score))
-        return (float(r[key][j]), pop[:, j]) if np.isfinite(score[j]) else None
+        unstable = bool(np.any(replace(cons, stable=False).violation(r) == 0))
+        return ((float(r[key][j]), pop[:, j]) if np.isfinite(score[j]) else None), unstable
 
     best: tuple[float, int, np.ndarray] | None = None
     per_count: dict[int, float] = {}
     again = 0
     stability_in_search = cons.stable and not cons.passive
     for n in drum_counts:
-        pop = search(n, stability_in_search)
-        found = best_of(pop, n)
-        if found is None and cons.stable and not stability_in_search:
-            # passive members but none stable: search again with stability in the penalty
+        found, rest_met = best_of(search(n, stability_in_search), n)
+        if found is None and rest_met and cons.stable and not stability_in_search:
+            # members meet every other limit but none is stable: search again with
+            # stability in the penalty
             again += 1
-            pop = search(n, True)
-            found = best_of(pop, n)
+            found = best_of(search(n, True), n)[0]
         if found is None:
             continue
         value, x = found
