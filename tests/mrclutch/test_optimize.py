@@ -238,3 +238,29 @@ def test_stability_is_searched_again_when_no_passive_member_is_stable(monkeypatc
     o = optimize(design_preset("paper"), drum_counts=(4,), maxiter=15, popsize=10)
     assert o.stability_searches == 1
     assert o.feasible and o.design.clutch.gap >= 0.5e-3
+
+
+def test_evaluate_batch_opt_in_columns_match_the_scalar_path():
+    """Default columns unchanged (the sweep's); each opt-in column appended and equal to
+    the reference-free scalar path on the same design."""
+    from mrclutch.haptics.model import passive_impedance
+    from mrclutch.haptics.transparency import HAND_AMPLITUDE, HAND_FREQUENCY, backdrive_force
+    from mrclutch.haptics.zwidth import zwidth
+    from mrclutch.outputs import SWEEP_COLUMNS
+
+    d = design_preset("paper")
+    assert tuple(_base_row(d)) == tuple(SWEEP_COLUMNS)
+    r = _base_row(d, stability=True, zwidth=True, transparency=True)
+    extra = ("max_stable_K_N_per_m", "zwidth_area_N2_s_per_m2", "backdrive_force_N")
+    assert tuple(r) == (*SWEEP_COLUMNS, *extra)
+    ev = evaluate(d)
+    assert r["max_stable_K_N_per_m"][0] == pytest.approx(ev.haptic["max_stable_K_N_per_m"])
+    assert r["zwidth_area_N2_s_per_m2"][0] == pytest.approx(
+        float(zwidth(ev.mr)["zwidth_area_N2_s_per_m2"]), rel=1e-9
+    )
+    w = 2 * np.pi * HAND_FREQUENCY
+    force = abs(passive_impedance(ev.mr, w)) * w * HAND_AMPLITUDE  # |Z_p| ω X
+    assert r["backdrive_force_N"][0] == pytest.approx(force, rel=1e-9)
+    assert backdrive_force(ev.mr, 2 * HAND_AMPLITUDE) == pytest.approx(2 * force, rel=1e-12)
+    with pytest.raises(ParameterError, match="frequency"):
+        backdrive_force(ev.mr, frequency=0.0)
