@@ -1,17 +1,32 @@
 """Design optimisation on the fast path, with the winner checked at reference fidelity.
 
-Maximise the rendering bandwidth at K_max (or the rendering area) over continuous
+Maximise an objective (``OBJECTIVES``: rendering bandwidth at K_max, rendering area, Z-width
+area, or transparency — the least backdrive force in free motion) over continuous
 DrumClutch dimensions for each drum count, subject to a torque floor, a mass limit, an
-envelope and optionally passivity at K_max. The search is scipy's differential
-evolution with ``vectorized=True``: each generation is one call of the batch evaluator
-(mrclutch.pipeline.evaluate_batch), so thousands of designs cost well under a second.
-Constraints enter as a penalty proportional to the relative violation, so the search
-is pushed back into the feasible set rather than blocked at its edge.
+envelope and, by default, a closed loop that is stable and passive at the design's own
+K = K_max (Eq. 4). The search is scipy's differential evolution with ``vectorized=True``:
+each generation is one call of the batch evaluator (mrclutch.pipeline.evaluate_batch).
+Constraints enter as a penalty proportional to the relative violation, so the search is
+pushed back into the feasible set rather than blocked at its edge.
+
+**Stability strategy.** The largest stable K is computed design by design (about ×8 the
+cost of the rest of the fast path), the largest passive K on arrays (×1.7). So:
+
+* passivity required (the default): the search penalises passivity only; then the whole
+  final population is checked for stability in one batch and the best design meeting
+  every limit wins. Passive at K implies stable at K on every design seen so far, so this
+  almost always keeps DE's best; if no member of the final population is stable, the
+  search is run again for that drum count with stability in the penalty (below).
+* stability required without passivity (``--allow-active``): stability is in the
+  penalty, computed only for the designs that meet every other limit.
+
+The stability and Z-width columns are computed only where needed; the Z-width objective
+(about ×7 the cost) only when it is chosen.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -21,7 +36,15 @@ from geometry.validation import ParameterError, check_choice, check_int, check_p
 from mrclutch.design import ClutchDesign
 from mrclutch.pipeline import evaluate_batch
 
-OBJECTIVES = {"bandwidth": "bandwidth_hz", "area": "rendering_area_dB_decade"}
+#: objective → the evaluate_batch column it reads.
+OBJECTIVES = {
+    "bandwidth": "bandwidth_hz",
+    "area": "rendering_area_dB_decade",
+    "zwidth": "zwidth_area_N2_s_per_m2",
+    "transparency": "backdrive_force_N",
+}
+#: objectives whose column is minimised (the search maximises its negative).
+MINIMISED = frozenset({"transparency"})
 
 #: Default search box (m): what a drum clutch of the paper's size can vary.
 DEFAULT_BOUNDS: dict[str, tuple[float, float]] = {
@@ -40,22 +63,32 @@ class Constraints:
     max_mass: float = 0.100  # kg, whole clutch
     max_diameter: float = 0.030  # m, Table 1 envelope
     max_length: float = 0.040  # m
-    passive: bool = False  # require a passive closed loop at K_max
+    passive: bool = True  # a passive closed loop at K = K_max (Eq. 4)
+    stable: bool = True  # a stable free closed loop at K = K_max
 
     def __post_init__(self) -> None:
         check_positive("min_torque", self.min_torque, " N·m")
         check_positive("max_mass", self.max_mass, " kg")
         check_positive("max_diameter", self.max_diameter, " m")
         check_positive("max_length", self.max_length, " m")
+        for name in ("passive", "stable"):
+            if not isinstance(getattr(self, name), bool):
+                raise ParameterError(f"{name} = {getattr(self, name)!r}: must be True or False")
 
-    def violation(self, r: dict[str, np.ndarray]) -> np.ndarray:
-        """Sum of relative violations (0 where every limit holds; inf for invalid designs)."""
+    def violation(self, r: Mapping[str, np.ndarray]) -> np.ndarray:
+        """Sum of relative violations (0 where every limit holds; inf for invalid designs).
+        Passivity needs the ``max_passive_K_N_per_m`` column; stability is checked where
+        ``max_stable_K_N_per_m`` is present (the search may leave it out: module docstring).
+        """
         v = np.maximum(0, 1 - r["max_torque_N_m"] / self.min_torque)
         v += np.maximum(0, r["clutch_mass_kg"] / self.max_mass - 1)
         v += np.maximum(0, r["diameter_m"] / self.max_diameter - 1)
         v += np.maximum(0, r["length_m"] / self.max_length - 1)
         if self.passive:
             v += np.maximum(0, r["K_N_per_m"] / r["max_passive_K_N_per_m"] - 1)
+        if self.stable and "max_stable_K_N_per_m" in r:
+            # stable for K below the first destabilising crossing (model.max_stable_stiffness)
+            v += np.maximum(0, r["K_N_per_m"] / r["max_stable_K_N_per_m"] - (1 - 1e-9))
         return np.where(r["valid"] == 1, np.nan_to_num(v, nan=np.inf), np.inf)
 
 
@@ -63,10 +96,11 @@ class Constraints:
 class Optimum:
     design: ClutchDesign
     objective: str
-    value: float  # fast-path objective at the optimum
+    value: float  # fast-path objective column at the optimum (OBJECTIVES; -inf: none)
     evaluations: int
     feasible: bool
-    per_drum_count: dict[int, float]  # best feasible objective for each drum count
+    per_drum_count: dict[int, float]  # best feasible objective column for each drum count
+    stability_searches: int = 0  # drum counts searched again with stability in the penalty
 
 
 def optimize(
@@ -95,25 +129,40 @@ def optimize(
         check_int("drum_counts", n, 1, 20)
     names = list(box)
     key = OBJECTIVES[objective]
+    sign = -1.0 if objective in MINIMISED else 1.0
     evaluations = 0
 
-    def results(x: np.ndarray, n: int) -> dict[str, np.ndarray]:
+    def results(x: np.ndarray, n: int, stability: bool = False) -> dict[str, np.ndarray]:
         nonlocal evaluations
         fields = {k: x[i] for i, k in enumerate(names)}
         fields["n_drums"] = np.full(x.shape[1], n, dtype=np.int64)
-        r = evaluate_batch(fields, base, passivity=cons.passive)
         evaluations += x.shape[1]
-        return r
+        return evaluate_batch(
+            fields,
+            base,
+            passivity=cons.passive,
+            stability=stability,
+            zwidth=objective == "zwidth",
+            transparency=objective == "transparency",
+        )
 
-    best: tuple[float, int, np.ndarray] | None = None
-    per_count: dict[int, float] = {}
-    for n in drum_counts:
+    def violation(x: np.ndarray, n: int, r: dict[str, np.ndarray], stability: bool) -> np.ndarray:
+        v = cons.violation(r)
+        if stability:  # the stability limit only where every other limit holds
+            ok = np.nonzero(v == 0)[0]
+            if ok.size:
+                v[ok] = cons.violation(results(x[:, ok], n, stability=True))
+        return v
 
-        def cost(x: np.ndarray, n: int = n) -> np.ndarray:
-            r = results(x if x.ndim == 2 else x[:, None], n)
-            value = np.nan_to_num(r[key], nan=0.0)
+    def search(n: int, stability: bool) -> np.ndarray:
+        def cost(x: np.ndarray) -> np.ndarray:
+            x = x if x.ndim == 2 else x[:, None]
+            r = results(x, n)
+            value = np.asarray(r[key], dtype=float)
+            value = sign * np.where(np.isfinite(value), value, 0.0)  # unbounded: no credit
             # penalty: any violation costs more than the best objective can gain
-            return -value + 1e3 * (1.0 + np.abs(value).max(initial=1.0)) * cons.violation(r)
+            scale = 1e3 * (1.0 + np.abs(value).max(initial=1.0))
+            return -value + scale * violation(x, n, r, stability)
 
         res = differential_evolution(
             cost,
@@ -126,19 +175,42 @@ def optimize(
             tol=1e-8,
             polish=False,
         )
-        r = results(res.x[:, None], n)
-        feasible = bool(cons.violation(r)[0] == 0)
-        value = float(r[key][0])
-        if feasible:
-            per_count[n] = value
-        score = value if feasible else -np.inf
-        if best is None or score > best[0]:
-            best = (score, n, res.x)
-    assert best is not None
-    score, n, x = best
+        return res.population[np.argsort(res.population_energies)].T
+
+    def best_of(pop: np.ndarray, n: int) -> tuple[tuple[float, np.ndarray] | None, bool]:
+        """The best member of a population meeting every limit, stability included, and
+        whether some member met every limit but stability."""
+        r = results(pop, n, stability=cons.stable)
+        v = cons.violation(r)
+        value = sign * np.asarray(r[key], dtype=float)
+        score = np.where((v == 0) & ~np.isnan(value), value, -np.inf)
+        j = int(np.argmax(score))
+        unstable = bool(np.any(replace(cons, stable=False).violation(r) == 0))
+        return ((float(r[key][j]), pop[:, j]) if np.isfinite(score[j]) else None), unstable
+
+    best: tuple[float, int, np.ndarray] | None = None
+    per_count: dict[int, float] = {}
+    again = 0
+    stability_in_search = cons.stable and not cons.passive
+    for n in drum_counts:
+        found, rest_met = best_of(search(n, stability_in_search), n)
+        if found is None and rest_met and cons.stable and not stability_in_search:
+            # members meet every other limit but none is stable: search again with
+            # stability in the penalty
+            again += 1
+            found = best_of(search(n, True), n)[0]
+        if found is None:
+            continue
+        value, x = found
+        per_count[n] = value
+        if best is None or sign * value > sign * best[0]:
+            best = (value, n, x)
+    if best is None:
+        return Optimum(base, objective, -np.inf, evaluations, False, per_count, again)
+    value, n, x = best
     clutch = replace(base.clutch, n_drums=n, **{k: float(v) for k, v in zip(names, x, strict=True)})
     design = replace(base, clutch=clutch, name=f"{base.name}-optimum")
-    return Optimum(design, objective, float(score), evaluations, np.isfinite(score), per_count)
+    return Optimum(design, objective, value, evaluations, True, per_count, again)
 
 
 def parse_bounds(specs: Sequence[str]) -> dict[str, tuple[float, float]]:

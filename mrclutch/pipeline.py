@@ -47,9 +47,15 @@ from mrclutch.haptics.actuator import (
     actuator,
     reflect,
 )
-from mrclutch.haptics.hand import hand_figures
-from mrclutch.haptics.model import max_passive_stiffness, metrics_batch, metrics_of
-from mrclutch.haptics.zwidth import ZWIDTH_KEYS, zwidth
+from mrclutch.haptics.hand import backdrive_force, hand_figures
+from mrclutch.haptics.model import (
+    max_passive_stiffness,
+    max_stable_stiffness,
+    metrics_batch,
+    metrics_of,
+)
+from mrclutch.haptics.zwidth import ZWIDTH_KEYS
+from mrclutch.haptics.zwidth import zwidth as zwidth_of
 from mrclutch.outputs import SWEEP_COLUMNS
 from mrclutch.trust import choose, circuit_trust
 
@@ -322,7 +328,7 @@ def evaluate(
     table2 = replace(mr, b1=TABLE2_MR.b1)  # the same pair with the paper's identified b1
     mr_m, em_m, t2_m = metrics_of([mr, em, table2], [k, k, k])  # all at the MR pair's K_max
     budget = hand_budget(design, fig, mr, t2_m)
-    zw = zwidth(HapticParams.stack([mr, em]))
+    zw = zwidth_of(HapticParams.stack([mr, em]))
     zws = {side: {key: zw[key][i] if np.ndim(zw[key]) > 1 else float(zw[key][i])
                   for key in ZWIDTH_KEYS} for i, side in enumerate(ZWIDTH_SIDES)}  # fmt: skip
     hand = {side: hand_figures(p, k) for side, p in zip(ZWIDTH_SIDES, (mr, em), strict=True)}
@@ -404,10 +410,19 @@ class BatchEvaluator:
 
 
 def evaluate_batch(
-    fields: Mapping[str, ArrayLike], base: ClutchDesign | None = None, *, passivity: bool = False
+    fields: Mapping[str, ArrayLike],
+    base: ClutchDesign | None = None,
+    *,
+    passivity: bool = False,
+    stability: bool = False,
+    zwidth: bool = False,
+    transparency: bool = False,
 ) -> dict[str, np.ndarray]:
-    """The fast path for S designs at once; returns arrays under ``SWEEP_COLUMNS``
-    (and ``max_passive_K_N_per_m`` with ``passivity=True``).
+    """The fast path for S designs at once; returns arrays under ``SWEEP_COLUMNS``, and
+    opt-in columns after them: ``max_passive_K_N_per_m`` (``passivity``, about ×1.7 the
+    cost), ``max_stable_K_N_per_m`` (``stability``: design by design, about ×8),
+    ``zwidth_area_N2_s_per_m2`` (``zwidth``, about ×7) and ``backdrive_force_N``
+    (``transparency``: mrclutch.haptics.hand.backdrive_force, cheap).
 
     The same physics as ``evaluate(design, "fast")``, on arrays: per drum count, the region
     table gives the analytic mass (``region_mass``), the circuit (``path_from_regions``)
@@ -445,6 +460,12 @@ def evaluate_batch(
         hand = dict(metrics_batch(hp, limits=False))
         if passivity:
             hand["max_passive_K_N_per_m"] = max_passive_stiffness(hp)
+        if stability:
+            hand["max_stable_K_N_per_m"] = max_stable_stiffness(hp)
+        if zwidth:
+            hand["zwidth_area_N2_s_per_m2"] = zwidth_of(hp)["zwidth_area_N2_s_per_m2"]
+        if transparency:
+            hand["backdrive_force_N"] = backdrive_force(hp)
     out = {
         "valid": ok.astype(float),
         "rotor_inertia_kg_m2": fig["rotor_inertia"],
@@ -460,7 +481,13 @@ def evaluate_batch(
         "dynamic_range_dB": dynamic_range_db(torque, off_torque),
         "continuous_torque_N_m": fig["continuous_torque"],
     }
-    extra = ("max_passive_K_N_per_m",) if passivity else ()
+    opt_in = {
+        "max_passive_K_N_per_m": passivity,
+        "max_stable_K_N_per_m": stability,
+        "zwidth_area_N2_s_per_m2": zwidth,
+        "backdrive_force_N": transparency,
+    }
+    extra = tuple(k for k, on in opt_in.items() if on)
     columns = (*SWEEP_COLUMNS, *extra)
     for key in columns:
         if key not in out:  # a metric at the hand

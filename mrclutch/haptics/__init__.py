@@ -1,5 +1,6 @@
 """Physics at the hand: actuators and transmissions (``actuator``), the paper's 2-DOF
-haptic model (``model``) and the cheaper stand-ins for its exact delay (``delay``).
+haptic model (``model``), the cheaper stand-ins for its exact delay (``delay``), the Z-width
+(``zwidth``) and the backdrive force in free motion (``hand``, with the coupled stability).
 
 Layer: imports ``geometry.validation`` only; the application (``mrclutch``) and the
 presentation (``mrclutch.cli``) import it, never the other way round.

@@ -88,7 +88,7 @@ __all__ = [
 
 TWO_PI = 2.0 * math.pi
 DEFAULT_AMPLITUDE = 0.010  # [m] hand motion amplitude (module docstring: our choice)
-DEFAULT_FREQUENCY = 2.0  # [Hz] within the ≤ 10 Hz voluntary band [kern-hatzfeld2023]
+DEFAULT_FREQUENCY = 2.0  # [Hz] ≤ 10 Hz voluntary band [kern-hatzfeld2023]; 2–5 Hz [brooks1990]
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,6 @@
-"""Optimisation on the fast path: constraints hold, the optimum beats the start."""
+"""Optimisation on the fast path: constraints hold (stable and passive at K by default, checked
+at reference fidelity), the optimum beats the start, the CLI never exits 0 with a violated
+requirement."""
 
 import json
 
@@ -6,6 +8,8 @@ import numpy as np
 import pytest
 
 from geometry import ParameterError
+from mrclutch.cli.commands import design as design_cmd
+from mrclutch.cli.commands.design import haptic_verdict, requirement_violations
 from mrclutch.cli.main import main
 from mrclutch.design import design_preset
 from mrclutch.optimize import Constraints, optimize, parse_bounds
@@ -15,6 +19,24 @@ from mrclutch.pipeline import evaluate, evaluate_batch
 @pytest.fixture(scope="module")
 def small():
     return optimize(design_preset("paper"), drum_counts=(1, 2), maxiter=15, popsize=10)
+
+
+@pytest.fixture(scope="module")
+def small_reference(small):
+    return evaluate(small.design, "reference").as_json()
+
+
+def test_default_optimum_is_stable_and_passive_at_its_K_at_reference_fidelity(
+    small, small_reference
+):
+    assert Constraints().passive and Constraints().stable  # the defaults (issue 15)
+    h = small_reference["haptic"]
+    assert small_reference["fidelity"] == "reference"
+    assert h["passive"] and h["K_N_per_m"] <= h["max_passive_K_N_per_m"]
+    assert h["K_N_per_m"] < h["max_stable_K_N_per_m"]
+    v = haptic_verdict(small_reference)
+    assert v["stable"] and v["passive"]
+    assert requirement_violations(small_reference, Constraints()) == []
 
 
 def test_optimum_meets_every_constraint_and_beats_the_paper_design(small):
@@ -42,7 +64,7 @@ def test_optimum_is_not_beaten_by_random_feasible_designs(small):
         "zone_length": rng.uniform(3e-3, 9e-3, n),
         "n_drums": rng.integers(1, 3, n),
     }
-    r = evaluate_batch(f, design_preset("paper"))
+    r = evaluate_batch(f, design_preset("paper"), passivity=True, stability=True)
     ok = Constraints().violation(r) == 0
     assert ok.sum() > 50
     assert r["bandwidth_hz"][ok].max() <= small.value * 1.01
@@ -50,15 +72,55 @@ def test_optimum_is_not_beaten_by_random_feasible_designs(small):
 
 def test_passivity_constraint_is_honoured():
     # passivity at K_max needs drag (b1) against the 1 ms delay: 4 drums get there
-    o = optimize(
-        design_preset("paper"),
-        drum_counts=(4,),
-        maxiter=10,
-        popsize=8,
-        constraints=Constraints(passive=True),
-    )
+    o = optimize(design_preset("paper"), drum_counts=(4,), maxiter=10, popsize=8)
     h = evaluate(o.design).as_json()["haptic"]
-    assert o.feasible and h["passive"]
+    assert o.feasible and h["passive"] and h["K_N_per_m"] < h["max_stable_K_N_per_m"]
+
+
+def test_allow_active_finds_a_larger_objective_than_the_passive_optimum():
+    """Passivity binds on the rendering area with 2 drums: without it the optimum is active
+    (still stable, as required) and its area is at least the passive optimum's."""
+    kw = dict(objective="area", drum_counts=(2,), maxiter=15, popsize=10)
+    passive = optimize(design_preset("paper"), **kw)
+    active = optimize(design_preset("paper"), constraints=Constraints(passive=False), **kw)
+    hp = evaluate(passive.design).as_json()["haptic"]
+    ha = evaluate(active.design).as_json()["haptic"]
+    assert hp["passive"] and not ha["passive"]
+    assert ha["K_N_per_m"] < ha["max_stable_K_N_per_m"]
+    assert active.value >= passive.value
+    assert ha["rendering_area_dB_decade"] == pytest.approx(active.value, rel=1e-9)
+
+
+def _base_row(design, **opt_in):
+    f = {k: np.array([getattr(design.clutch, k)]) for k in
+         ("gap", "drum_thickness", "drum_inner_diameter", "zone_length", "n_drums")}  # fmt: skip
+    return evaluate_batch(f, design, **opt_in)
+
+
+def test_zwidth_objective_improves_on_the_base_design():
+    base = design_preset("paper")
+    o = optimize(base, objective="zwidth", drum_counts=(2,), maxiter=6, popsize=6)
+    assert o.feasible and o.objective == "zwidth"
+    assert o.value > _base_row(base, zwidth=True)["zwidth_area_N2_s_per_m2"][0]
+    assert _base_row(o.design, zwidth=True)["zwidth_area_N2_s_per_m2"][0] == pytest.approx(
+        o.value, rel=1e-9
+    )
+
+
+def test_transparency_objective_lowers_the_backdrive_force():
+    """Without the haptic limits (the paper preset itself is not passive at its K) the
+    optimum backdrives more lightly than the preset; with them, more lightly than the
+    bandwidth optimum under the same limits."""
+    base = design_preset("paper")
+    kw = dict(drum_counts=(2,), maxiter=15, popsize=10)
+    free = optimize(base, objective="transparency",
+                    constraints=Constraints(passive=False, stable=False), **kw)  # fmt: skip
+    assert free.value < _base_row(base, transparency=True)["backdrive_force_N"][0]
+    light = optimize(base, objective="transparency", **kw)
+    fast = optimize(base, objective="bandwidth", **kw)
+    assert light.value < _base_row(fast.design, transparency=True)["backdrive_force_N"][0]
+    h = evaluate(light.design).as_json()["haptic"]
+    assert h["passive"] and h["K_N_per_m"] < h["max_stable_K_N_per_m"]
 
 
 def test_impossible_constraints_are_reported(capsys):
@@ -87,6 +149,9 @@ def test_cli_json_and_design_file(tmp_path, capsys):
     )
     assert code == 0
     data = json.loads(capsys.readouterr().out)
+    assert data["verdict"]["fidelity"] == "fast" and data["requirements_met"] is True
+    assert data["verdict"]["stable"] and data["verdict"]["passive"]
+    assert data["required"] == {"passive": True, "stable": True}
     assert 0.3 <= data["design_mm"]["gap_mm"] <= 0.6
     assert data["design_mm"]["n_drums"] == 2
     assert out.exists() and "gap_mm" in out.read_text()
@@ -97,3 +162,105 @@ def test_bad_bounds_are_named():
         parse_bounds(["gap=0.2:0.3"])
     with pytest.raises(ParameterError, match="need 0 < min < max"):
         optimize(design_preset("paper"), bounds={"gap": (0.5e-3, 0.2e-3)})
+
+
+def test_cli_prints_the_reference_verdict(tmp_path, capsys):
+    out = tmp_path / "best.toml"
+    assert main(["optimize", "--drums", "1", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "haptic verdict (reference fidelity)" in text
+    assert "stable at K:  yes (required)" in text
+    assert "passive at K: yes (required)" in text
+    assert "requirements: all met" in text
+    assert out.exists()
+
+
+def _violating_reference(key):
+    """A reference check that finds the design unstable or active at its K."""
+
+    def check(design):
+        ev = evaluate(design, "fast").as_json()
+        h = ev["haptic"]
+        if key == "passive":
+            h["passive"], h["max_passive_K_N_per_m"] = False, 0.5 * h["K_N_per_m"]
+        else:
+            h["max_stable_K_N_per_m"] = 0.5 * h["K_N_per_m"]
+        ev["fidelity"] = "reference"
+        return ev
+
+    return check
+
+
+@pytest.mark.parametrize(
+    ("key", "allow", "phrase"),
+    [("passive", "--allow-active", "passivity was required"),
+     ("stable", "--allow-unstable", "stability was required")],
+)  # fmt: skip
+def test_cli_exits_3_when_the_reference_check_violates_a_requirement(
+    tmp_path, capsys, monkeypatch, key, allow, phrase
+):
+    monkeypatch.setattr(design_cmd, "reference_check", _violating_reference(key))
+    out = tmp_path / "best.toml"
+    argv = ["optimize", "--drums", "1", "--json", "--out", str(out)]
+    assert main(argv) == design_cmd.EXIT_REQUIREMENT_VIOLATED == 3
+    cap = capsys.readouterr()
+    assert phrase in cap.err and "reference fidelity" in cap.err
+    data = json.loads(cap.out)
+    assert data["requirements_met"] is False and data["verdict"][key] is False
+    assert data["verdict"]["fidelity"] == "reference"
+    assert out.exists()
+    # the same violation is no violation when that requirement is relaxed
+    assert main([*argv, allow]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["requirements_met"] is True and data["verdict"][key] is False
+
+
+def test_removed_require_passive_flag_is_refused(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["optimize", "--require-passive"])
+    assert exc.value.code == 2
+
+
+def test_stability_is_searched_again_when_no_passive_member_is_stable(monkeypatch):
+    """The strategy's fallback: a stand-in physics where every gap under 0.5 mm is unstable
+    at its K (the passive search converges to small gaps) sends the drum count to a second
+    search with stability in the penalty, whose optimum is stable."""
+    import mrclutch.optimize as opt_mod
+
+    def batch(fields, base, **kw):
+        r = evaluate_batch(fields, base, **kw)
+        if kw.get("stability"):
+            small_gap = np.asarray(fields["gap"]) < 0.5e-3
+            r["max_stable_K_N_per_m"] = np.where(small_gap, 0.5, 2.0) * r["K_N_per_m"]
+        return r
+
+    monkeypatch.setattr(opt_mod, "evaluate_batch", batch)
+    o = optimize(design_preset("paper"), drum_counts=(4,), maxiter=15, popsize=10)
+    assert o.stability_searches == 1
+    assert o.feasible and o.design.clutch.gap >= 0.5e-3
+
+
+def test_evaluate_batch_opt_in_columns_match_the_scalar_path():
+    """Default columns unchanged (the sweep's); each opt-in column appended and equal to
+    the reference-free scalar path on the same design."""
+    from mrclutch.haptics.hand import DEFAULT_AMPLITUDE, DEFAULT_FREQUENCY, backdrive_force
+    from mrclutch.haptics.model import passive_impedance
+    from mrclutch.haptics.zwidth import zwidth
+    from mrclutch.outputs import SWEEP_COLUMNS
+
+    d = design_preset("paper")
+    assert tuple(_base_row(d)) == tuple(SWEEP_COLUMNS)
+    r = _base_row(d, stability=True, zwidth=True, transparency=True)
+    extra = ("max_stable_K_N_per_m", "zwidth_area_N2_s_per_m2", "backdrive_force_N")
+    assert tuple(r) == (*SWEEP_COLUMNS, *extra)
+    ev = evaluate(d)
+    assert r["max_stable_K_N_per_m"][0] == pytest.approx(ev.haptic["max_stable_K_N_per_m"])
+    assert r["zwidth_area_N2_s_per_m2"][0] == pytest.approx(
+        float(zwidth(ev.mr)["zwidth_area_N2_s_per_m2"]), rel=1e-9
+    )
+    w = 2 * np.pi * DEFAULT_FREQUENCY
+    force = abs(passive_impedance(ev.mr, w)) * w * DEFAULT_AMPLITUDE  # |Z_p| ω X
+    assert r["backdrive_force_N"][0] == pytest.approx(force, rel=1e-9)
+    assert backdrive_force(ev.mr, 2 * DEFAULT_AMPLITUDE) == pytest.approx(2 * force, rel=1e-12)
+    with pytest.raises(ParameterError, match="frequency"):
+        backdrive_force(ev.mr, frequency=0.0)

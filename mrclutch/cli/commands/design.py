@@ -13,8 +13,8 @@ from mrclutch.cli.commands._common import add_design_args, atomic_path, load_des
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.plots.design import pareto_plot
 from mrclutch.cli.report import write_report
-from mrclutch.design import design_from_mapping, design_to_toml
-from mrclutch.optimize import Constraints, optimize, parse_bounds
+from mrclutch.design import ClutchDesign, design_from_mapping, design_to_toml
+from mrclutch.optimize import MINIMISED, OBJECTIVES, Constraints, Optimum, optimize, parse_bounds
 from mrclutch.outputs import CLUTCH_ROWS, HAND_ROWS, SWEEP_COLUMNS, output, row_label
 from mrclutch.pipeline import (
     FAST_BANDWIDTH_ERROR,
@@ -83,17 +83,39 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser(
         "optimize",
-        help="maximise rendering bandwidth (or area) under torque, mass and envelope limits",
+        help="maximise rendering bandwidth (area, Z-width or transparency) under torque, "
+        "mass, envelope and stability/passivity limits",
         description="Differential evolution on the vectorised fast path for each drum count, "
-        "then the winner re-evaluated at reference fidelity (exact B-rep inertia, FEM torque).",
+        "then the winner re-evaluated at reference fidelity (exact B-rep inertia, FEM torque) "
+        "and its haptic verdict printed. By default the optimum must be stable and passive "
+        "at its own K = K_max (Eq. 4).",
+        epilog="exit status: 0 the optimum meets every requirement (at reference fidelity "
+        "unless --no-verify); 2 bad input, or no design meets the limits on the fast path; "
+        "3 the reference re-check violates a requirement (named on stderr; --out still "
+        "writes the design).",
     )
     add_design_args(p)
-    p.add_argument("--objective", default="bandwidth", help="bandwidth or area (default bandwidth)")
+    p.add_argument(
+        "--objective",
+        default="bandwidth",
+        help="bandwidth (rendering bandwidth at K_max, Hz), area (rendering area, dB·decade), "
+        "zwidth (Z-width area, N²·s/m²; about ×7 slower) or transparency (least backdrive "
+        "force in free motion, 10 mm at 2 Hz); default bandwidth",
+    )
     p.add_argument("--min-torque", type=float, default=0.4, help="N·m (default 0.4)")
     p.add_argument("--max-mass-g", type=float, default=100.0, help="clutch mass, g (default 100)")
     p.add_argument("--max-diameter-mm", type=float, default=30.0, help="default 30")
     p.add_argument("--max-length-mm", type=float, default=40.0, help="default 40")
-    p.add_argument("--require-passive", action="store_true", help="passive at K_max")
+    p.add_argument(
+        "--allow-active",
+        action="store_true",
+        help="do not require a passive closed loop at K_max (required by default)",
+    )
+    p.add_argument(
+        "--allow-unstable",
+        action="store_true",
+        help="do not require a stable closed loop at K_max (required by default)",
+    )
     p.add_argument("--drums", default="1,2,3,4", help="drum counts to try (default 1,2,3,4)")
     p.add_argument(
         "--vary",
@@ -286,6 +308,10 @@ def _sweep(args: argparse.Namespace) -> int:
     return 0
 
 
+#: exit status of ``optimize`` when the reference re-check violates a requirement.
+EXIT_REQUIREMENT_VIOLATED = 3
+
+
 def _optimize(args: argparse.Namespace) -> int:
     base = load_design_args(args)
     try:
@@ -297,7 +323,8 @@ def _optimize(args: argparse.Namespace) -> int:
         max_mass=args.max_mass_g * 1e-3,
         max_diameter=args.max_diameter_mm * 1e-3,
         max_length=args.max_length_mm * 1e-3,
-        passive=args.require_passive,
+        passive=not args.allow_active,
+        stable=not args.allow_unstable,
     )
     t0 = time.perf_counter()
     opt = optimize(
@@ -312,43 +339,132 @@ def _optimize(args: argparse.Namespace) -> int:
     if not opt.feasible:
         raise CLIError("no design meets the constraints in the search box; relax a limit")
     fast = evaluate(opt.design, "fast").as_json()
+    key = OBJECTIVES[args.objective]
     data = {
         "objective": args.objective,
+        "objective_column": key,
+        "objective_value": opt.value,
         "evaluations": opt.evaluations,
         "optimisation_time_s": t_fast,
         "best_per_drum_count": {str(k): v for k, v in opt.per_drum_count.items()},
         "design_mm": opt.design.clutch.to_mm(),
+        "required": {"passive": cons.passive, "stable": cons.stable},
         "fast": fast,
         "fast_bandwidth_error_stated": FAST_BANDWIDTH_ERROR,
     }
+    checked = fast
     if not args.no_verify:
-        ref = evaluate(opt.design, "reference").as_json()
+        ref = reference_check(opt.design)
         b_fast, b_ref = fast["haptic"]["bandwidth_hz"], ref["haptic"]["bandwidth_hz"]
         data["reference"] = ref
         data["bandwidth_change_reference_vs_fast"] = b_ref / b_fast - 1
+        checked = ref
+    verdict = haptic_verdict(checked)
+    violations = requirement_violations(checked, cons)
+    data["verdict"] = {**verdict, "fidelity": checked["fidelity"]}
+    data["requirements_met"] = not violations
+    data["violations"] = violations
     if args.out:
         with atomic_path(args.out) as tmp:
             tmp.write_text(design_to_toml(opt.design))
     if args.json:
         print_json(data)
-        return 0
+    else:
+        _print_optimum(args, opt, t_fast, data)
+    if violations:
+        print(
+            f"mrclutch optimize: the optimum violates a requirement at {checked['fidelity']} "
+            f"fidelity: {'; '.join(violations)}",
+            file=sys.stderr,
+        )
+        return EXIT_REQUIREMENT_VIOLATED
+    return 0
+
+
+def reference_check(design: ClutchDesign) -> dict:
+    """The optimum at reference fidelity, as JSON (a seam for the tests)."""
+    return evaluate(design, "reference").as_json()
+
+
+def haptic_verdict(ev: dict) -> dict:
+    """Stable and passive at the design's K, and the largest stable and passive K, from
+    ``Evaluation.as_json()``; stable below the first destabilising crossing gain."""
+    h = ev["haptic"]
+    k, ks, kp = h["K_N_per_m"], h["max_stable_K_N_per_m"], h["max_passive_K_N_per_m"]
+    return {
+        "K_N_per_m": k,
+        "stable": bool(k < ks),
+        "passive": bool(h["passive"]),
+        "max_stable_K_N_per_m": ks,
+        "max_passive_K_N_per_m": kp,
+    }
+
+
+def requirement_violations(ev: dict, cons: Constraints) -> list[str]:
+    """Every limit of ``cons`` the evaluated design misses, each as a phrase (empty: none).
+    Torque, mass and envelope within 1e-9 relative (rounding) of their limits pass."""
+    c, v = ev["clutch"], haptic_verdict(ev)
+    tol = 1e-9
+    out = []
+    if c["max_torque_N_m"] < cons.min_torque * (1 - tol):
+        out.append(f"torque {c['max_torque_N_m']:.4g} N·m below the {cons.min_torque:g} N·m floor")
+    if c["clutch_mass_kg"] > cons.max_mass * (1 + tol):
+        out.append(f"mass {c['clutch_mass_kg'] * 1e3:.4g} g above {cons.max_mass * 1e3:g} g")
+    d, length = c["envelope_m"]
+    if d > cons.max_diameter * (1 + tol) or length > cons.max_length * (1 + tol):
+        out.append(f"envelope Ø{d * 1e3:.4g} × {length * 1e3:.4g} mm outside the limits")
+    k = v["K_N_per_m"]
+    if cons.stable and not v["stable"]:
+        out.append(f"not stable at K = {k:.4g} N/m (largest stable K "
+                   f"{v['max_stable_K_N_per_m']:.4g} N/m); stability was required")  # fmt: skip
+    if cons.passive and not v["passive"]:
+        out.append(f"not passive at K = {k:.4g} N/m (largest passive K "
+                   f"{v['max_passive_K_N_per_m']:.4g} N/m); passivity was required")  # fmt: skip
+    return out
+
+
+def _print_optimum(args: argparse.Namespace, opt: Optimum, t_fast: float, data: dict) -> None:
     c = opt.design.clutch
+    key = data["objective_column"]
     print(
         f"optimum ({opt.evaluations} designs in {t_fast:.2f} s): {c.n_drums} drums, "
         f"gap {c.gap * 1e3:.3g} mm, drum {c.drum_thickness * 1e3:.3g} mm, "
         f"inner Ø {c.drum_inner_diameter * 1e3:.3g} mm, zone {c.zone_length * 1e3:.3g} mm"
     )
+    sense = "minimised" if args.objective in MINIMISED else "maximised"
+    print(f"objective {args.objective} ({key}, {sense}): {opt.value:.4g} on the fast path")
     for k, v in opt.per_drum_count.items():
-        print(f"  best with {k} drum(s): {args.objective} {v:.4g}")
-    print(f"\nfast path:\n{format_evaluation(fast)}")
+        print(f"  best with {k} drum(s): {key} {v:.4g}")
+    print(f"\nfast path:\n{format_evaluation(data['fast'])}")
     if "reference" in data:
         change = data["bandwidth_change_reference_vs_fast"]
         print(f"\nreference fidelity:\n{format_evaluation(data['reference'])}")
-        verdict = "within" if abs(change) <= FAST_BANDWIDTH_ERROR else "OUTSIDE"
+        within = "within" if abs(change) <= FAST_BANDWIDTH_ERROR else "OUTSIDE"
         print(
-            f"\nbandwidth, reference vs fast: {change * 100:+.2f} % ({verdict} the fast "
+            f"\nbandwidth, reference vs fast: {change * 100:+.2f} % ({within} the fast "
             f"path's stated error of {FAST_BANDWIDTH_ERROR * 100:.1f} %)"
         )
+    print(format_verdict(data))
     if args.out:
         print(f"design written to {args.out}")
-    return 0
+
+
+def format_verdict(data: dict) -> str:
+    """The optimum's haptic verdict beside its objective, and which limits were required."""
+    v, req = data["verdict"], data["required"]
+
+    def yn(b: bool) -> str:
+        return "yes" if b else "no"
+
+    need = {True: "required", False: "not required"}
+    return "\n".join(
+        [
+            f"\nhaptic verdict ({v['fidelity']} fidelity) at K = {v['K_N_per_m']:.4g} N/m, "
+            f"{data['objective']} {data['objective_value']:.4g}:",
+            f"  stable at K:  {yn(v['stable']):<4}({need[req['stable']]}); largest stable K "
+            f"{v['max_stable_K_N_per_m']:.4g} N/m",
+            f"  passive at K: {yn(v['passive']):<4}({need[req['passive']]}); largest passive K "
+            f"{v['max_passive_K_N_per_m']:.4g} N/m",
+            "  requirements: " + ("all met" if data["requirements_met"] else "VIOLATED"),
+        ]
+    )
