@@ -24,6 +24,7 @@ import numpy as np
 
 from geometry.materials import COIL, COLOUR, MRF, STAINLESS, STEEL
 from geometry.section import PARTS, Region, Section, build_section
+from geometry.validation import ParameterError, check_finite
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from geometry.params import DrumClutch
@@ -162,8 +163,6 @@ def check_tolerance(name: str, tolerance: float, clutch: DrumClutch, scale: floa
     """A chord height ``tolerance`` (m) that is finite, > 0 and ≥ MIN_RELATIVE_TOLERANCE ×
     the clutch's size; the message names ``name`` in the caller's unit (value × ``scale``:
     1e3 for an ``_mm`` option)."""
-    from geometry.validation import ParameterError, check_finite
-
     unit = " mm" if scale == 1e3 else " m"
     check_finite(name, tolerance * scale, unit)
     floor = MIN_RELATIVE_TOLERANCE * clutch_size(clutch)
