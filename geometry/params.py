@@ -207,10 +207,16 @@ class DrumClutch:
             self.coil_turns, self.wire_outer_diameter, self.coil_depth, self.band_length
         ):
             max_turns = math.floor(have / self.wire_outer_diameter**2)
+            fix = (
+                f"allowed range [1, {max_turns}]"
+                if max_turns >= 1
+                else "the window holds no turn: enlarge it or use a thinner wire"
+            )
             raise ParameterError(
-                f"coil_turns = {self.coil_turns}: does not fit the coil window "
-                f"{self.coil_depth * 1e3:.3g} × {self.band_length * 1e3:.3g} mm with "
-                f"{self.wire_outer_diameter * 1e3:.3g} mm wire; allowed range [1, {max_turns}]"
+                f"coil_turns = {self.coil_turns}: does not fit the coil window coil_depth = "
+                f"{self.coil_depth:.6g} m × band_length = {self.band_length:.6g} m with "
+                f"wire_diameter = {self.wire_diameter:.6g} m and wire_insulation = "
+                f"{self.wire_insulation:.6g} m; {fix}"
             )
         if not wire_fits(self.wire_outer_diameter, self.coil_depth, self.band_length):
             raise ParameterError(
