@@ -119,8 +119,11 @@ class ClutchDesign:
 
 def current_limit(operating: Operating, wire_diameter: Any) -> Any:
     """max_current capped by the current-density limit in the copper (floats or arrays)."""
-    wire_area = math.pi * wire_diameter**2 / 4
-    return np.minimum(operating.max_current, operating.current_density_limit * wire_area)
+    # batches hold rows that valid() refused (a 1e150 m wire): their area may overflow to
+    # inf, which caps nothing; those rows' currents are never used
+    with np.errstate(over="ignore"):
+        wire_area = math.pi * np.asarray(wire_diameter, dtype=float) ** 2 / 4
+        return np.minimum(operating.max_current, operating.current_density_limit * wire_area)
 
 
 #: Named designs. "paper": the paper's clutch on the paper's MR bench (170 mm lever).
