@@ -24,6 +24,7 @@ import numpy as np
 
 from geometry.materials import COIL, COLOUR, MRF, STAINLESS, STEEL
 from geometry.section import PARTS, Region, Section, build_section
+from geometry.validation import ParameterError, check_finite
 
 if TYPE_CHECKING:  # pragma: no cover - typing only
     from geometry.params import DrumClutch
@@ -145,6 +146,33 @@ def brep_volume_mm3(shape: Any) -> float:
     props = GProp_GProps()
     BRepGProp.VolumeProperties_s(shape.wrapped, props)
     return float(props.Mass())
+
+
+#: Finest chord height relative to the clutch's size: 1e-4 already gives ~280 segments per
+#: circle and a volume error ~1e-4 (chord error h/R); finer only multiplies the triangles
+#: (``--tolerance-mm 1e-6`` on the paper clutch was killed at 24 GB).
+MIN_RELATIVE_TOLERANCE = 1e-4
+
+
+def clutch_size(clutch: DrumClutch) -> float:
+    """The clutch's largest extent (m): outer diameter or overall length."""
+    return max(2 * clutch.outer_radius, clutch.overall_length)
+
+
+def check_tolerance(name: str, tolerance: float, clutch: DrumClutch, scale: float = 1.0) -> float:
+    """A chord height ``tolerance`` (m) that is finite, > 0 and ≥ MIN_RELATIVE_TOLERANCE ×
+    the clutch's size; the message names ``name`` in the caller's unit (value × ``scale``:
+    1e3 for an ``_mm`` option)."""
+    unit = " mm" if scale == 1e3 else " m"
+    check_finite(name, tolerance * scale, unit)
+    floor = MIN_RELATIVE_TOLERANCE * clutch_size(clutch)
+    if not tolerance >= floor:
+        raise ParameterError(
+            f"{name} = {tolerance * scale:.6g}{unit}: must be >= {floor * scale:.3g}{unit} "
+            f"({MIN_RELATIVE_TOLERANCE:g} × the clutch's size {clutch_size(clutch) * scale:.4g}"
+            f"{unit}; a finer mesh only multiplies the triangles and the memory)"
+        )
+    return tolerance
 
 
 def tessellate(shape: Any, tolerance_mm: float, angular_tolerance: float = 0.5) -> tuple:

@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from geometry import regions
-from geometry.cad import material_solids, tessellate
+from geometry.cad import check_tolerance, material_solids, tessellate
 from geometry.params import DrumClutch, broadcast_fields, valid
 from geometry.regions import OUTPUT_PARTS, PARTS
 from geometry.section import Section, build_section
@@ -208,6 +208,7 @@ def mesh_mass(
     numbers at ``tolerance`` (for benchmarks and to show what goes wrong).
     """
     check_positive("tolerance", tolerance, " m")
+    check_tolerance("tolerance", tolerance, clutch)
     check_positive("angular_tolerance", angular_tolerance, " rad")
     s = build_section(clutch)
     solids = solids if solids is not None else material_solids(clutch, s)

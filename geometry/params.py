@@ -22,6 +22,7 @@ radius follows from it, the gaps and the thicknesses.
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, fields, replace
 from typing import Any
@@ -33,8 +34,6 @@ from geometry import regions
 from geometry.validation import (
     ParameterError,
     check_int,
-    check_nonnegative,
-    check_positive,
     check_range,
 )
 
@@ -45,8 +44,22 @@ MIN_GAP = 0.1e-3
 #: Thinnest drum the geometry accepts (razor-thin drums are allowed so that the methods
 #: can be shown failing on them; the CAD tolerance checks catch what the mesh cannot see).
 MIN_DRUM_THICKNESS = 0.02e-3
-#: Largest clutch we model (keeps every dimension in a sane range for the solvers).
-MAX_DIMENSION = 0.5
+#: Thinnest wall, clearance or feature we accept: ~10 µm is the tolerance a ground part of
+#: this size holds (ISO 286 IT6 at 3–30 mm is 6–13 µm); below it a dimension is a numerical
+#: artefact (a 1e-18 m end clearance gave 5.7e10 N·m of face-film drag).
+MIN_FEATURE = 10e-6
+#: Whole-clutch plausibility limits of a *haptic* clutch: haptic MR clutches are 20–100 mm
+#: across ([lebel]: 30×30×40 mm); 0.3 m is 3× the largest, beyond which the rotor inertia
+#: alone defeats transparency. A larger clutch is a different product: raise these
+#: constants (the only place they are written) to model one.
+MAX_OUTER_DIAMETER = 0.3
+MAX_OVERALL_LENGTH = 0.3
+#: Largest single dimension (no field may exceed the envelope it sits in).
+MAX_DIMENSION = max(MAX_OUTER_DIAMETER, MAX_OVERALL_LENGTH)
+#: Thickest magnet wire we model (AWG 0000 is 11.7 mm; a haptic coil uses < 1 mm) and the
+#: thickest insulation (heavy-build film and glass serving stay well below 0.1 mm).
+MAX_WIRE_DIAMETER = 10e-3
+MAX_WIRE_INSULATION = 1e-3
 #: Fraction of the coil window a layer-wound coil can fill with insulated wire cross-
 #: sections d_ins² (square packing fills 1.0; winding leads and layer steps lose ~10 %).
 COIL_PACKING = 0.9
@@ -64,13 +77,16 @@ INT_RANGES: tuple[tuple[str, int, int], ...] = (
     ("coil_turns", 1, 100_000),
     ("hub_holes", 0, 200),
 )
-#: Length fields: (name, lo, hi, lo_open) in metres.
+#: Length fields: (name, lo, hi, lo_open) in metres; every length has a closed physical
+#: range (the edge ``from_mm`` states it in mm, ``valid`` applies it to arrays).
 LENGTH_RANGES: tuple[tuple[str, float, float, bool], ...] = (
     ("drum_thickness", MIN_DRUM_THICKNESS, 0.02, False),
     ("input_drum_thickness", MIN_DRUM_THICKNESS, 0.02, False),
     ("gap", MIN_GAP, 5e-3, False),
+    ("wire_diameter", MIN_FEATURE, MAX_WIRE_DIAMETER, False),
+    ("wire_insulation", 0.0, MAX_WIRE_INSULATION, False),  # bare wire is allowed
     *(
-        (name, 0.0, MAX_DIMENSION, True)
+        (name, MIN_FEATURE, MAX_DIMENSION, False)
         for name in (
             "drum_inner_diameter",
             "zone_length",
@@ -81,15 +97,14 @@ LENGTH_RANGES: tuple[tuple[str, float, float, bool], ...] = (
             "shell_thickness",
             "sleeve_thickness",
             "coil_depth",
-            "wire_diameter",
             "shaft_radius",
             "shaft_length",
             "shaft_bore_clearance",
+            "hub_hole_diameter",
+            "hub_hole_pitch_radius",
         )
     ),
 )
-NONNEGATIVE_FIELDS: tuple[str, ...] = ("wire_insulation",)
-POSITIVE_FIELDS: tuple[str, ...] = ("hub_hole_diameter", "hub_hole_pitch_radius")
 
 
 def coil_fits(turns: Any, wire_outer_diameter: Any, coil_depth: Any, band_length: Any) -> Any:
@@ -115,6 +130,12 @@ def bore_covered(bore_radius: Any, hub_outer_radius: Any) -> Any:
     """The front cap's bore opens inside the hub's face, so the hub closes the fluid chamber
     (the face film between hub and cap needs a cap face to shear against)."""
     return bore_radius < hub_outer_radius
+
+
+def envelope_fits(outer_radius: Any, overall_length: Any) -> Any:
+    """The whole clutch stays inside the haptic plausibility envelope (MAX_OUTER_DIAMETER,
+    MAX_OVERALL_LENGTH)."""
+    return (2 * outer_radius <= MAX_OUTER_DIAMETER) & (overall_length <= MAX_OVERALL_LENGTH)
 
 
 def hub_holes_apart(n_holes: Any, pitch_radius: Any, hole_diameter: Any) -> Any:
@@ -159,10 +180,6 @@ class DrumClutch:
             check_int(name, getattr(self, name), ilo, ihi)
         for name, lo, hi, lo_open in LENGTH_RANGES:
             check_range(name, getattr(self, name), lo, hi, " m", lo_open=lo_open)
-        for name in NONNEGATIVE_FIELDS:
-            check_nonnegative(name, getattr(self, name), " m")
-        for name in POSITIVE_FIELDS:
-            check_positive(name, getattr(self, name), " m")
 
         # Collisions. The core must keep a solid section inside the first gap.
         core_r = self.core_radius
@@ -182,7 +199,7 @@ class DrumClutch:
                 f"shaft_bore_clearance = {self.shaft_bore_clearance:.6g} m: the front cap's bore "
                 f"(radius {bore:.6g} m) must stay inside the hub (outer radius "
                 f"{self.hub_outer_radius:.6g} m), or the fluid chamber opens; allowed range "
-                f"(0, {self.hub_outer_radius - self.shaft_radius:.6g}) m"
+                f"[{MIN_FEATURE:.6g}, {self.hub_outer_radius - self.shaft_radius:.6g}) m"
             )
         # The coil must fit its window (turns · d_ins² ≤ packing · window area).
         have = COIL_PACKING * self.coil_window_area
@@ -190,10 +207,16 @@ class DrumClutch:
             self.coil_turns, self.wire_outer_diameter, self.coil_depth, self.band_length
         ):
             max_turns = math.floor(have / self.wire_outer_diameter**2)
+            fix = (
+                f"allowed range [1, {max_turns}]"
+                if max_turns >= 1
+                else "the window holds no turn: enlarge it or use a thinner wire"
+            )
             raise ParameterError(
-                f"coil_turns = {self.coil_turns}: does not fit the coil window "
-                f"{self.coil_depth * 1e3:.3g} × {self.band_length * 1e3:.3g} mm with "
-                f"{self.wire_outer_diameter * 1e3:.3g} mm wire; allowed range [1, {max_turns}]"
+                f"coil_turns = {self.coil_turns}: does not fit the coil window coil_depth = "
+                f"{self.coil_depth:.6g} m × band_length = {self.band_length:.6g} m with "
+                f"wire_diameter = {self.wire_diameter:.6g} m and wire_insulation = "
+                f"{self.wire_insulation:.6g} m; {fix}"
             )
         if not wire_fits(self.wire_outer_diameter, self.coil_depth, self.band_length):
             raise ParameterError(
@@ -202,6 +225,15 @@ class DrumClutch:
             )
         if self.hub_holes:
             self._check_hub_holes()
+        if not envelope_fits(self.outer_radius, self.overall_length):
+            raise ParameterError(
+                f"the clutch is {2 * self.outer_radius:.6g} m across × "
+                f"{self.overall_length:.6g} m long (n_drums = {self.n_drums}, "
+                f"drum_inner_diameter = {self.drum_inner_diameter:.6g} m, gap = {self.gap:.6g} m"
+                f", …): must fit Ø {MAX_OUTER_DIAMETER:.6g} m × {MAX_OVERALL_LENGTH:.6g} m, the "
+                "plausibility envelope of a haptic clutch (geometry.params.MAX_OUTER_DIAMETER, "
+                "MAX_OVERALL_LENGTH; raise them there to model a larger one)"
+            )
 
     def _check_hub_holes(self) -> None:
         r_h, d_h = self.hub_hole_pitch_radius, self.hub_hole_diameter
@@ -333,9 +365,7 @@ class DrumClutch:
                     raise ParameterError(f"{prefix}{key} = {v!r}: must be an integer")
                 values[key] = v
             elif key.endswith("_mm") and key[:-3] in LENGTH_FIELDS:
-                if isinstance(v, bool) or not isinstance(v, (int, float)):
-                    raise ParameterError(f"{prefix}{key} = {v!r}: must be a number (mm)")
-                values[key[:-3]] = float(v) / 1000.0
+                values[key[:-3]] = _length_from_mm(prefix, key, v)
             elif key in LENGTH_FIELDS:
                 raise ParameterError(
                     f"{prefix}{key}: lengths need their unit in the key; write {key}_mm (mm)"
@@ -351,13 +381,43 @@ class DrumClutch:
                 m = missing[0]
                 key = m if m in INTEGER_FIELDS else f"{m}_mm"
                 raise ParameterError(f'{prefix}{key}: missing (or give base = "paper")')
-            return cls(**values)
-        return replace(base, **values)
+        try:
+            return cls(**values) if base is None else replace(base, **values)
+        except ParameterError as exc:  # a rule between fields: say it in the file's keys
+            raise ParameterError(prefix + _in_mm(str(exc))) from None
 
 
 FIELD_NAMES = tuple(f.name for f in fields(DrumClutch))
 INTEGER_FIELDS = frozenset({"n_drums", "coil_turns", "hub_holes"})
 LENGTH_FIELDS = frozenset(n for n in FIELD_NAMES if n not in INTEGER_FIELDS)
+_LENGTH_RULE = {name: (lo, hi, lo_open) for name, lo, hi, lo_open in LENGTH_RANGES}
+_SI_LENGTH = re.compile(
+    r"\b(" + "|".join(sorted(LENGTH_FIELDS)) + r") = ([-+0-9.eE]+|nan|inf|-inf) m\b"
+)
+
+
+def _length_from_mm(prefix: str, key: str, value: Any) -> float:
+    """A design file's ``<name>_mm`` value in metres, checked by LENGTH_RANGES's rule (the
+    one DrumClutch applies) and, if outside, reported in the file's key and unit."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ParameterError(f"{prefix}{key} = {value!r}: must be a number (mm)")
+    name = key[:-3]
+    lo, hi, lo_open = _LENGTH_RULE[name]
+    si = float(value) / 1000.0
+    try:
+        check_range(name, si, lo, hi, " m", lo_open=lo_open)
+    except ParameterError:
+        lb = "(" if lo_open else "["
+        raise ParameterError(
+            f"{prefix}{key} = {float(value):.6g} mm: must be in {lb}{lo * 1e3:.6g}, "
+            f"{hi * 1e3:.6g}] mm"
+        ) from None
+    return si
+
+
+def _in_mm(message: str) -> str:
+    """``gap = 0.0007 m`` in a DrumClutch message → ``gap_mm = 0.7 mm`` (the file's key)."""
+    return _SI_LENGTH.sub(lambda m: f"{m[1]}_mm = {float(m[2]) * 1e3:.6g} mm", message)
 
 
 # ---- arrays of designs -------------------------------------------------------------------
@@ -388,10 +448,6 @@ def valid(p: Mapping[str, np.ndarray]) -> NDArray[np.bool_]:
     for name, lo, hi, lo_open in LENGTH_RANGES:
         v = p[name]
         ok &= ((v > lo) if lo_open else (v >= lo)) & (v <= hi)  # NaN fails both
-    for name in NONNEGATIVE_FIELDS:
-        ok &= np.isfinite(p[name]) & (p[name] >= 0)
-    for name in POSITIVE_FIELDS:
-        ok &= np.isfinite(p[name]) & (p[name] > 0)
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         d_ins = p["wire_diameter"] + 2 * p["wire_insulation"]
         ok &= coil_fits(p["coil_turns"], d_ins, p["coil_depth"], p["band_length"])
@@ -407,6 +463,7 @@ def valid(p: Mapping[str, np.ndarray]) -> NDArray[np.bool_]:
             holes = hub_holes_inside(r_h, d_h, sub["shaft_radius"], first_r0)
             holes &= hub_holes_apart(sub["hub_holes"], r_h, d_h)
             good &= (sub["hub_holes"] == 0) | holes
+            good &= envelope_fits(rg.outer_radius, rg.length)
             ok[rows] = good
     return ok
 

@@ -259,7 +259,8 @@ def _radial(r0: FloatArray, r1: FloatArray, length: FloatArray, n: int, mask=Non
     if mask is not None:
         w = np.where(mask[..., None], w, 0.0)
         k = np.where(mask[..., None], k, 0.0)
-    return k.reshape(k.shape[0], -1), w.reshape(w.shape[0], -1)
+    flat = (k.shape[0], int(np.prod(k.shape[1:])))  # explicit: -1 is ambiguous for S = 0
+    return k.reshape(flat), w.reshape(flat)
 
 
 def _kernels(path: MagneticPath) -> _Kernels:

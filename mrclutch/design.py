@@ -39,7 +39,8 @@ from __future__ import annotations
 
 import math
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -118,8 +119,11 @@ class ClutchDesign:
 
 def current_limit(operating: Operating, wire_diameter: Any) -> Any:
     """max_current capped by the current-density limit in the copper (floats or arrays)."""
-    wire_area = math.pi * wire_diameter**2 / 4
-    return np.minimum(operating.max_current, operating.current_density_limit * wire_area)
+    # batches hold rows that valid() refused (a 1e150 m wire): their area may overflow to
+    # inf, which caps nothing; those rows' currents are never used
+    with np.errstate(over="ignore"):
+        wire_area = math.pi * np.asarray(wire_diameter, dtype=float) ** 2 / 4
+        return np.minimum(operating.max_current, operating.current_density_limit * wire_area)
 
 
 #: Named designs. "paper": the paper's clutch on the paper's MR bench (170 mm lever).
@@ -184,6 +188,22 @@ def _read_table(
     return out
 
 
+@contextmanager
+def _file_key(
+    table: Mapping[str, Any], keys: Mapping[str, tuple[str, float]], where: str
+) -> Iterator[None]:
+    """A ParameterError on an SI field (``lever = 1e-12 m: …``) is told with the file's key
+    and value first (``transmission.lever_mm = 1e-09: lever = 1e-12 m: …``)."""
+    try:
+        yield
+    except ParameterError as exc:
+        name = str(exc).split(" ", 1)[0]
+        key = next((k for k, (n, _) in keys.items() if n == name and k in table), None)
+        if key is None:
+            raise
+        raise ParameterError(f"{where}.{key} = {table[key]!r}: {exc}") from None
+
+
 def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> ClutchDesign:
     """Build a design from a parsed design file (see the module docstring)."""
     known = {"clutch", "operating", "transmission", "support", "name"}
@@ -206,10 +226,12 @@ def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> Clutc
     for name, t in (("operating", op_table), ("transmission", tr_table), ("support", sup_table)):
         if not isinstance(t, dict):
             raise ParameterError(f"{where}: [{name}] must be a table")
-    operating = Operating(**_read_table(op_table, _OPERATING_KEYS, f"{where}: operating"))
-    transmission = replace(
-        MR_170, **_read_table(tr_table, _TRANSMISSION_KEYS, f"{where}: transmission")
-    )
+    with _file_key(op_table, _OPERATING_KEYS, f"{where}: operating"):
+        operating = Operating(**_read_table(op_table, _OPERATING_KEYS, f"{where}: operating"))
+    with _file_key(tr_table, _TRANSMISSION_KEYS, f"{where}: transmission"):
+        transmission = replace(
+            MR_170, **_read_table(tr_table, _TRANSMISSION_KEYS, f"{where}: transmission")
+        )
     bearing = sup_table.pop("bearing", Support.bearing)
     if not isinstance(bearing, str):
         raise ParameterError(f"{where}: support.bearing = {bearing!r}: must be a string")
@@ -218,7 +240,8 @@ def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> Clutc
         if sup["bearings"] != int(sup["bearings"]):
             raise ParameterError(f"{where}: support.bearings = {sup['bearings']:g}: whole number")
         sup["bearings"] = int(sup["bearings"])
-    support = Support(bearing=bearing, **sup)  # type: ignore[arg-type]
+    with _file_key(sup_table, _SUPPORT_KEYS, f"{where}: support"):
+        support = Support(bearing=bearing, **sup)  # type: ignore[arg-type]
     name = data["name"] if "name" in data else Path(where).stem
     return ClutchDesign(clutch, operating, transmission, str(name), support)
 
@@ -227,9 +250,11 @@ def load_design(path: str | Path) -> ClutchDesign:
     """Read a design file; every error names the key and the file."""
     p = Path(path)
     try:
-        data = tomllib.loads(p.read_text())
+        data = tomllib.loads(p.read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise ParameterError(f"design file {p}: not found") from None
+    except UnicodeDecodeError as exc:
+        raise ParameterError(f"design file {p}: not UTF-8 text ({exc.reason})") from None
     except IsADirectoryError:
         raise ParameterError(f"design file {p}: is a directory") from None
     except tomllib.TOMLDecodeError as exc:

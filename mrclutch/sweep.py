@@ -28,13 +28,16 @@ from typing import Any
 
 import numpy as np
 
-from geometry.params import INTEGER_FIELDS, LENGTH_FIELDS, DrumClutch, preset
+from geometry.params import INT_RANGES, INTEGER_FIELDS, LENGTH_FIELDS, DrumClutch, preset
 from geometry.validation import ParameterError, check_int
 from mrclutch.outputs import OUTPUTS, describe
 
 Evaluator = Callable[[dict[str, np.ndarray]], dict[str, np.ndarray]]
 
 DEFAULT_CHUNK = 20_000
+#: Most designs one spec may ask for: 10⁸ rows are ~20 GB of CSV and hours of the fast
+#: path; a larger spec is almost always a typo in a count (4·10¹⁰ was accepted before).
+MAX_DESIGNS = 10**8
 
 
 @dataclass(frozen=True)
@@ -88,8 +91,15 @@ class SweepSpec:
         if not self.params:
             raise ParameterError("parameters: at least one swept parameter is needed")
         check_int("chunk_size", self.chunk_size, 1, 10_000_000)
+        check_int("seed", self.seed, 0, 2**63 - 1)  # numpy's SeedSequence takes >= 0 only
         if self.mode == "random":
-            check_int("samples", self.samples, 1, 10**9)
+            check_int("samples", self.samples, 1, MAX_DESIGNS)
+        elif self.n_designs > MAX_DESIGNS:
+            counts = " × ".join(f"{len(p.grid())} ({p.column})" for p in self.params)
+            raise ParameterError(
+                f"parameters: the grid has {counts} = {self.n_designs:.3g} designs: must be "
+                f"<= {MAX_DESIGNS:.0e} (mrclutch.sweep.MAX_DESIGNS); lower the counts"
+            )
 
     @property
     def n_designs(self) -> int:
@@ -163,14 +173,23 @@ def parse_parameters(table: Mapping[str, Any], mode: str, where: str) -> tuple[P
             vals = spec["values"]
             if not isinstance(vals, list) or not vals:
                 raise ParameterError(f"{where}: {key}.values: must be a non-empty list")
-            values = tuple(_number(f"{where}: {key}.values", v) * scale for v in vals)
+            if name in INTEGER_FIELDS:
+                values = tuple(
+                    float(check_int(f"{where}: {key}.values", v, *_INT_RANGE[name])) for v in vals
+                )
+            else:
+                values = tuple(_number(f"{where}: {key}.values", v) * scale for v in vals)
             out.append(ParamRange(name, min(values), max(values), len(values), values))
             continue
         for k in ("min", "max"):
             if k not in spec:
                 raise ParameterError(f"{where}: {key}.{k}: missing")
-        lo = _number(f"{where}: {key}.min", spec["min"]) * scale
-        hi = _number(f"{where}: {key}.max", spec["max"]) * scale
+        if name in INTEGER_FIELDS:  # the field's own range (DrumClutch's INT_RANGES)
+            lo = check_int(f"{where}: {key}.min", spec["min"], *_INT_RANGE[name])
+            hi = check_int(f"{where}: {key}.max", spec["max"], *_INT_RANGE[name])
+        else:
+            lo = _number(f"{where}: {key}.min", spec["min"]) * scale
+            hi = _number(f"{where}: {key}.max", spec["max"]) * scale
         if hi < lo:
             raise ParameterError(
                 f"{where}: {key}: max = {spec['max']} is below min = {spec['min']}"
@@ -182,6 +201,9 @@ def parse_parameters(table: Mapping[str, Any], mode: str, where: str) -> tuple[P
             count = check_int(f"{where}: {key}.count", spec["count"], 1, 10**7)
         out.append(ParamRange(name, lo, hi, count))
     return tuple(out)
+
+
+_INT_RANGE = {name: (lo, hi) for name, lo, hi in INT_RANGES}
 
 
 def _number(name: str, v: Any) -> float:
@@ -196,9 +218,13 @@ def load_spec(path: str | Path) -> tuple[SweepSpec, dict[str, Any]]:
     for the design layer to read."""
     p = Path(path)
     try:
-        data = tomllib.loads(p.read_text())
+        data = tomllib.loads(p.read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise ParameterError(f"sweep spec {p}: not found") from None
+    except IsADirectoryError:
+        raise ParameterError(f"sweep spec {p}: is a directory") from None
+    except UnicodeDecodeError as exc:
+        raise ParameterError(f"sweep spec {p}: not UTF-8 text ({exc.reason})") from None
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError(f"sweep spec {p}: not valid TOML ({exc})") from None
     for table in ("sweep", "parameters"):
@@ -210,7 +236,10 @@ def load_spec(path: str | Path) -> tuple[SweepSpec, dict[str, Any]]:
     if bad:
         raise ParameterError(f"{p}: sweep.{bad[0]}: unknown key ({', '.join(sorted(known))})")
     mode = sw.pop("mode", "grid")
-    base = preset(sw.pop("base", "paper"))
+    base_name = sw.pop("base", "paper")
+    if not isinstance(base_name, str):
+        raise ParameterError(f"{p}: sweep.base = {base_name!r}: must be a preset name")
+    base = preset(base_name)
     params = parse_parameters(data["parameters"], mode, str(p))
     spec = SweepSpec(params, mode=mode, base=base, **sw)
     rest = {k: v for k, v in data.items() if k not in ("sweep", "parameters")}
@@ -229,6 +258,17 @@ def _meta_path(out: Path) -> Path:
     return out.with_name(out.name + ".meta.json")
 
 
+def _read_or_refuse(path: Path, parse: Callable[[str], Any]) -> Any:
+    """``parse`` of a file left by an earlier run; a corrupt one refuses the resume in one line."""
+    try:
+        return parse(path.read_text(encoding="utf-8"))
+    except (ValueError, OSError) as exc:  # JSONDecodeError and UnicodeDecodeError too
+        raise ParameterError(
+            f"{path}: unreadable ({type(exc).__name__}); cannot resume; pass --overwrite "
+            "to start again"
+        ) from None
+
+
 def _rows_on_disk(out: Path, spec: SweepSpec) -> int:
     """Rows of whole chunks already in ``out``; trims any partial chunk or line."""
     with out.open("rb+") as f:
@@ -243,8 +283,9 @@ def _rows_on_disk(out: Path, spec: SweepSpec) -> int:
         f.write(keep)
         f.truncate()
     for i, ln in enumerate(complete[:whole]):
-        if int(ln.split(b",", 1)[0]) != i:
-            raise ParameterError(f"{out}: row {i} has design_id {ln.split(b',', 1)[0]!r}")
+        head = ln.split(b",", 1)[0]
+        if not head.isdigit() or int(head) != i:
+            raise ParameterError(f"{out}: row {i} has design_id {head!r}; cannot resume")
     return whole
 
 
@@ -304,10 +345,10 @@ def run_sweep(
     start_rows = 0
     if out.exists() and resume:
         mp = _meta_path(out)
-        old = json.loads(mp.read_text()) if mp.exists() else {}
+        old = _read_or_refuse(mp, json.loads) if mp.exists() else {}
+        first = _read_or_refuse(out, lambda text: text.split("\n", 1)[0])
         if old != meta:
             raise ParameterError(f"{out}: written by a different sweep spec; cannot resume")
-        first = out.read_text().split("\n", 1)[0]
         if first != header:
             raise ParameterError(f"{out}: its columns differ from this sweep's; cannot resume")
         start_rows = _rows_on_disk(out, spec)

@@ -15,6 +15,7 @@ from collections.abc import Sequence
 
 from geometry.validation import ParameterError
 from mrclutch import __version__
+from mrclutch.cli.commands._common import OUTPUT_OPTIONS, check_writable
 from mrclutch.cli.errors import CLIError
 
 #: Command modules, in the order their commands appear in ``--help``.
@@ -45,13 +46,25 @@ def build_parser() -> argparse.ArgumentParser:
                 continue
             raise
         module.register(sub)
+    for command in sub.choices.values():  # which outputs each command writes, and their kind
+        outs = {a.dest: a.metavar == "DIR" for a in command._actions if a.dest in OUTPUT_OPTIONS}
+        command.set_defaults(output_options=outs)
     return parser
+
+
+def check_outputs(args: argparse.Namespace) -> None:
+    """Every output option given can be written: checked before any work starts."""
+    for dest, folder in getattr(args, "output_options", {}).items():
+        value = getattr(args, dest, None)
+        if value is not None:
+            check_writable(f"--{dest}", value, folder)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
+        check_outputs(args)
         return int(args.func(args) or 0)
     except (ParameterError, CLIError) as exc:
         print(f"mrclutch {args.command}: error: {exc}", file=sys.stderr)

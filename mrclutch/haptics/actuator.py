@@ -35,6 +35,7 @@ from geometry.validation import (
     check_choice,
     check_nonnegative,
     check_positive,
+    check_range,
 )
 
 __all__ = [
@@ -153,6 +154,15 @@ class Actuator:
         )
 
 
+#: Lever (handle) length of a haptic device: 1 mm (a fingertip device) to 2 m (an arm
+#: exoskeleton). Far outside, the reflected impedance runs the stability search out of
+#: memory (``--lever-mm 1e-9`` asked for a 743 TiB frequency grid).
+LEVER_RANGE = (1e-3, 2.0)
+#: Gear factor on the transmission ratio: haptic gearing stays within two decades of 1
+#: (the paper uses 1 and 4); ``gearing = 1e-6`` exhausted memory as the lever did.
+GEARING_RANGE = (1e-2, 1e2)
+
+
 @dataclass(frozen=True)
 class Transmission:
     """Cable transmission and lever. Lengths [m]; k [N/m], b [N·s/m], m2 [kg] are linear
@@ -170,7 +180,9 @@ class Transmission:
     def __post_init__(self) -> None:
         check_positive("ratio", self.ratio)
         check_positive("lever", self.lever, " m")
+        check_range("lever", self.lever, *LEVER_RANGE, " m")
         check_positive("gearing", self.gearing)
+        check_range("gearing", self.gearing, *GEARING_RANGE)
         check_positive("k", self.k, " N/m")
         check_nonnegative("b", self.b, " N·s/m")
         check_positive("m2", self.m2, " kg")

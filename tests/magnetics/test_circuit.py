@@ -41,7 +41,8 @@ def test_linear_limit_axisymmetric_closed_form(i, mu_f, gap_mm):
 
 def test_linear_limit_planar_formula_for_a_thin_large_radius_stack():
     """μ0 μr N I / (L Σ g/L) within the geometric bound Δr/r of a stack at large radius."""
-    c = DrumClutch(n_drums=1, gap=0.1e-3, drum_thickness=0.02e-3, drum_inner_diameter=0.45,
+    # the largest stack the haptic envelope admits (geometry.params.MAX_OUTER_DIAMETER)
+    c = DrumClutch(n_drums=1, gap=0.1e-3, drum_thickness=0.02e-3, drum_inner_diameter=0.28,
                    coil_turns=140)  # fmt: skip
     mats = linear_materials(1e12, 5.0)
     res = solve(c, [2.0], materials=mats)
@@ -50,7 +51,7 @@ def test_linear_limit_planar_formula_for_a_thin_large_radius_stack():
     planar = MU0 * 5.0 * 140 * 2.0 / (lengths * np.sum(c.gap / lengths))
     spread = (c.drum_radii_out[0][1] + c.gap - c.core_radius) / c.core_radius
     np.testing.assert_allclose(res.gap_b[0, 0], planar, rtol=spread)
-    assert spread < 1e-3
+    assert spread < 2e-3  # the bound is tight: the planar limit is really tested
 
 
 def test_path_read_from_the_table_matches_closed_forms():

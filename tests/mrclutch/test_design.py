@@ -33,7 +33,7 @@ def test_full_design_file_round_trip(tmp_path):
         ("[clutch]\ngap_mm = 0.3\n", "n_drums: missing"),
         ('[clutch]\nbase = "paper"\ngapp_mm = 0.3\n', "gapp_mm: unknown key"),
         ('[clutch]\nbase = "paper"\ngap = 0.3\n', "gap: lengths need their unit"),
-        ('[clutch]\nbase = "paper"\ngap_mm = -0.3\n', "gap = -0.0003 m: must be in"),
+        ('[clutch]\nbase = "paper"\ngap_mm = -0.3\n', "gap_mm = -0.3 mm: must be in"),
         ('[clutch]\nbase = "paper"\ngap_mm = "wide"\n', "gap_mm = 'wide': must be a number"),
         ('[clutch]\nbase = "paper"\ndrum_inner_diameter_mm = 1.0\n', "must exceed 2·gap"),
         ('[clutch]\nbase = "paper"\n[operating]\nmax_current = 3\n', "write max_current_A"),

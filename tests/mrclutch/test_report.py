@@ -67,7 +67,7 @@ def test_bad_design_file_leaves_nothing(tmp_path, capsys):
     out = tmp_path / "out"
     assert main(["report", str(bad), "--out", str(out), "--no-progress"]) == 2
     err = capsys.readouterr().err
-    assert "gap = -0.001 m" in err and "Traceback" not in err
+    assert "gap_mm = -1 mm" in err and "Traceback" not in err
     assert not out.exists()
     assert list(tmp_path.iterdir()) == [bad]
 

@@ -11,9 +11,10 @@ import math
 from pathlib import Path
 from typing import Any
 
-from geometry.cad import material_solids
+from geometry.cad import check_tolerance, material_solids
 from geometry.export import export_clutch, read_step_parts
 from geometry.mass import analytic_mass, brep_mass, check_mesh, mesh_mass, weigh_mesh, weigh_shape
+from geometry.params import DrumClutch
 from geometry.section import build_section
 from geometry.validation import ParameterError, check_positive
 from mrclutch.cli.commands._common import add_design_args, load_clutch, print_json
@@ -72,13 +73,15 @@ def _tol(p: argparse.ArgumentParser) -> None:
     )
 
 
-def _tolerance(args: argparse.Namespace) -> float:
-    return check_positive("--tolerance-mm", args.tolerance_mm, " mm") * 1e-3
+def _tolerance(args: argparse.Namespace, clutch: DrumClutch) -> float:
+    """``--tolerance-mm`` in metres, bounded below relative to the clutch (memory)."""
+    tol = check_positive("--tolerance-mm", args.tolerance_mm, " mm") * 1e-3
+    return check_tolerance("--tolerance-mm", tol, clutch, scale=1e3)
 
 
 def cmd_export(args: argparse.Namespace) -> int:
     clutch = load_clutch(args)
-    res = export_clutch(clutch, args.out, _tolerance(args))
+    res = export_clutch(clutch, args.out, _tolerance(args, clutch))
     print(f"{res.step}")
     for name, path in res.stl.items():
         print(f"{path}  ({res.stl_triangles[name]} triangles)")
@@ -103,7 +106,7 @@ def cmd_inertia(args: argparse.Namespace) -> int:
     if args.density is not None or args.part_density:
         raise CLIError("--density/--part-density apply to a STEP/STL file only")
     clutch = load_clutch(args)
-    tol = _tolerance(args)
+    tol = _tolerance(args, clutch)
     s = build_section(clutch)
     solids = material_solids(clutch, s)
     reps = {
@@ -205,7 +208,7 @@ def _weigh_file(args: argparse.Namespace) -> int:
 
 def cmd_view(args: argparse.Namespace) -> int:
     clutch = load_clutch(args)
-    tol = None if args.tolerance_mm is None else _tolerance(args)
+    tol = None if args.tolerance_mm is None else _tolerance(args, clutch)
     if args.screenshot:
         print(screenshot(clutch, args.screenshot, tolerance=tol))
     else:

@@ -8,10 +8,12 @@ import math
 from dataclasses import replace
 from typing import Any
 
-from geometry.validation import check_choice, check_nonnegative, check_positive
+from geometry.validation import check_choice, check_nonnegative, check_positive, check_range
 from mrclutch.cli.commands._common import atomic_path, print_json
 from mrclutch.cli.plots.haptic import compare_figure
 from mrclutch.haptics.actuator import (
+    GEARING_RANGE,
+    LEVER_RANGE,
     TABLE2_EM_136206,
     TABLE2_MR,
     actuator,
@@ -78,8 +80,9 @@ def _edge(args: argparse.Namespace) -> tuple[float | None, float | None, float]:
 
 def run_haptic(args: argparse.Namespace) -> int:
     K, delay, workspace = _edge(args)
-    lever = check_positive("--lever-mm", args.lever_mm, " mm") * 1e-3
-    gearing = check_positive("--gearing", args.gearing)
+    lo, hi = LEVER_RANGE  # Transmission's own rule, stated in the option's unit
+    lever = check_range("--lever-mm", args.lever_mm, lo * 1e3, hi * 1e3, " mm") * 1e-3
+    gearing = check_range("--gearing", args.gearing, *GEARING_RANGE)
     act = actuator(check_choice("--actuator", args.actuator, ACTUATOR_NAMES))
     if delay is not None:
         act = replace(act, delay=delay)
