@@ -143,7 +143,6 @@ def optimize(
             passivity=cons.passive,
             stability=stability,
             zwidth=objective == "zwidth",
-            transparency=objective == "transparency",
         )
 
     def violation(x: np.ndarray, n: int, r: dict[str, np.ndarray], stability: bool) -> np.ndarray:

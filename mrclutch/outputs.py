@@ -121,6 +121,11 @@ _ALL = (
            "largest passive K"),
     Output("max_stable_K_N_per_m", "N/m", "largest K rendered stably (delay included)",
            "largest stable K"),
+    Output("backdrive_force_N", "N", "peak force felt moving the lever with nothing "
+           "rendered (K = 0), ±10 mm at 2 Hz: |Z_p(jω)|·ω·X (mrclutch.haptics.hand)",
+           "backdrive force", "mN", 1e3),
+    Output("zwidth_area_N2_s_per_m2", "N²·s/m²", "area of the Z-width: virtual (K, B) "
+           "rendered passively (mrclutch.haptics.zwidth)", "Z-width area"),
 )  # fmt: skip
 
 #: Every output, by key.
@@ -161,8 +166,8 @@ HAND_ROWS: tuple[str, ...] = (
     "max_passive_K_N_per_m",
     "max_stable_K_N_per_m",
 )
-#: Columns of a sweep row, in order (fast path; ``max_passive_K_N_per_m`` is added where
-#: passivity is asked for).
+#: Columns of a sweep row, in order (fast path; the ``SWEEP_OPTIONAL`` ones follow where
+#: asked for).
 SWEEP_COLUMNS: tuple[str, ...] = (
     "valid",
     "rotor_inertia_kg_m2",
@@ -184,6 +189,15 @@ SWEEP_COLUMNS: tuple[str, ...] = (
     "bandwidth_hz",
     "resonance_hz",
     "rendering_area_dB_decade",
+    "backdrive_force_N",
+)
+
+#: Sweep columns computed only when asked for (``evaluate_batch`` flags, ``sweep --with``),
+#: each with its cost relative to the default row (docs/sweeps.md).
+SWEEP_OPTIONAL: tuple[str, ...] = (
+    "max_passive_K_N_per_m",  # about ×1.7
+    "max_stable_K_N_per_m",  # design by design, about ×8
+    "zwidth_area_N2_s_per_m2",  # about ×7
 )
 
 

@@ -56,7 +56,7 @@ from mrclutch.haptics.model import (
 )
 from mrclutch.haptics.zwidth import ZWIDTH_KEYS
 from mrclutch.haptics.zwidth import zwidth as zwidth_of
-from mrclutch.outputs import SWEEP_COLUMNS
+from mrclutch.outputs import SWEEP_COLUMNS, SWEEP_OPTIONAL
 from mrclutch.trust import choose, circuit_trust
 
 FIDELITIES: tuple[str, ...] = ("fast", "reference")
@@ -404,9 +404,22 @@ class BatchEvaluator:
     """
 
     base: ClutchDesign
+    optional: tuple[str, ...] = ()  # of ``SWEEP_OPTIONAL``: columns after SWEEP_COLUMNS
+
+    def __post_init__(self) -> None:
+        for key in self.optional:
+            check_choice("optional column", key, SWEEP_OPTIONAL)
+
+    @property
+    def columns(self) -> tuple[str, ...]:
+        """The columns of its rows, in order."""
+        return (*SWEEP_COLUMNS, *(k for k in SWEEP_OPTIONAL if k in self.optional))
 
     def __call__(self, fields: Mapping[str, ArrayLike]) -> dict[str, np.ndarray]:
-        return evaluate_batch(fields, self.base)
+        on = set(self.optional)
+        return evaluate_batch(fields, self.base, passivity="max_passive_K_N_per_m" in on,
+                              stability="max_stable_K_N_per_m" in on,
+                              zwidth="zwidth_area_N2_s_per_m2" in on)  # fmt: skip
 
 
 def evaluate_batch(
@@ -416,13 +429,11 @@ def evaluate_batch(
     passivity: bool = False,
     stability: bool = False,
     zwidth: bool = False,
-    transparency: bool = False,
 ) -> dict[str, np.ndarray]:
     """The fast path for S designs at once; returns arrays under ``SWEEP_COLUMNS``, and
     opt-in columns after them: ``max_passive_K_N_per_m`` (``passivity``, about ×1.7 the
     cost), ``max_stable_K_N_per_m`` (``stability``: design by design, about ×8),
-    ``zwidth_area_N2_s_per_m2`` (``zwidth``, about ×7) and ``backdrive_force_N``
-    (``transparency``: mrclutch.haptics.hand.backdrive_force, cheap).
+    ``zwidth_area_N2_s_per_m2`` (``zwidth``, about ×7) (``outputs.SWEEP_OPTIONAL``).
 
     The same physics as ``evaluate(design, "fast")``, on arrays: per drum count, the region
     table gives the analytic mass (``region_mass``), the circuit (``path_from_regions``)
@@ -458,14 +469,13 @@ def evaluate_batch(
         hp = mr_at_hand(base, inertia[ok], fig["damping"][ok], torque[ok],
                         fig["clutch_mass"][ok])  # fmt: skip
         hand = dict(metrics_batch(hp, limits=False))
+        hand["backdrive_force_N"] = backdrive_force(hp)
         if passivity:
             hand["max_passive_K_N_per_m"] = max_passive_stiffness(hp)
         if stability:
             hand["max_stable_K_N_per_m"] = max_stable_stiffness(hp)
         if zwidth:
             hand["zwidth_area_N2_s_per_m2"] = zwidth_of(hp)["zwidth_area_N2_s_per_m2"]
-        if transparency:
-            hand["backdrive_force_N"] = backdrive_force(hp)
     out = {
         "valid": ok.astype(float),
         "rotor_inertia_kg_m2": fig["rotor_inertia"],
@@ -485,7 +495,6 @@ def evaluate_batch(
         "max_passive_K_N_per_m": passivity,
         "max_stable_K_N_per_m": stability,
         "zwidth_area_N2_s_per_m2": zwidth,
-        "backdrive_force_N": transparency,
     }
     extra = tuple(k for k, on in opt_in.items() if on)
     columns = (*SWEEP_COLUMNS, *extra)

@@ -115,10 +115,10 @@ def test_transparency_objective_lowers_the_backdrive_force():
     kw = dict(drum_counts=(2,), maxiter=15, popsize=10)
     free = optimize(base, objective="transparency",
                     constraints=Constraints(passive=False, stable=False), **kw)  # fmt: skip
-    assert free.value < _base_row(base, transparency=True)["backdrive_force_N"][0]
+    assert free.value < _base_row(base)["backdrive_force_N"][0]
     light = optimize(base, objective="transparency", **kw)
     fast = optimize(base, objective="bandwidth", **kw)
-    assert light.value < _base_row(fast.design, transparency=True)["backdrive_force_N"][0]
+    assert light.value < _base_row(fast.design)["backdrive_force_N"][0]
     h = evaluate(light.design).as_json()["haptic"]
     assert h["passive"] and h["K_N_per_m"] < h["max_stable_K_N_per_m"]
 
@@ -250,8 +250,8 @@ def test_evaluate_batch_opt_in_columns_match_the_scalar_path():
 
     d = design_preset("paper")
     assert tuple(_base_row(d)) == tuple(SWEEP_COLUMNS)
-    r = _base_row(d, stability=True, zwidth=True, transparency=True)
-    extra = ("max_stable_K_N_per_m", "zwidth_area_N2_s_per_m2", "backdrive_force_N")
+    r = _base_row(d, stability=True, zwidth=True)
+    extra = ("max_stable_K_N_per_m", "zwidth_area_N2_s_per_m2")
     assert tuple(r) == (*SWEEP_COLUMNS, *extra)
     ev = evaluate(d)
     assert r["max_stable_K_N_per_m"][0] == pytest.approx(ev.haptic["max_stable_K_N_per_m"])

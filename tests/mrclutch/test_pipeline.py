@@ -52,6 +52,7 @@ def test_batch_equals_single_design_fast_path(batch, i):
         "bandwidth_lumped_hz": h["bandwidth_lumped_hz"],
         "bandwidth_hz": h["bandwidth_hz"],
         "rendering_area_dB_decade": h["rendering_area_dB_decade"],
+        "backdrive_force_N": ev.hand["mr"]["backdrive_force_N"],
     }
     for key, single in pairs.items():
         assert batch[key][i] == pytest.approx(single, rel=1e-6), key

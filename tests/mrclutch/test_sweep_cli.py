@@ -77,3 +77,50 @@ def test_sweeps_and_the_optimiser_never_build_cad(tmp_path, argv):
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "0 []", out.stderr
+
+
+def test_sweep_with_optional_columns_writes_them_after_the_default_ones(tmp_path):
+    """``--with`` appends the asked-for columns, each equal to the single-design value;
+    the default row already carries the backdrive force (issue 13)."""
+    import csv
+
+    from mrclutch.design import design_preset
+    from mrclutch.outputs import SWEEP_COLUMNS
+    from mrclutch.pipeline import evaluate
+
+    spec = tmp_path / "s.toml"
+    spec.write_text(SPEC.replace("samples = 60000", "samples = 6"))
+    out = tmp_path / "r.csv"
+    cmd = _sweep(spec, out, "--with", "zwidth_area_N2_s_per_m2", "--with",
+                 "max_passive_K_N_per_m")  # fmt: skip
+    subprocess.run(cmd, check=True, capture_output=True, timeout=120)
+    with out.open() as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == 6
+    cols = list(rows[0])
+    tail = ["max_passive_K_N_per_m", "zwidth_area_N2_s_per_m2"]
+    assert cols[-2:] == tail and all(c in cols for c in SWEEP_COLUMNS)
+    assert "backdrive_force_N" in SWEEP_COLUMNS
+    for r in rows:
+        assert float(r["zwidth_area_N2_s_per_m2"]) > 0
+        assert float(r["backdrive_force_N"]) > 0
+    # the paper preset row by row equals evaluate's figures
+    ev = evaluate(design_preset("paper"))
+    from mrclutch.pipeline import BatchEvaluator
+
+    row = BatchEvaluator(design_preset("paper"), tuple(tail))({})
+    assert row["zwidth_area_N2_s_per_m2"][0] == pytest.approx(
+        ev.zwidth["mr"]["zwidth_area_N2_s_per_m2"], rel=1e-9
+    )
+    assert row["backdrive_force_N"][0] == pytest.approx(
+        ev.hand["mr"]["backdrive_force_N"], rel=1e-9
+    )
+
+
+def test_sweep_with_an_unknown_column_is_refused(tmp_path):
+    spec = tmp_path / "s.toml"
+    spec.write_text(SPEC)
+    r = subprocess.run(_sweep(spec, tmp_path / "r.csv", "--with", "nonsense"),
+                       capture_output=True, text=True, timeout=60)  # fmt: skip
+    assert r.returncode == 2 and "nonsense" in r.stderr and "Traceback" not in r.stderr
+    assert not (tmp_path / "r.csv").exists()

@@ -15,7 +15,7 @@ from mrclutch.cli.plots.design import pareto_plot
 from mrclutch.cli.report import write_report
 from mrclutch.design import ClutchDesign, design_from_mapping, design_to_toml
 from mrclutch.optimize import MINIMISED, OBJECTIVES, Constraints, Optimum, optimize, parse_bounds
-from mrclutch.outputs import CLUTCH_ROWS, HAND_ROWS, SWEEP_COLUMNS, output, row_label
+from mrclutch.outputs import CLUTCH_ROWS, HAND_ROWS, SWEEP_OPTIONAL, output, row_label
 from mrclutch.pipeline import (
     FAST_BANDWIDTH_ERROR,
     FIDELITIES,
@@ -77,6 +77,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--resume", action="store_true", help="continue an interrupted sweep")
     p.add_argument("--overwrite", action="store_true", help="replace an existing results file")
     p.add_argument("--workers", type=int, default=0, help="processes (0: in this process)")
+    p.add_argument(
+        "--with",
+        dest="optional",
+        action="append",
+        default=[],
+        choices=SWEEP_OPTIONAL,
+        metavar="COLUMN",
+        help="also compute this column (repeatable): max_passive_K_N_per_m (about ×1.7 the "
+        "cost), max_stable_K_N_per_m (×8), zwidth_area_N2_s_per_m2 (×7)",
+    )
     p.add_argument("--pareto", metavar="FILE.png", help="also draw the Pareto front")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_sweep)
@@ -275,14 +285,14 @@ def _sweep(args: argparse.Namespace) -> int:
     base = design_from_mapping({"clutch": spec.base.to_mm(), **rest}, where=args.spec)
     if args.workers < 0:
         raise CLIError(f"--workers = {args.workers}: must be >= 0")
-    evaluator = BatchEvaluator(base)
+    evaluator = BatchEvaluator(base, tuple(args.optional))
     executor = ProcessPoolExecutor(args.workers) if args.workers else None
     try:
         res = run_sweep(
             spec,
             args.out,
             evaluator,
-            SWEEP_COLUMNS,
+            evaluator.columns,
             executor=executor,
             resume=args.resume,
             overwrite=args.overwrite,
