@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike
 from geometry import regions
 from geometry.mass import MassReport, analytic_mass, brep_mass, region_mass
 from geometry.materials import MRF
-from geometry.params import broadcast_fields, valid
+from geometry.params import broadcast_fields, preset, valid
 from geometry.section import build_section
 from geometry.validation import check_choice
 from magnetics import thermal
@@ -376,6 +376,8 @@ def hand_budget(design: ClutchDesign, fig: ClutchFigures, mr: HapticParams,
 
     b1, m1 = float(mr.b1), float(mr.m1)
     return {
+        # Table 2 identified the paper's own clutch: "unexplained" means something only there
+        "paper_clutch": design.clutch == preset("paper"),
         "b1_N_s_per_m": {
             **table(b_terms, b1, float(TABLE2_MR.b1)),
             "least_certain": list(B1_UNCERTAIN),

@@ -210,16 +210,24 @@ def budget_html(budget: dict[str, Any]) -> str:
             f"<td class=n>{t['share'] * 100:.1f} %</td><td>{e_(t['source'])}</td></tr>"
             for t in b["terms"]
         )
-        rows += (f"<tr><th>total</th><th class=n>{b['total'] * scale:.4g}</th><th></th><th></th>"
-                 f"</tr><tr><td>paper, Table 2</td><td class=n>{b['paper_table2'] * scale:.4g}"
-                 f"</td><td></td><td></td></tr><tr><td>unexplained</td><td class=n>"
-                 f"{b['unexplained'] * scale:.4g}</td><td></td><td></td></tr>")  # fmt: skip
+        rows += f"<tr><th>total</th><th class=n>{b['total'] * scale:.4g}</th><th></th><th></th>"
+        if budget["paper_clutch"]:
+            rows += (f"</tr><tr><td>paper, Table 2</td><td class=n>"
+                     f"{b['paper_table2'] * scale:.4g}</td><td></td><td></td></tr><tr><td>"
+                     f"unexplained</td><td class=n>{b['unexplained'] * scale:.4g}</td><td></td>"
+                     f"<td></td></tr>")  # fmt: skip
+        else:  # Table 2 identified the paper's clutch, not this one
+            rows += (f"</tr><tr><td>paper clutch, Table 2 (for scale)</td><td class=n>"
+                     f"{b['paper_table2'] * scale:.4g}</td><td></td><td></td></tr>")  # fmt: skip
         why = "".join(f"<li>{e_(w)}</li>" for w in b.get("least_certain", ()))
         name = key.split("_")[0]
         parts.append(f"<div><h3>{name} ({unit})</h3><table>{rows}</table>"
                      + (f"<p class=small>Least certain:</p><ul class=small>{why}</ul>" if why
                         else "") + "</div>")  # fmt: skip
     t2 = budget["with_table2_b1"]
+    if not budget["paper_clutch"]:
+        parts.append("</div>")
+        return "".join(parts)
     parts.append(
         f"</div><p class=small>With Table 2's b1 = {t2['b1_N_s_per_m']:g} N·s/m the pair is "
         f"{'passive' if t2['passive'] else 'not passive'} at K (largest passive K "

@@ -110,3 +110,22 @@ def test_report_page_shows_the_budget():
     page = budget_html(evaluate(design_preset("paper")).as_json()["budget"])
     assert "Where b1 and m1 come from" in page and "carried fluid" in page
     assert "unexplained" in page and "Table 2" in page
+
+
+def test_table2_is_compared_only_with_the_paper_clutch():
+    """Table 2 identified the paper's own clutch: another design's budget shows it for
+    scale, with no 'unexplained' remainder and no Table 2 verdict."""
+    from dataclasses import replace
+
+    from mrclutch.cli.commands.design import format_budget
+    from mrclutch.design import design_preset
+    from mrclutch.pipeline import evaluate
+
+    d = design_preset("paper")
+    paper = evaluate(d).as_json()["budget"]
+    other = evaluate(replace(d, clutch=replace(d.clutch, gap=0.5e-3))).as_json()["budget"]
+    assert paper["paper_clutch"] and not other["paper_clutch"]
+    assert "unexplained" in "\n".join(format_budget(paper))
+    text = "\n".join(format_budget(other))
+    assert "unexplained" not in text and "with Table 2's b1" not in text
+    assert "for scale" in text

@@ -242,10 +242,16 @@ def format_budget(budget: dict) -> list[str]:
             lines.append(f"  {t['name']:<28}{t['value'] * scale:>10.4g}{t['share'] * 100:>7.1f} %"
                          f"  {t['source']}")  # fmt: skip
         lines.append(f"  {'total':<28}{b['total'] * scale:>10.4g}")
+        if not budget["paper_clutch"]:  # Table 2 identified the paper's clutch, not this one
+            lines.append(f"  {'paper clutch, Table 2':<28}{b['paper_table2'] * scale:>10.4g}"
+                         "  (for scale: another clutch)")  # fmt: skip
+            continue
         lines.append(f"  {'paper, Table 2':<28}{b['paper_table2'] * scale:>10.4g}")
         lines.append(f"  {'unexplained':<28}{b['unexplained'] * scale:>10.4g}"
                      f"  ({b['ratio_to_paper'] * 100:.0f} % of Table 2 explained)")  # fmt: skip
         lines += [f"  least certain: {why}" for why in b.get("least_certain", ())]
+    if not budget["paper_clutch"]:
+        return lines
     t2 = budget["with_table2_b1"]
     lines.append(
         f"with Table 2's b1 = {t2['b1_N_s_per_m']:g} N·s/m: passive at K "
