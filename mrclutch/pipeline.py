@@ -36,7 +36,12 @@ from magnetics.circuit import path_from_regions, path_from_section
 from magnetics.drag import Drag, coupled_fluid_inertia, drag_terms, totals
 from magnetics.error_map import error_bound
 from magnetics.materials import FLUIDS
-from magnetics.torque import coil_properties, continuous_torque, torque_curve, yield_torque_at
+from magnetics.torque import (
+    coil_properties,
+    continuous_torque,
+    torque_curve,
+    yield_torque_and_flux,
+)
 from mrclutch.design import ClutchDesign, current_limit
 from mrclutch.haptics.actuator import (
     EM_170,
@@ -217,8 +222,10 @@ def thermal_figures(design: ClutchDesign, rg: regions.Regions, path: Any, off_to
     holding the peak torque while slipping at the input speed."""
     op = design.operating
     net = thermal.network(rg, op.ambient_temperature, FLUID_LIMIT)
+    peak = np.atleast_1d(design.current_limit)
+    hint = (peak, yield_torque_and_flux(path, peak)[1])  # as the sweeps: warm start at I_peak
     i_c, t_c = continuous_torque(net, path, op.input_speed, off_torque,
-                                 op.wire_temperature_limit, FLUID_LIMIT)  # fmt: skip
+                                 op.wire_temperature_limit, FLUID_LIMIT, hint=hint)  # fmt: skip
     t_wire, t_fluid = thermal.time_to_limits(
         net,
         design.current_limit,
@@ -455,11 +462,12 @@ def evaluate_batch(
         out["off_torque"], out["damping"] = totals(terms)
         out["fluid_inertia"] = coupled_fluid_inertia(rg)
         path = path_from_regions(rg)
-        out["yield_torque"] = yield_torque_at(path, current[rows])
+        out["yield_torque"], flux = yield_torque_and_flux(path, current[rows])
         net = thermal.network(rg, op.ambient_temperature, FLUID_LIMIT)
         out["continuous_torque"] = continuous_torque(
-            net, path, op.input_speed, out["off_torque"], op.wire_temperature_limit, FLUID_LIMIT
-        )[1]
+            net, path, op.input_speed, out["off_torque"], op.wire_temperature_limit,
+            FLUID_LIMIT, hint=(current[rows], flux),
+        )[1]  # fmt: skip
         return out
 
     fig = regions.per_topology(p, ok, clutch)
