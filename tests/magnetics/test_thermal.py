@@ -168,3 +168,13 @@ def test_network_of_a_batch_equals_one_design_at_a_time():
         n1 = network(build_section(replace(PAPER, gap=float(g))).table)
         assert nb.conductance[i] == pytest.approx(n1.conductance, rel=1e-12)
         assert nb.capacity[i] == pytest.approx(n1.capacity, rel=1e-12)
+
+
+def test_network_inverse_is_the_matrix_inverse():
+    """The adjugate inverse the network stores equals numpy's LU inverse."""
+    from magnetics.thermal import _inverse3
+
+    a = np.random.default_rng(0).normal(size=(200, 3, 3))
+    assert np.allclose(_inverse3(a) @ a, np.eye(3), atol=1e-10)
+    net = network(build_section(PAPER).table)
+    assert net.inverse == pytest.approx(np.linalg.inv(net.conductance), rel=1e-12)
