@@ -164,8 +164,10 @@ class BHCurve:
         t = b * self._inv_step
         np.minimum(t, self._slope.size - 1, out=t)
         i = t.astype(np.intp)
-        s = self._slope[i]
-        return self._icpt[i] + s * b, s
+        s = np.take(self._slope, i)
+        h = np.take(self._icpt, i)
+        h += s * b
+        return h, s
 
     def b_of_h(self, h: ArrayLike) -> FloatArray:
         """Inverse of ``h_of_b`` (same dense table, so the pair is consistent)."""
