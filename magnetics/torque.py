@@ -158,13 +158,18 @@ def yield_torque_and_flux(
 ) -> tuple[FloatArray, FloatArray]:
     """``yield_torque_at`` and the gap flux (S, 1) it solved for (a warm start for a nearby
     current: ``continuous_torque``'s ``hint``); ``start``: a first flux guess (S, 1)."""
+    return _solved_point(path, current, materials, fluid, rtol, start)[:2]
+
+
+def _solved_point(path, current, materials, fluid, rtol, start=None):  # type: ignore[no-untyped-def]
+    """(yield torque (S,), gap flux (S, 1), dF/dΦ there (S, 1)) at ``current``."""
     mats = MATERIALS if materials is None else materials
     cur = np.broadcast_to(np.asarray(current, dtype=float), path.turns.shape)
     kern = _kernels(path)
     phi = np.abs(solve_flux(path, (path.turns * cur)[:, None], mats, rtol=rtol, kernels=kern,
                             start=start))  # fmt: skip
-    radial = 0.5 * _mmf(path, mats, phi, kern)["radial"]
-    return _gap_torque(path, phi, radial, mats, fluid).sum(-1)[:, 0], phi
+    m = _mmf(path, mats, phi, kern)
+    return _gap_torque(path, phi, 0.5 * m["radial"], mats, fluid).sum(-1)[:, 0], phi, m["dtotal"]
 
 
 def max_torque_batch(
@@ -325,6 +330,7 @@ def continuous_torque(
     off = np.asarray(off_torque, dtype=float)
     i_max_sq = continuous_current_sq(net, wire_limit, fluid_limit)
     i_a = np.sqrt(np.maximum(i_max_sq(off * w), 0.0))
+    i_a = np.broadcast_to(i_a, path.turns.shape).copy()  # (S,), also for one design
 
     def fixed_point(c1: FloatArray) -> FloatArray:
         """The root of h(I) = I² − I_cont²(ω·(T_off + c1·I)) on [0, I_a] (h increasing:
@@ -355,15 +361,24 @@ def continuous_torque(
     # T(0) = 0 and T is concave past the knee: the fixed point on the chord through the
     # curve at I_k lies at or above the true one, and the next chord goes through it; each
     # solve starts from the last flux scaled to the new current (the flux is near linear)
-    i, c1, phi, ratio = i_a, np.zeros_like(i_a), None, np.ones_like(i_a)
+    # Warm starts: Φ(I) is concave (F(Φ) convex), so its tangent at a solved point and the
+    # linear circuit's flux both lie above the root: Newton from their minimum converges
+    # monotonically ([numerical-recipes] §9.4).
+    kern = _kernels(path)
+    turns = path.turns[:, None]
+    lin = turns / _mmf(path, mats, np.zeros((turns.shape[0], 1)), kern)["dtotal"]  # Φ/I
+    i_old = phi = dfdphi = None
     if hint is not None:
-        i_h, phi = np.asarray(hint[0], dtype=float), np.asarray(hint[1], dtype=float)
-        ratio = np.where(i_h > 0, i_a / np.where(i_h > 0, i_h, 1.0), 1.0)
+        i_old, phi = np.asarray(hint[0], dtype=float)[:, None], np.asarray(hint[1], dtype=float)
+        dfdphi = _mmf(path, mats, np.abs(phi), kern)["dtotal"]
+    i, c1 = i_a, np.zeros_like(i_a)
     for _ in range(passes):
-        start = None if phi is None else np.maximum(np.abs(phi) * ratio[:, None], 1e-30)
-        t, phi = yield_torque_and_flux(path, i, mats, fluid, 1e-3, start)
+        start = None
+        if phi is not None:
+            tangent = np.abs(phi) + turns * (i[:, None] - i_old) / dfdphi
+            start = np.maximum(np.minimum(tangent, lin * i[:, None]), 1e-30)
+        t, phi, dfdphi = _solved_point(path, i, mats, fluid, 1e-3, start)
+        i_old = i[:, None]
         c1 = np.where(i > 0, t / np.where(i > 0, i, 1.0), 0.0)
-        i_next = fixed_point(c1)
-        ratio = np.where(i > 0, i_next / np.where(i > 0, i, 1.0), 1.0)
-        i = i_next
+        i = fixed_point(c1)
     return i, np.where(i_a > 0, off + c1 * i, 0.0)
