@@ -9,8 +9,9 @@ of the map (the range of the errors at the corners of the design's cell), t the 
 fractional position in the cell along the worst axis (the linear-interpolation remainder,
 which vanishes at the nodes: a node is a measurement), and RANGE_FACTOR the largest miss
 over v measured at off-grid designs. A design whose dimensions off the map's axes (shell,
-coil, …) differ from the paper preset's gets the margin of a cell centre (t = ½).
-Outside the grid the error is unknown: NaN estimate, infinite bound.
+coil, …) differ from the paper preset's is off the map, as is one outside the grid: its
+error is unknown (NaN estimate, infinite bound, a note naming the fields), since those
+dimensions move the error by tens of percent (shell 0.7 mm instead of 1.4: −34 %).
 """
 
 from __future__ import annotations
@@ -161,11 +162,15 @@ def error_bound(p: Mapping[str, Any]) -> tuple[Any, Any, tuple[str, ...]]:
     off = np.zeros(np.shape(est), bool)
     names = []
     for name, value in _base_off_axes().items():
-        differs = np.asarray(p[name]) != value
+        # off the map: the map holds these at the base preset's values; a shell of 0.7 mm
+        # instead of 1.4 mm moves the error from +0.5 % to −34 % (issue 16), so no margin
+        # stands for them: the error is unknown there
+        differs = ~np.isclose(np.asarray(p[name], dtype=float), value, rtol=1e-9, atol=0.0)
         if np.any(differs):
             off = off | differs
             names.append(name)
-    margin = m.range_factor * rng * np.where(off, 1.0, spread)
+    margin = m.range_factor * rng * spread
+    est = np.where(off, np.nan, est)
     bound = np.where(np.isfinite(est), np.abs(est) + margin, np.inf)
     if np.ndim(est) == 0:
         return float(est), float(bound), tuple(names)
@@ -176,6 +181,16 @@ def circuit_error(clutch: Any) -> CircuitError:
     """The map's estimate and bound of the saturating circuit's torque error on ``clutch``."""
     m = load()
     est, bound, off = error_bound({f.name: getattr(clutch, f.name) for f in fields(clutch)})
+    if off and not math.isfinite(est):
+        return CircuitError(
+            math.nan,
+            math.inf,
+            (
+                f"saturating circuit: off the measured error map — the map holds "
+                f"{', '.join(off)} at the {m.base_preset} preset's values and this design "
+                f"differs; its error is unknown (check it with --fidelity reference)",
+            ),
+        )
     if not math.isfinite(est):
         axes = _grid()[0]
         where = ", ".join(
@@ -190,11 +205,5 @@ def circuit_error(clutch: Any) -> CircuitError:
                 f"(benchmarks/measure_circuit_map.py); its error is unknown",
             ),
         )
-    notes = ()
-    if off:
-        notes = (
-            f"circuit error map: measured with the {m.base_preset} preset's "
-            f"{', '.join(off)}; this design differs, so its error bound carries the "
-            f"margin of a cell centre ({m.range_factor:g} × the local variation of the map)",
-        )
+    notes: tuple[str, ...] = ()
     return CircuitError(est, bound, notes)

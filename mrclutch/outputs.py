@@ -93,7 +93,7 @@ _ALL = (
            "coil resistance"),
     Output("coil_power_W", "W", "coil Joule power at the current limit", "coil power"),
     Output("circuit_error_bound", "1", "largest |relative error| of the circuit's torque "
-           "against the FEM in the measured error map's cell of this design (NaN: off the "
+           "against the FEM in the measured error map's cell of this design (inf: off the "
            "map)", "circuit error bound"),
     Output("current_A", "A", "coil current of a torque-curve point", "current"),
     Output("torque_N_m", "N·m", "clutch torque (yield + viscous) at a torque-curve point",
