@@ -1,0 +1,94 @@
+"""Where ``mrclutch sweep`` runs its chunks: this process, a process pool, or a Dask cluster.
+
+``distributed`` is imported only when a Dask option is given (it takes ≈ 1 s), so
+``mrclutch --help`` and in-process sweeps never load it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from concurrent.futures import Executor, ProcessPoolExecutor
+from contextlib import contextmanager
+from typing import Any
+
+from mrclutch.cli.errors import CLIError
+
+
+@contextmanager
+def sweep_executor(
+    workers: int = 0,
+    scheduler: str | None = None,
+    dask_local: int | None = None,
+    connect_timeout: float = 10.0,
+) -> Iterator[tuple[Executor | None, int]]:
+    """(executor, how many chunks it evaluates at once); ``(None, 1)`` runs in-process.
+
+    ``workers``: a process pool of that size; ``scheduler``: the address of a running
+    dask.distributed scheduler (its workers must have mrclutch installed); ``dask_local``: a
+    LocalCluster of that many worker processes, one thread each.
+    """
+    given = [opt for opt, v in (("--workers", workers), ("--scheduler", scheduler),
+                                ("--dask-local", dask_local)) if v]  # fmt: skip
+    if len(given) > 1:
+        raise CLIError(f"{' and '.join(given)}: give one way to run the chunks")
+    if workers < 0:
+        raise CLIError(f"--workers = {workers}: must be >= 0")
+    if dask_local is not None and dask_local < 1:
+        raise CLIError(f"--dask-local = {dask_local}: must be >= 1")
+    if not connect_timeout > 0:
+        raise CLIError(f"--connect-timeout = {connect_timeout}: must be > 0 s")
+    if scheduler is None and dask_local is None:
+        if not workers:
+            yield None, 1
+            return
+        pool = ProcessPoolExecutor(workers)
+        try:
+            yield pool, workers
+        finally:
+            pool.shutdown(cancel_futures=True)
+        return
+    with _dask_client(scheduler, dask_local, connect_timeout) as client:
+        executor = client.get_executor()
+        try:
+            yield executor, max(1, sum(client.nthreads().values()))
+        finally:
+            executor.shutdown(wait=False)
+
+
+@contextmanager
+def _dask_client(scheduler: str | None, n: int | None, timeout: float) -> Iterator[Any]:
+    import distributed
+
+    if scheduler is None:
+        cluster = distributed.LocalCluster(
+            n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None
+        )
+        client = distributed.Client(cluster)
+        try:
+            yield client
+        finally:
+            client.close()
+            cluster.close()
+        return
+    try:
+        client = distributed.Client(scheduler, timeout=timeout)
+    except (OSError, ValueError) as exc:  # a bad address; none answering (TimeoutError)
+        raise CLIError(f"--scheduler {scheduler}: {_line(exc)}") from None
+    try:
+        try:
+            client.wait_for_workers(1, timeout=timeout)
+        except (OSError, TimeoutError):
+            raise CLIError(
+                f"--scheduler {scheduler}: no worker joined within {timeout:g} s"
+            ) from None
+        yield client
+    finally:
+        client.close()
+
+
+def _line(exc: BaseException) -> str:
+    text = str(exc).strip() or type(exc).__name__
+    return text.splitlines()[0]
+
+
+__all__ = ["sweep_executor"]
