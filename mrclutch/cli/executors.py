@@ -60,9 +60,7 @@ def _dask_client(scheduler: str | None, n: int | None, timeout: float) -> Iterat
     import distributed
 
     if scheduler is None:
-        cluster = distributed.LocalCluster(
-            n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None
-        )
+        cluster = local_cluster(n or 1)
         client = distributed.Client(cluster)
         try:
             yield client
@@ -86,9 +84,24 @@ def _dask_client(scheduler: str | None, n: int | None, timeout: float) -> Iterat
         client.close()
 
 
+def local_cluster(n: int) -> Any:
+    """A Dask LocalCluster of ``n`` worker processes, one thread each, without the
+    ``MALLOC_TRIM_THRESHOLD_=65536`` Dask sets in its workers' environment by default: glibc
+    then maps and unmaps every array above 128 KiB, and a 20 000-design chunk takes 1.2 s in
+    a worker instead of 0.4 s (measured here). A value the user set in the environment
+    is kept (the workers inherit it)."""
+    import dask
+    import distributed
+
+    with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
+        return distributed.LocalCluster(
+            n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None
+        )
+
+
 def _line(exc: BaseException) -> str:
     text = str(exc).strip() or type(exc).__name__
     return text.splitlines()[0]
 
 
-__all__ = ["sweep_executor"]
+__all__ = ["local_cluster", "sweep_executor"]
