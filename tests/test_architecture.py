@@ -28,6 +28,9 @@ LAZY_OK = {
     "matplotlib": "only where a figure is drawn",
     "scipy": "≈ 0.3–0.4 s; the CLI and the analytic commands start without it",
     "tqdm": "progress bars only on long work",
+    "dask": "only when a sweep runs on a Dask cluster",
+    "distributed": "≈ 1 s; only when a sweep runs on a Dask cluster",
+    "pyarrow": "≈ 0.3 s; only when a sweep writes or reads Parquet",
 }
 
 

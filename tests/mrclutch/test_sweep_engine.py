@@ -11,7 +11,14 @@ from hypothesis import strategies as st
 from geometry import ParameterError
 from geometry.params import broadcast_fields, valid
 from geometry.regions import per_topology
-from mrclutch.sweep import ParamRange, SweepSpec, load_spec, pareto_front, run_sweep
+from mrclutch.sweep import (
+    ParamRange,
+    SweepSpec,
+    executor_workers,
+    load_spec,
+    pareto_front,
+    run_sweep,
+)
 
 OUTPUTS = ("outer_radius", "pole_radius")
 
@@ -165,12 +172,8 @@ def test_dask_local_cluster_executor_gives_the_same_rows(tmp_path):
         ) as cluster,
         distributed.Client(cluster) as client,
     ):
-        run_sweep(
-            spec,
-            tmp_path / "b.csv",
-            geometric_outputs,
-            OUTPUTS,
-            executor=client.get_executor(),
-            progress=False,
-        )
+        executor = client.get_executor()
+        assert executor_workers(executor) == 2  # the cluster's threads: 8 chunks in flight
+        run_sweep(spec, tmp_path / "b.csv", geometric_outputs, OUTPUTS, executor=executor,
+                  progress=False)  # fmt: skip
     assert (tmp_path / "a.csv").read_text() == (tmp_path / "b.csv").read_text()

@@ -6,11 +6,17 @@ import argparse
 import math
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor
 
 from geometry.validation import check_choice
-from mrclutch.cli.commands._common import add_design_args, atomic_path, load_design_args, print_json
+from mrclutch.cli.commands._common import (
+    add_design_args,
+    atomic_path,
+    check_writable,
+    load_design_args,
+    print_json,
+)
 from mrclutch.cli.errors import CLIError
+from mrclutch.cli.executors import sweep_executor
 from mrclutch.cli.plots.design import pareto_plot
 from mrclutch.cli.report import write_report
 from mrclutch.design import ClutchDesign, design_from_mapping, design_to_toml
@@ -22,7 +28,7 @@ from mrclutch.pipeline import (
     BatchEvaluator,
     evaluate,
 )
-from mrclutch.sweep import load_spec, run_sweep
+from mrclutch.sweep import is_parquet, load_spec, run_sweep
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -73,10 +79,36 @@ def register(sub: argparse._SubParsersAction) -> None:
         "written as they come, so an interrupted sweep loses nothing and --resume carries on.",
     )
     p.add_argument("spec", metavar="SPEC.toml", help="sweep spec (see examples/*.toml)")
-    p.add_argument("--out", required=True, metavar="RESULTS.csv", help="CSV file to write")
+    p.add_argument(  # dest "results": a .parquet output is a folder, checked in _sweep
+        "--out",
+        dest="results",
+        required=True,
+        metavar="RESULTS.csv|RESULTS.parquet",
+        help="CSV file to write, or a Parquet dataset (a folder of one part file a chunk) "
+        "when the name ends in .parquet",
+    )
     p.add_argument("--resume", action="store_true", help="continue an interrupted sweep")
     p.add_argument("--overwrite", action="store_true", help="replace an existing results file")
     p.add_argument("--workers", type=int, default=0, help="processes (0: in this process)")
+    p.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="run the chunks on a running dask.distributed scheduler (tcp://host:8786); "
+        "its workers need mrclutch installed",
+    )
+    p.add_argument(
+        "--dask-local",
+        type=int,
+        metavar="N",
+        help="run the chunks on a local Dask cluster of N worker processes (1 thread each)",
+    )
+    p.add_argument(
+        "--connect-timeout",
+        type=float,
+        default=10.0,
+        metavar="S",
+        help="seconds to wait for the --scheduler and its first worker (default 10)",
+    )
     p.add_argument(
         "--with",
         dest="optional",
@@ -289,24 +321,21 @@ def _report(args: argparse.Namespace) -> int:
 def _sweep(args: argparse.Namespace) -> int:
     spec, rest = load_spec(args.spec)
     base = design_from_mapping({"clutch": spec.base.to_mm(), **rest}, where=args.spec)
-    if args.workers < 0:
-        raise CLIError(f"--workers = {args.workers}: must be >= 0")
+    check_writable("--out", args.results, folder=is_parquet(args.results))
     evaluator = BatchEvaluator(base, tuple(args.optional))
-    executor = ProcessPoolExecutor(args.workers) if args.workers else None
-    try:
+    where = (args.workers, args.scheduler, args.dask_local, args.connect_timeout)
+    with sweep_executor(*where) as (executor, workers):
         res = run_sweep(
             spec,
-            args.out,
+            args.results,
             evaluator,
             evaluator.columns,
             executor=executor,
+            workers=workers,
             resume=args.resume,
             overwrite=args.overwrite,
             progress=not args.no_progress,
         )
-    finally:
-        if executor is not None:
-            executor.shutdown(cancel_futures=True)
     if not res.complete:
         print(
             f"mrclutch sweep: interrupted after {res.rows} of {spec.n_designs} designs; "

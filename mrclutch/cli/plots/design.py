@@ -7,11 +7,17 @@ from pathlib import Path
 import numpy as np
 
 from geometry.atomic import atomic_path
-from mrclutch.sweep import pareto_front
+from mrclutch.sweep import is_parquet, pareto_front
 
 
 def read_results(path: str | Path) -> dict[str, np.ndarray]:
-    """A sweep CSV as columns of floats (empty cells → NaN)."""
+    """A sweep's CSV (or Parquet dataset, a folder ending in .parquet) as columns of floats
+    (empty cells → NaN)."""
+    if is_parquet(path):
+        import pyarrow.parquet as pq
+
+        table = pq.read_table(path)
+        return {name: table[name].to_numpy().astype(float) for name in table.column_names}
     data = np.genfromtxt(path, delimiter=",", names=True, dtype=float, ndmin=1)
     return {name: np.atleast_1d(data[name]) for name in data.dtype.names}
 
