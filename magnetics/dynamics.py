@@ -86,8 +86,8 @@ STEEL_CONDUCTIVITY = 5.8e6
 #: s, first-order lag of the fluid's chain formation: an assumption ("sub-millisecond",
 #: module docstring, [kubik2022]).
 FLUID_RESPONSE_TIME = 0.25e-3
-#: The bias at which the eddy lag is taken, as a fraction of the peak current: the middle
-#: of the torque range a rendered spring sweeps (the incremental μ depends on it).
+#: The bias at which the eddy lag is taken, as a fraction of the peak gap flux: about the
+#: middle of the torque range a rendered spring sweeps (the incremental μ depends on it).
 BIAS = 0.5
 #: Zeros of J0 [abramowitz-stegun] Table 9.5; beyond them McMahon's expansion (9.5.12).
 _J0_ZEROS = (2.404825557695773, 5.520078110286311, 8.653727912911013, 11.79153443901428,
@@ -235,31 +235,52 @@ def current_rise(
     amplifier: Amplifier,
     materials: Mapping[str, Magnetic] | None = None,
     nodes: int = 8,
+    flux: FloatArray | None = None,
 ) -> CurrentRise:
-    """The amplifier's step to ``current`` (S,) through the coil (resistance (S,) Ω,
-    L_inc(i) of the circuit): Gauss–Legendre in u = −ln(1 − i/I) with ``nodes`` points on
-    [0, u(10 %)] and on [u(10 %), u(90 %)] (module docstring). inf where V ≤ R·I (the
-    amplifier cannot reach the current)."""
+    """The amplifier's step to ``current`` (S,) through the coil (resistance (S,) Ω).
+
+    Integrated in the gap flux Φ, where the circuit is explicit (no solve at the nodes):
+    i = F(Φ)/N, dλ/dΦ = N(1 + P·R_st), so dt/dΦ = max(τ_a (di/dΦ)/(I − i),
+    (dλ/dΦ)/(V − R i)) (module docstring); with Φ = Φ_I(1 − e^{−u}) the first term is
+    τ_a exactly in the linear regime. Gauss–Legendre, ``nodes`` points on [0, Φ(10 %)]
+    and on [Φ(10 %), Φ(90 %)]; ``flux`` (S, 3): the gap flux at 0.1 I, 0.9 I and I if
+    already solved. inf where V ≤ R·I (the amplifier cannot reach the current)."""
+    mats = MATERIALS if materials is None else materials
     size = path.turns.size
     cur = np.broadcast_to(np.asarray(current, float), (size,))
     res = np.broadcast_to(np.asarray(resistance, float), (size,))
+    n_t = path.turns
+    kn = _kernels(path)
+    if flux is None:
+        flux = np.abs(solve_flux(path, n_t[:, None] * cur[:, None] * _RISE_FRACTIONS, mats,
+                                 kernels=kn))  # fmt: skip
+    f10, f90, f_end = flux[:, 0], flux[:, 1], flux[:, 2]
     x, w = np.polynomial.legendre.leggauss(int(nodes))
-    u10, u90 = math.log(10 / 9), math.log(10.0)
-    u = np.concatenate([0.5 * u10 * (x + 1), u10 + 0.5 * (u90 - u10) * (x + 1)])
-    wu = np.concatenate([0.5 * u10 * w, 0.5 * (u90 - u10) * w])
-    frac = 1.0 - np.exp(-u)  # i/I at the nodes
-    i = cur[:, None] * frac
-    _, L = flux_linkage(path, i, materials)
+    u_of = lambda f: -np.log1p(-f / f_end)  # noqa: E731
+    u10, u90 = u_of(f10), u_of(f90)
+    u = np.concatenate([0.5 * u10[:, None] * (x + 1),
+                        u10[:, None] + 0.5 * (u90 - u10)[:, None] * (x + 1)], axis=1)  # fmt: skip
+    wu = np.concatenate([0.5 * u10[:, None] * w, 0.5 * (u90 - u10)[:, None] * w], axis=1)
+    phi = f_end[:, None] * -np.expm1(-u)
+    m = _mmf(path, mats, phi, kn)
+    i = m["total"] / n_t[:, None]
+    di = m["dtotal"] / n_t[:, None]  # di/dΦ
+    dlam = n_t[:, None] * (1.0 + kn.leak * m["dstack"])  # dλ/dΦ
+    dphi_du = f_end[:, None] - phi
     v = amplifier.supply_voltage
     head = v - res[:, None] * i
-    with np.errstate(divide="ignore"):
-        volt = np.where(head > 0, L * (cur[:, None] - i) / np.where(head > 0, head, 1.0), np.inf)
-    g = np.maximum(amplifier.time_constant, volt)
+    volt = np.where(head > 0, dlam * dphi_du / np.where(head > 0, head, 1.0), np.inf)
+    amp = amplifier.time_constant * di * dphi_du / (cur[:, None] - i)
+    g = np.maximum(amp, volt) * wu
     n = int(nodes)
-    t10 = np.sum(g[:, :n] * wu[:n], axis=1)
-    t90 = t10 + np.sum(g[:, n:] * wu[n:], axis=1)
+    t10 = np.sum(g[:, :n], axis=1)
+    t90 = t10 + np.sum(g[:, n:], axis=1)
     short = v <= res * cur
     return CurrentRise(np.where(short, np.inf, t10), np.where(short, np.inf, t90))
+
+
+#: Fractions of the step's current where the rise solves the circuit (10 %, 90 %, 100 %).
+_RISE_FRACTIONS = np.array([0.1, 0.9, 1.0])
 
 
 # ---- eddy currents ----------------------------------------------------------------------------
@@ -288,8 +309,10 @@ def eddy_parts(
     laminations: Laminations | None = None,
     sigma: float = STEEL_CONDUCTIVITY,
     materials: Mapping[str, Magnetic] | None = None,
+    flux: ArrayLike | None = None,
 ) -> dict[str, EddyPart]:
-    """Each steel part's eddy lag at the bias ``current`` (S,) (module docstring:
+    """Each steel part's eddy lag at the bias ``current`` (S,), or at the gap ``flux``
+    (S,) Wb where given (module docstring:
     boundary conditions and combination rule). Parts: ``core``, ``drums`` (all the walls
     in both zones together), ``poles``, ``back_iron``. The gap flux's eddy time constant is
     the sum of the parts' ``contribution``."""
@@ -298,9 +321,12 @@ def eddy_parts(
     mats = MATERIALS if materials is None else materials
     steel = magnetic(path.steel, mats)
     size = path.turns.size
-    cur = np.broadcast_to(np.asarray(current, float), (size,))
     kn = _kernels(path)
-    phi = np.abs(solve_flux(path, path.turns[:, None] * cur[:, None], mats, kernels=kn))
+    if flux is None:
+        cur = np.broadcast_to(np.asarray(current, float), (size,))
+        phi = np.abs(solve_flux(path, path.turns[:, None] * cur[:, None], mats, kernels=kn))
+    else:
+        phi = np.abs(np.broadcast_to(np.asarray(flux, float), (size,)))[:, None]
     m = _mmf(path, mats, phi, kn)
     phi_sh = m["phi_shell"]
     r_st, r_sh, p = m["dstack"][:, 0], m["dshell"][:, 0], kn.leak[:, 0]
@@ -436,10 +462,13 @@ def torque_response(
     materials: Mapping[str, Magnetic] | None = None,
     nodes: int = 8,
     eddy: bool = True,
+    flux_peak: ArrayLike | None = None,
 ) -> TorqueResponse:
     """The torque response of the designs of ``rg`` to a step to ``current`` (S,) A: the
-    amplifier's rise through the coil, the eddy lag at ``bias``·current and the fluid's lag
-    (module docstring). ``path`` reuses a circuit already built from ``rg``."""
+    amplifier's rise through the coil, the eddy lag at ``bias``× the peak gap flux and the
+    fluid's lag
+    (module docstring). ``path`` reuses a circuit already built from ``rg``; ``flux_peak``
+    (S,) Wb the gap flux at ``current`` where already solved (the torque's solve)."""
     amp = Amplifier() if amplifier is None else amplifier
     check_range("bias", bias, 0.0, 1.0, "")
     check_nonnegative("fluid_time", fluid_time, " s")
@@ -452,9 +481,25 @@ def torque_response(
     res = np.broadcast_to(
         np.asarray(coil_resistance(rg.fields, at["coil_in"], at["coil_out"], coil_temperature),
                    float), (size,))  # fmt: skip
-    lam, L = flux_linkage(pth, np.stack([np.zeros(size), cur], 1), materials)
-    rise = current_rise(pth, res, cur, amp, materials, nodes)
-    parts = eddy_parts(pth, bias * cur, laminations, materials=materials) if eddy else {}
+    mats = MATERIALS if materials is None else materials
+    kn = _kernels(pth)
+    n_t = pth.turns[:, None]
+    ni = n_t * cur[:, None]
+    if flux_peak is None:
+        peak = np.abs(solve_flux(pth, ni, mats, rtol=1e-8, kernels=kn))
+    else:
+        peak = np.abs(np.broadcast_to(np.asarray(flux_peak, float), (size,)))[:, None]
+    m = _mmf(pth, mats, np.concatenate([np.zeros((size, 1)), peak], 1), kn)
+    # 10 % and 90 %: warm starts from the linear circuit and one Newton step back from the
+    # peak; 1e-6 of the MMF is far below the model's own error
+    start = np.concatenate([0.1 * ni / m["dtotal"][:, :1], peak - 0.1 * ni / m["dtotal"][:, 1:]], 1)
+    ends = solve_flux(pth, ni * _RISE_FRACTIONS[:2], mats, rtol=1e-6, kernels=kn,
+                      start=np.maximum(start, 0.0))  # fmt: skip
+    fl = np.concatenate([np.abs(ends), peak], 1)
+    lam = n_t * m["phi_shell"]
+    L = n_t**2 * (1.0 + kn.leak * m["dstack"]) / m["dtotal"]  # flux_linkage, explicit in Φ
+    rise = current_rise(pth, res, cur, amp, mats, nodes, flux=fl)
+    parts = eddy_parts(pth, cur, laminations, materials=mats, flux=bias * fl[:, 2]) if eddy else {}
     return TorqueResponse(cur.copy(), res.copy(), L[:, 0], L[:, 1], lam[:, 1] / cur, rise,
                           parts, float(fluid_time))  # fmt: skip
 

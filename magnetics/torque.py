@@ -148,6 +148,17 @@ def yield_torque_at(
     return _torque_and_flux(path, current, materials, fluid, rtol)[0]
 
 
+def yield_torque_and_flux(
+    path: MagneticPath,
+    current: ArrayLike,
+    materials: Mapping[str, Magnetic] | None = None,
+    rtol: float = 1e-7,
+) -> tuple[FloatArray, FloatArray]:
+    """``yield_torque_at`` and the gap flux (S,) Wb it solved (for the torque response)."""
+    torque, phi = _torque_and_flux(path, current, materials, None, rtol)
+    return torque, phi[:, 0]
+
+
 def _torque_and_flux(
     path: MagneticPath,
     current: ArrayLike,
