@@ -244,7 +244,9 @@ def current_rise(
     (dλ/dΦ)/(V − R i)) (module docstring); with Φ = Φ_I(1 − e^{−u}) the first term is
     τ_a exactly in the linear regime. Gauss–Legendre, ``nodes`` points on [0, Φ(10 %)]
     and on [Φ(10 %), Φ(90 %)]; ``flux`` (S, 3): the gap flux at 0.1 I, 0.9 I and I if
-    already solved. inf where V ≤ R·I (the amplifier cannot reach the current)."""
+    already known (the first two may be estimates: the times are corrected to first order
+    to 10 % and 90 % of I); None: solved. inf where V ≤ R·I (the amplifier cannot reach
+    the current)."""
     mats = MATERIALS if materials is None else materials
     size = path.turns.size
     cur = np.broadcast_to(np.asarray(current, float), (size,))
@@ -261,7 +263,7 @@ def current_rise(
     u = np.concatenate([0.5 * u10[:, None] * (x + 1),
                         u10[:, None] + 0.5 * (u90 - u10)[:, None] * (x + 1)], axis=1)  # fmt: skip
     wu = np.concatenate([0.5 * u10[:, None] * w, 0.5 * (u90 - u10)[:, None] * w], axis=1)
-    phi = f_end[:, None] * -np.expm1(-u)
+    phi = np.concatenate([f_end[:, None] * -np.expm1(-u), flux[:, :2]], axis=1)  # + the ends
     m = _mmf(path, mats, phi, kn)
     i = m["total"] / n_t[:, None]
     di = m["dtotal"] / n_t[:, None]  # di/dΦ
@@ -271,10 +273,15 @@ def current_rise(
     head = v - res[:, None] * i
     volt = np.where(head > 0, dlam * dphi_du / np.where(head > 0, head, 1.0), np.inf)
     amp = amplifier.time_constant * di * dphi_du / (cur[:, None] - i)
-    g = np.maximum(amp, volt) * wu
+    dt_du = np.maximum(amp, volt)
+    g = dt_du[:, :-2] * wu
     n = int(nodes)
-    t10 = np.sum(g[:, :n], axis=1)
-    t90 = t10 + np.sum(g[:, n:], axis=1)
+    # the ends may be approximate fluxes: first-order correction to 10 % and 90 % of I,
+    # (f·I − i(Φ_end))·dt/di (exact ends: zero)
+    dt_di = dt_du[:, -2:] / (di * dphi_du)[:, -2:]
+    fix = (np.array([0.1, 0.9]) * cur[:, None] - i[:, -2:]) * np.where(np.isfinite(dt_di), dt_di, 0)
+    t10 = np.sum(g[:, :n], axis=1) + fix[:, 0]
+    t90 = np.sum(g, axis=1) + fix[:, 1]
     short = v <= res * cur
     return CurrentRise(np.where(short, np.inf, t10), np.where(short, np.inf, t90))
 
@@ -490,12 +497,12 @@ def torque_response(
     else:
         peak = np.abs(np.broadcast_to(np.asarray(flux_peak, float), (size,)))[:, None]
     m = _mmf(pth, mats, np.concatenate([np.zeros((size, 1)), peak], 1), kn)
-    # 10 % and 90 %: warm starts from the linear circuit and one Newton step back from the
-    # peak; 1e-6 of the MMF is far below the model's own error
-    start = np.concatenate([0.1 * ni / m["dtotal"][:, :1], peak - 0.1 * ni / m["dtotal"][:, 1:]], 1)
-    ends = solve_flux(pth, ni * _RISE_FRACTIONS[:2], mats, rtol=1e-6, kernels=kn,
-                      start=np.maximum(start, 0.0))  # fmt: skip
-    fl = np.concatenate([np.abs(ends), peak], 1)
+    # the flux at 10 % and 90 % of I, not solved: the linear circuit's, and one Newton step
+    # back from the peak; current_rise corrects its times to first order (tests: within
+    # 2 % of the solved ends with 64 nodes)
+    f10 = 0.1 * ni / m["dtotal"][:, :1]
+    f90 = np.maximum(peak - 0.1 * ni / m["dtotal"][:, 1:], f10)
+    fl = np.concatenate([np.minimum(f10, 0.5 * peak), f90, peak], 1)
     lam = n_t * m["phi_shell"]
     L = n_t**2 * (1.0 + kn.leak * m["dstack"]) / m["dtotal"]  # flux_linkage, explicit in Φ
     rise = current_rise(pth, res, cur, amp, mats, nodes, flux=fl)
