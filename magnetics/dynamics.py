@@ -500,9 +500,9 @@ def torque_response(
     # the flux at 10 % and 90 % of I, not solved: the linear circuit's, and one Newton step
     # back from the peak; current_rise corrects its times to first order (tests: within
     # 2 % of the solved ends with 64 nodes)
-    f10 = 0.1 * ni / m["dtotal"][:, :1]
-    f90 = np.maximum(peak - 0.1 * ni / m["dtotal"][:, 1:], f10)
-    fl = np.concatenate([np.minimum(f10, 0.5 * peak), f90, peak], 1)
+    f10 = np.minimum(0.1 * ni / m["dtotal"][:, :1], 0.5 * peak)
+    f90 = np.clip(peak - 0.1 * ni / m["dtotal"][:, 1:], f10, 0.999 * peak)
+    fl = np.concatenate([f10, f90, peak], 1)
     lam = n_t * m["phi_shell"]
     L = n_t**2 * (1.0 + kn.leak * m["dstack"]) / m["dtotal"]  # flux_linkage, explicit in Φ
     rise = current_rise(pth, res, cur, amp, mats, nodes, flux=fl)
