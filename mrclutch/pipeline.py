@@ -267,9 +267,11 @@ def mr_at_hand(design: ClutchDesign, inertia: Any, damping: Any, torque: Any, ma
     ``evaluate_batch`` both feed the haptic model. ``delay``: the torque response's
     equivalent delay, used where ``operating.delay_source`` is "geometry"."""
     op = design.operating
-    tau = delay if op.delay_source == "geometry" and delay is not None else op.delay
-    pair = Actuator.mr_pair(inertia, damping, torque, mass, tau, design.name)
-    return reflect(pair, design.transmission)
+    pair = Actuator.mr_pair(inertia, damping, torque, mass, op.delay, design.name)
+    hp = reflect(pair, design.transmission)
+    if op.delay_source == "geometry" and delay is not None:
+        hp = replace(hp, delay=delay)  # one delay per design (arrays in a sweep)
+    return hp
 
 
 def motor_transmission(mr: HapticParams, mr_tr: Transmission, motor: Actuator) -> Transmission:
