@@ -96,3 +96,15 @@ def test_design_default_is_fixed():
     assert ClutchDesign().operating.delay_source == "fixed"
     with pytest.raises(Exception, match="delay_source"):
         Operating(delay_source="geo")
+
+
+def test_plot_torque_step(tmp_path):
+    from mrclutch.cli.plots.dynamics import plot_torque_step
+
+    out = tmp_path / "step.png"
+    from geometry.section import build_section
+    from magnetics.dynamics import torque_response
+
+    resp = torque_response(build_section(PAPER.clutch).table, PAPER.current_limit)
+    plot_torque_step([("paper", resp)], out, typed_delay=1e-3)
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
