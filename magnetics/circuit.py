@@ -297,7 +297,8 @@ def _mmf(
     path: MagneticPath, mats: Mapping[str, Magnetic], phi: FloatArray, kern: _Kernels | None = None
 ) -> dict[str, FloatArray]:
     """MMF drops (A) at gap flux ``phi`` ≥ 0 (S, C): radial (gaps + drums, both zones),
-    stack, shell flux, total and dF/dΦ."""
+    stack, shell flux, total and dF/dΦ; ``dstack`` = dF_stack/dΦ, ``dshell`` = dF_shell/dΦ_shell
+    (the incremental reluctances of the two branches, for the inductance)."""
     kn = _kernels(path) if kern is None else kern
     steel, fluid = magnetic(path.steel, mats), magnetic(path.fluid, mats)
     g, dg = _sum_h(fluid, phi, kn.gap_k, kn.gap_w, kn.gap_wk)
@@ -309,7 +310,8 @@ def _mmf(
     shell = phi + kn.leak * stack
     s, ds = _sum_h(steel, shell, kn.shell_k, kn.shell_w, kn.shell_wk)
     return {"gaps": g, "radial": radial, "stack": stack, "phi_shell": shell,
-            "total": stack + s, "dtotal": dstack + ds * (1.0 + kn.leak * dstack)}  # fmt: skip
+            "total": stack + s, "dstack": dstack, "dshell": ds,
+            "dtotal": dstack + ds * (1.0 + kn.leak * dstack)}  # fmt: skip
 
 
 def solve_flux(

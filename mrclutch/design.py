@@ -13,6 +13,7 @@ the key name too::
     max_current_density_A_per_mm2 = 30.0   # default: IEC 60949 adiabatic for peak_duration_s
     input_speed_rpm = 530
     delay_ms = 1.0
+    delay_source = "fixed"   # or "geometry": the delay from magnetics.dynamics
     coil_temperature_C = 20
     fluid_temperature_C = 20
     ambient_temperature_C = 20
@@ -25,6 +26,14 @@ the key name too::
     bearing_load_N = 10
     grease_viscosity_mm2_per_s = 110
     seal_torque_mN_m = 0
+
+    [amplifier]              # optional, defaults in `magnetics.dynamics.Amplifier`
+    supply_voltage_V = 24
+    current_bandwidth_Hz = 2000
+
+    [laminations]            # optional: laminated/slotted steel (0 = solid)
+    core_mm = 0
+    shell_mm = 0
 
     [transmission]           # optional, defaults: the paper's MR bench (170 mm lever)
     lever_mm = 170
@@ -49,11 +58,15 @@ import numpy as np
 
 from geometry.materials import MRF
 from geometry.params import DrumClutch, preset
-from geometry.validation import ParameterError, check_positive, check_range
+from geometry.validation import ParameterError, check_choice, check_positive, check_range
 from magnetics.drag import ROOM_TEMPERATURE, Support
+from magnetics.dynamics import Amplifier, Laminations
 from magnetics.materials import FLUIDS
 from magnetics.thermal import adiabatic_current_density
 from mrclutch.haptics.actuator import MR_170, MR_DELAY, Transmission
+
+#: Where the haptic model's actuator delay comes from (``Operating.delay_source``).
+DELAY_SOURCES: tuple[str, ...] = ("fixed", "geometry")
 
 
 @dataclass(frozen=True)
@@ -71,8 +84,12 @@ class Operating:
     ambient_temperature: float = 20.0  # °C, air around the clutch
     wire_temperature_limit: float = 155.0  # °C: magnet wire of thermal class 155 [iec60085]
     peak_duration: float = 1.0  # s the peak current is held (sets the default J limit)
+    #: "fixed": the haptic model uses ``delay``; "geometry": the torque response's
+    #: equivalent delay from the design (magnetics.dynamics; docs/dynamics.md)
+    delay_source: str = "fixed"
 
     def __post_init__(self) -> None:
+        check_choice("delay_source", self.delay_source, DELAY_SOURCES)
         check_range("max_current", self.max_current, 0.0, 1e4, " A", lo_open=True)
         j = self.max_current_density
         if j is not None and not (math.isinf(j) and j > 0):
@@ -110,6 +127,8 @@ class ClutchDesign:
     transmission: Transmission = MR_170
     name: str = "design"
     support: Support = field(default_factory=Support)
+    amplifier: Amplifier = field(default_factory=Amplifier)
+    laminations: Laminations = field(default_factory=Laminations)
 
     @property
     def current_limit(self) -> float:
@@ -159,6 +178,14 @@ _SUPPORT_KEYS: dict[str, tuple[str, float]] = {
     "grease_viscosity_mm2_per_s": ("grease_viscosity", 1e-6),
     "seal_torque_mN_m": ("seal_torque", 1e-3),
 }
+_AMPLIFIER_KEYS: dict[str, tuple[str, float]] = {
+    "supply_voltage_V": ("supply_voltage", 1.0),
+    "current_bandwidth_Hz": ("current_bandwidth_hz", 1.0),
+}
+_LAMINATION_KEYS: dict[str, tuple[str, float]] = {
+    "core_mm": ("core", 1e-3),
+    "shell_mm": ("shell", 1e-3),
+}
 _TRANSMISSION_KEYS: dict[str, tuple[str, float]] = {
     "ratio": ("ratio", 1.0),
     "lever_mm": ("lever", 1e-3),
@@ -206,7 +233,8 @@ def _file_key(
 
 def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> ClutchDesign:
     """Build a design from a parsed design file (see the module docstring)."""
-    known = {"clutch", "operating", "transmission", "support", "name"}
+    known = {"clutch", "operating", "transmission", "support", "amplifier", "laminations",
+             "name"}  # fmt: skip
     for key in data:
         if key not in known and not isinstance(data[key], dict):
             raise ParameterError(f"{where}: {key}: not in a table; dimensions go under [clutch]")
@@ -220,14 +248,28 @@ def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> Clutc
     base_name = table.pop("base", None)
     base = preset(base_name) if base_name is not None else None
     clutch = DrumClutch.from_mm(table, base=base, where=f"{where}: clutch")
-    op_table = data["operating"] if "operating" in data else {}
+    op_table = dict(data["operating"]) if "operating" in data else {}
+    amp_table = data["amplifier"] if "amplifier" in data else {}
+    lam_table = data["laminations"] if "laminations" in data else {}
     tr_table = data["transmission"] if "transmission" in data else {}
     sup_table = dict(data["support"]) if "support" in data else {}
-    for name, t in (("operating", op_table), ("transmission", tr_table), ("support", sup_table)):
+    for name, t in (("operating", op_table), ("transmission", tr_table), ("support", sup_table),
+                    ("amplifier", amp_table), ("laminations", lam_table)):  # fmt: skip
         if not isinstance(t, dict):
             raise ParameterError(f"{where}: [{name}] must be a table")
+    source = op_table.pop("delay_source", "fixed")
+    if not isinstance(source, str) or source not in DELAY_SOURCES:
+        raise ParameterError(f"{where}: operating.delay_source = {source!r}: must be one of "
+                             f"{', '.join(repr(x) for x in DELAY_SOURCES)}")  # fmt: skip
     with _file_key(op_table, _OPERATING_KEYS, f"{where}: operating"):
-        operating = Operating(**_read_table(op_table, _OPERATING_KEYS, f"{where}: operating"))
+        operating = Operating(**_read_table(op_table, _OPERATING_KEYS, f"{where}: operating"),
+                              delay_source=source)  # fmt: skip
+    with _file_key(amp_table, _AMPLIFIER_KEYS, f"{where}: amplifier"):
+        amplifier = Amplifier(**_read_table(amp_table, _AMPLIFIER_KEYS, f"{where}: amplifier"))
+    with _file_key(lam_table, _LAMINATION_KEYS, f"{where}: laminations"):
+        laminations = Laminations(
+            **_read_table(lam_table, _LAMINATION_KEYS, f"{where}: laminations")
+        )
     with _file_key(tr_table, _TRANSMISSION_KEYS, f"{where}: transmission"):
         transmission = replace(
             MR_170, **_read_table(tr_table, _TRANSMISSION_KEYS, f"{where}: transmission")
@@ -243,7 +285,8 @@ def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> Clutc
     with _file_key(sup_table, _SUPPORT_KEYS, f"{where}: support"):
         support = Support(bearing=bearing, **sup)  # type: ignore[arg-type]
     name = data["name"] if "name" in data else Path(where).stem
-    return ClutchDesign(clutch, operating, transmission, str(name), support)
+    return ClutchDesign(clutch, operating, transmission, str(name), support, amplifier,
+                        laminations)  # fmt: skip
 
 
 def load_design(path: str | Path) -> ClutchDesign:
@@ -272,6 +315,11 @@ def design_to_toml(design: ClutchDesign) -> str:
         raw = getattr(op, name)
         if raw is not None and math.isfinite(raw / factor):
             lines.append(f"{key} = {_toml(raw / factor)}")
+    lines.append(f"delay_source = {_toml(op.delay_source)}")
+    for table, keys, obj in (("amplifier", _AMPLIFIER_KEYS, design.amplifier),
+                             ("laminations", _LAMINATION_KEYS, design.laminations)):  # fmt: skip
+        lines += ["", f"[{table}]"]
+        lines += [f"{k} = {_toml(getattr(obj, n) / f)}" for k, (n, f) in keys.items()]
     lines += ["", "[transmission]"]
     lines += [f"{k} = {_toml(getattr(tr, n) / f)}" for k, (n, f) in _TRANSMISSION_KEYS.items()]
     sup = design.support

@@ -95,6 +95,9 @@ _ALL = (
     Output("circuit_error_bound", "1", "largest |relative error| of the circuit's torque "
            "against the FEM in the measured error map's cell of this design (inf: off the "
            "map)", "circuit error bound"),
+    Output("torque_delay_s", "s", "equivalent pure delay of the torque's response to a "
+           "current step: Σ of the electrical, eddy-current and fluid lags "
+           "(magnetics.dynamics, docs/dynamics.md)", "torque delay", "ms", 1e3),
     Output("current_A", "A", "coil current of a torque-curve point", "current"),
     Output("torque_N_m", "N·m", "clutch torque (yield + viscous) at a torque-curve point",
            "torque"),
@@ -182,6 +185,7 @@ SWEEP_COLUMNS: tuple[str, ...] = (
     "off_state_torque_N_m",
     "dynamic_range_dB",
     "continuous_torque_N_m",
+    "torque_delay_s",
     "m1_kg",
     "b1_N_s_per_m",
     "K_N_per_m",

@@ -34,6 +34,7 @@ from geometry.validation import check_choice
 from magnetics import thermal
 from magnetics.circuit import path_from_regions, path_from_section
 from magnetics.drag import Drag, coupled_fluid_inertia, drag_terms, totals
+from magnetics.dynamics import torque_response
 from magnetics.error_map import error_bound
 from magnetics.materials import FLUIDS
 from magnetics.torque import (
@@ -52,6 +53,7 @@ from mrclutch.haptics.actuator import (
     actuator,
     reflect,
 )
+from mrclutch.haptics.delay import lag_stable_stiffness
 from mrclutch.haptics.hand import backdrive_force, hand_figures
 from mrclutch.haptics.model import (
     max_passive_stiffness,
@@ -260,13 +262,18 @@ def _output_parts(mass: MassReport) -> dict[str, float]:
     return {p: float(mass.parts[p].inertia) for p in regions.OUTPUT_PARTS if p in mass.parts}
 
 
-def mr_at_hand(design: ClutchDesign, inertia: Any, damping: Any, torque: Any, mass: Any
-               ) -> HapticParams:  # fmt: skip
+def mr_at_hand(design: ClutchDesign, inertia: Any, damping: Any, torque: Any, mass: Any,
+               delay: Any = None) -> HapticParams:  # fmt: skip
     """The antagonistic pair of clutches with these figures (floats or arrays of designs),
     seen at the hand through the design's transmission (Eq. 3–4): what ``evaluate`` and
-    ``evaluate_batch`` both feed the haptic model."""
-    pair = Actuator.mr_pair(inertia, damping, torque, mass, design.operating.delay, design.name)
-    return reflect(pair, design.transmission)
+    ``evaluate_batch`` both feed the haptic model. ``delay``: the torque response's
+    equivalent delay, used where ``operating.delay_source`` is "geometry"."""
+    op = design.operating
+    pair = Actuator.mr_pair(inertia, damping, torque, mass, op.delay, design.name)
+    hp = reflect(pair, design.transmission)
+    if op.delay_source == "geometry" and delay is not None:
+        hp = replace(hp, delay=delay)  # one delay per design (arrays in a sweep)
+    return hp
 
 
 def motor_transmission(mr: HapticParams, mr_tr: Transmission, motor: Actuator) -> Transmission:
@@ -292,6 +299,7 @@ class Evaluation:
     budget: Mapping[str, Any]  # b1 and m1 as named terms beside the paper's Table 2
     zwidth: Mapping[str, Any]  # side → the Z-width (``zwidth.zwidth``) of MR pair and motor
     hand: Mapping[str, Any]  # side → ``hand.hand_figures``: coupled stability, transparency
+    response: Mapping[str, Any] = field(default_factory=dict)  # ``response_figures``
 
     def as_json(self) -> dict[str, Any]:
         mr_m, em_m = dict(self.haptic), dict(self.motor_metrics)
@@ -308,6 +316,7 @@ class Evaluation:
             ),
             "zwidth": {k: dict(v) for k, v in self.zwidth.items()},
             "hand": {k: dict(v) for k, v in self.hand.items()},
+            "response": dict(self.response),
         }
 
 
@@ -326,8 +335,15 @@ def evaluate(
     fig = clutch_figures(design, fidelity, accuracy)
     if accuracy is not None:
         fidelity = f"accuracy={accuracy:g}"
+    resp = torque_response(
+        build_section(design.clutch).table,
+        fig.max_current,
+        design.amplifier,
+        design.laminations,
+        coil_temperature=design.operating.coil_temperature,
+    )
     mr = mr_at_hand(design, fig.moving_inertia, fig.drag_damping, fig.max_torque,
-                    fig.clutch_mass)  # fmt: skip
+                    fig.clutch_mass, float(resp.equivalent_delay[0]))  # fmt: skip
     motor = actuator(MOTOR)
     em_tr = motor_transmission(mr, design.transmission, motor)
     em = reflect(motor, em_tr)
@@ -339,7 +355,29 @@ def evaluate(
     zws = {side: {key: zw[key][i] if np.ndim(zw[key]) > 1 else float(zw[key][i])
                   for key in ZWIDTH_KEYS} for i, side in enumerate(ZWIDTH_SIDES)}  # fmt: skip
     hand = {side: hand_figures(p, k) for side, p in zip(ZWIDTH_SIDES, (mr, em), strict=True)}
-    return Evaluation(design, fidelity, fig, mr, em, em_tr.gearing, mr_m, em_m, budget, zws, hand)
+    return Evaluation(design, fidelity, fig, mr, em, em_tr.gearing, mr_m, em_m, budget, zws, hand,
+                      response_figures(design, resp, mr))  # fmt: skip
+
+
+def response_figures(design: ClutchDesign, resp: Any, mr: HapticParams) -> dict[str, Any]:
+    """The torque response of one design (``magnetics.dynamics.TorqueResponse``) and what it
+    does to the haptic loop: the largest stable K with the typed delay, with the
+    equivalent delay τ_eq, and with the lags themselves (the reference τ_eq approximates)."""
+    op = design.operating
+    tau_eq = float(resp.equivalent_delay[0])
+    k_typed = max_stable_stiffness(replace(mr, delay=op.delay))
+    k_eq = max_stable_stiffness(replace(mr, delay=tau_eq))
+    k_lags = lag_stable_stiffness(replace(mr, delay=0.0), resp.lags[0])
+    return {
+        **resp.item(0),
+        "delay_source": op.delay_source,
+        "typed_delay_s": op.delay,
+        "supply_voltage_V": design.amplifier.supply_voltage,
+        "current_bandwidth_hz": design.amplifier.current_bandwidth_hz,
+        "max_stable_K_typed_delay_N_per_m": k_typed,
+        "max_stable_K_torque_delay_N_per_m": k_eq,
+        "max_stable_K_lags_N_per_m": k_lags,
+    }
 
 
 #: The sides of ``Evaluation.zwidth`` and ``.hand``: the MR pair and the equal-force motor.
@@ -463,6 +501,9 @@ def evaluate_batch(
         out["fluid_inertia"] = coupled_fluid_inertia(rg)
         path = path_from_regions(rg)
         out["yield_torque"], flux = yield_torque_and_flux(path, current[rows])
+        out["torque_delay"] = torque_response(rg, current[rows], base.amplifier, base.laminations,
+                                              path=path, coil_temperature=op.coil_temperature,
+                                              nodes=3, flux_peak=flux[:, 0]).equivalent_delay  # fmt: skip
         net = thermal.network(rg, op.ambient_temperature, FLUID_LIMIT)
         out["continuous_torque"] = continuous_torque(
             net, path, op.input_speed, out["off_torque"], op.wire_temperature_limit,
@@ -477,7 +518,7 @@ def evaluate_batch(
     if ok.any():
         inertia = fig["rotor_inertia"] + fig["fluid_inertia"]
         hp = mr_at_hand(base, inertia[ok], fig["damping"][ok], torque[ok],
-                        fig["clutch_mass"][ok])  # fmt: skip
+                        fig["clutch_mass"][ok], fig["torque_delay"][ok])  # fmt: skip
         hand = dict(metrics_batch(hp, limits=False))
         hand["backdrive_force_N"] = backdrive_force(hp)
         if passivity:
@@ -500,6 +541,7 @@ def evaluate_batch(
         "off_state_torque_N_m": off_torque,
         "dynamic_range_dB": dynamic_range_db(torque, off_torque),
         "continuous_torque_N_m": fig["continuous_torque"],
+        "torque_delay_s": fig["torque_delay"],
     }
     opt_in = {
         "max_passive_K_N_per_m": passivity,

@@ -185,3 +185,32 @@ def simulate_growth(p: HapticParams, K: float, t_end: float, steps_per_delay: in
     peaks = [tail[k : k + win].max() for k in starts]
     tp = [(n // 2 + k) * h for k in starts]
     return float(np.polyfit(tp, np.log(peaks), 1)[0])
+
+
+def lag_stable_stiffness(p: HapticParams, lags: np.ndarray | list[float], order: int = 8) -> float:
+    """Largest stable K [N/m] with first-order lags Π 1/(1 + sT_i) in the loop besides the
+    pure delay τ (``p.delay`` + ZOH/2, replaced by its order-n Padé approximant; none when
+    τ = 0, and then the result is exact): the roots of
+    χ(s) = s Num(s) Π(1 + sT_i) P_n(−sτ) + K P_n(sτ)(bs + k) (the actuator's torque
+    response of ``magnetics.dynamics``; scaled s = w0 σ for ``numpy.roots``)."""
+    t = np.asarray(lags, dtype=float).ravel()
+    if np.any(~np.isfinite(t)) or np.any(t < 0):
+        raise ParameterError(f"lags = {t.tolist()}: need finite time constants >= 0 s")
+    tau = _tau(p)
+    w0 = 1.0 / max(tau + float(t.sum()), 1e-9)
+    a = np.array(_num_coeffs(p), dtype=float) * w0 ** np.arange(3, -1, -1)
+    lhs = np.polymul(a, [w0, 0.0])  # s Num(s) in σ
+    rhs = np.array([p.b * w0, p.k], dtype=float)  # bs + k
+    for ti in t:
+        lhs = np.polymul(lhs, [ti * w0, 1.0])
+    if tau > 0:
+        num_p, den_p = pade_coefficients(order)
+        scale = (tau * w0) ** np.arange(num_p.size)
+        lhs = np.polymul(lhs, (den_p * scale)[::-1])
+        rhs = np.polymul(rhs, (num_p * scale)[::-1])
+
+    def stable(K: float) -> bool:
+        c = np.polyadd(lhs, K * rhs)
+        return bool(np.max(np.roots(c / np.max(np.abs(c))).real) < 0)
+
+    return _largest_stable(stable, _k_scale(p))

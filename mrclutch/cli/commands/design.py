@@ -217,7 +217,33 @@ def format_evaluation(data: dict) -> str:
     lines += format_zwidth(data["zwidth"])
     lines += format_hand(data["hand"])
     lines += format_budget(data["budget"])
+    lines += format_response(data["response"])
     return "\n".join(lines)
+
+
+def format_response(r: dict) -> list[str]:
+    """The torque's response time from the geometry (magnetics.dynamics; docs/dynamics.md)."""
+    ms = lambda v: f"{v * 1e3:.3g}"  # noqa: E731
+    src = r["delay_source"]
+    lines = ["", f"torque response (magnetics.dynamics; the haptic model uses the {src} delay)",
+             f"  coil: L {r['inductance_0A_H'] * 1e3:.3g} mH at 0 A, "
+             f"{r['inductance_peak_H'] * 1e3:.3g} mH at the peak current (secant "
+             f"{r['inductance_secant_peak_H'] * 1e3:.3g} mH), R {r['coil_resistance_ohm']:.3g} Ω; "
+             f"amplifier {r['supply_voltage_V']:g} V, {r['current_bandwidth_hz']:g} Hz",
+             f"  {'electrical (10–90 % / ln 9)':<30}{ms(r['electrical_time_constant_s']):>10} ms",
+             f"  {'eddy currents':<30}{ms(r['eddy_time_constant_s']):>10} ms"]  # fmt: skip
+    for k, e in r["eddy"].items():
+        lines.append(f"    {k:<28}{ms(e['contribution_s']):>10} ms  (mean delay "
+                     f"{ms(e['mean_delay_s'])} ms × share {e['weight']:.2g})")  # fmt: skip
+    lines += [
+        f"  {'fluid (assumed)':<30}{ms(r['fluid_time_constant_s']):>10} ms",
+        f"  {'equivalent delay Σ T':<30}{ms(r['torque_delay_s']):>10} ms  (typed: "
+        f"{ms(r['typed_delay_s'])} ms); −3 dB at {r['torque_bandwidth_hz']:.3g} Hz",
+        f"  largest stable K: {r['max_stable_K_typed_delay_N_per_m']:.4g} N/m with the typed "
+        f"delay, {r['max_stable_K_torque_delay_N_per_m']:.4g} with Σ T, "
+        f"{r['max_stable_K_lags_N_per_m']:.4g} with the lags themselves",
+    ]
+    return lines
 
 
 def _bounded(v: float | None) -> str:
