@@ -501,9 +501,10 @@ def evaluate_batch(
         out["fluid_inertia"] = coupled_fluid_inertia(rg)
         path = path_from_regions(rg)
         out["yield_torque"], flux = yield_torque_and_flux(path, current[rows])
-        out["torque_delay"] = torque_response(rg, current[rows], base.amplifier, base.laminations,
-                                              path=path, coil_temperature=op.coil_temperature,
-                                              nodes=3, flux_peak=flux[:, 0]).equivalent_delay  # fmt: skip
+        resp = torque_response(rg, current[rows], base.amplifier, base.laminations, path=path,
+                               coil_temperature=op.coil_temperature, nodes=3,
+                               flux_peak=flux[:, 0])  # fmt: skip
+        out["torque_delay"] = resp.equivalent_delay
         net = thermal.network(rg, op.ambient_temperature, FLUID_LIMIT)
         out["continuous_torque"] = continuous_torque(
             net, path, op.input_speed, out["off_torque"], op.wire_temperature_limit,
