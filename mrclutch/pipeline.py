@@ -300,6 +300,7 @@ class Evaluation:
     zwidth: Mapping[str, Any]  # side → the Z-width (``zwidth.zwidth``) of MR pair and motor
     hand: Mapping[str, Any]  # side → ``hand.hand_figures``: coupled stability, transparency
     response: Mapping[str, Any] = field(default_factory=dict)  # ``response_figures``
+    torque_response: Any = None  # its ``magnetics.dynamics.TorqueResponse`` (step, lags)
 
     def as_json(self) -> dict[str, Any]:
         mr_m, em_m = dict(self.haptic), dict(self.motor_metrics)
@@ -356,7 +357,7 @@ def evaluate(
                   for key in ZWIDTH_KEYS} for i, side in enumerate(ZWIDTH_SIDES)}  # fmt: skip
     hand = {side: hand_figures(p, k) for side, p in zip(ZWIDTH_SIDES, (mr, em), strict=True)}
     return Evaluation(design, fidelity, fig, mr, em, em_tr.gearing, mr_m, em_m, budget, zws, hand,
-                      response_figures(design, resp, mr))  # fmt: skip
+                      response_figures(design, resp, mr), resp)  # fmt: skip
 
 
 def response_figures(design: ClutchDesign, resp: Any, mr: HapticParams) -> dict[str, Any]:

@@ -8,6 +8,8 @@
 * ``haptic.png`` (Bode magnitude, effective stiffness and damping, rendering areas of
   the MR pair against the equal-force motor),
 * ``zwidth.png`` (the Z-width: passive virtual springs and dampers of both),
+* ``response.png`` (torque after a current step: the lags, their equivalent delay and the
+  typed delay),
 * ``metrics.json`` (exactly ``mrclutch evaluate --json`` at the same fidelity, plus the
   torque curve and the artefact list),
 * ``report.html`` (one page, read first).
@@ -35,6 +37,7 @@ from geometry.validation import ParameterError
 from magnetics.torque import torque_curve
 from mrclutch.cli.jsonio import to_jsonable
 from mrclutch.cli.plots.design import section_figure
+from mrclutch.cli.plots.dynamics import plot_torque_step
 from mrclutch.cli.plots.haptic import compare_figure, zwidth_figure
 from mrclutch.cli.plots.magnetics import plot_torque
 from mrclutch.cli.view import screenshot
@@ -88,6 +91,9 @@ def write_report(
                        tmp / "haptic.png")  # fmt: skip
         zw = {"MR pair": ev.zwidth["mr"], "Maxon 136206 (equal force)": ev.zwidth["motor"]}
         zwidth_figure(zw, k, tmp / "zwidth.png")
+        tick("torque step response")
+        plot_torque_step([(design.name, ev.torque_response)], tmp / "response.png",
+                         typed_delay=design.operating.delay)  # fmt: skip
         metrics = {**data, "torque_curve": curve, "cad": cad}
         (tmp / "metrics.json").write_text(json.dumps(to_jsonable(metrics), indent=2) + "\n")
         tick("report.html")
@@ -248,6 +254,17 @@ def zwidth_caption(zw: dict[str, Any]) -> str:
             f"{em['zwidth_area_N2_s_per_m2']:.4g} N²·s/m².")  # fmt: skip
 
 
+def response_caption(r: dict[str, Any]) -> str:
+    """One sentence on the torque response (magnetics.dynamics) and which delay is used."""
+    used = "the equivalent delay" if r["delay_source"] == "geometry" else "the typed delay"
+    return (f"Equivalent delay {r['torque_delay_s'] * 1e3:.3g} ms from the geometry "
+            f"(typed: {r['typed_delay_s'] * 1e3:.3g} ms); largest stable K "
+            f"{r['max_stable_K_torque_delay_N_per_m']:.4g} N/m with it, "
+            f"{r['max_stable_K_typed_delay_N_per_m']:.4g} N/m with the typed delay. The haptic "
+            f"figures above use {used} (delay_source = \"{r['delay_source']}\"; "
+            f"docs/dynamics.md).")  # fmt: skip
+
+
 def render_html(m: dict[str, Any]) -> str:
     """One page: findings, the clutch, the hand, the figures, the files."""
     c, h, e = m["clutch"], m["haptic"], m["motor"]
@@ -295,6 +312,8 @@ render the same virtual spring K.</p></div></div>
 <h2>Z-width: the springs and dampers it renders passively</h2>
 <img src="zwidth.png" alt="Z-width in the K-B plane">
 <p class=small>{e_(zwidth_caption(m["zwidth"]))}</p>
+<h2>Torque response to a current step</h2><img src="response.png" alt="torque step response">
+<p class=small>{e_(response_caption(m["response"]))}</p>
 <div class=grid>
 <div><h2>Torque against current</h2><img src="torque.png" alt="torque-current"></div>
 <div><h2>Section</h2><img src="section.png" alt="r-z section"></div></div>

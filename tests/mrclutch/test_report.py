@@ -11,7 +11,7 @@ from mrclutch.cli.main import main
 EXPECTED = {
     "clutch.step", "rotor.stl", "shaft.stl", "input.stl", "housing.stl", "coil.stl",
     "fluid.stl", "view.png", "section.png", "torque.png", "haptic.png", "zwidth.png",
-    "metrics.json", "report.html",
+    "response.png", "metrics.json", "report.html",
 }  # fmt: skip
 
 
@@ -53,8 +53,8 @@ def test_metrics_json_equals_evaluate_json(report_dir):
 
 def test_html_names_the_findings_and_links_every_figure(report_dir):
     page = (report_dir / "report.html").read_text()
-    for name in ("haptic.png", "zwidth.png", "torque.png", "section.png", "view.png", "clutch.step",
-                 "rotor.stl", "metrics.json"):  # fmt: skip
+    for name in ("haptic.png", "zwidth.png", "response.png", "torque.png", "section.png",
+                 "view.png", "clutch.step", "rotor.stl", "metrics.json"):  # fmt: skip
         assert f'"{name}"' in page, name
     metrics = json.loads((report_dir / "metrics.json").read_text())
     assert f"{metrics['haptic']['bandwidth_hz']:.1f} Hz" in page
