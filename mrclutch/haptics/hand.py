@@ -65,8 +65,8 @@ from mrclutch.haptics.model import (
     _FIELDS,
     _check_K,
     _hold,
-    _illinois,
     _num_coeffs,
+    _scan_imaginary_axis,
     max_passive_stiffness,
 )
 
@@ -222,28 +222,13 @@ def _crossings_h(
         rts = np.roots(np.trim_zeros(poly.imag[::-1], "f"))
         wc = np.sort(rts.real[(np.abs(rts.imag) < 1e-9 * np.abs(rts)) & (rts.real > 0)])
     else:
-        step = min(w_a / 50.0, math.pi / (16.0 * tau))
-        grid = w_a * np.logspace(-4, 0, 401)  # model._crossings' grid
         nz = mags[mags > 1e-12 * w_a]
-        w_lo = 1e-2 * float(np.min(nz))
-        if h != NO_HAND and w_lo < grid[0]:  # a slow hand mode below the grid: start lower
-            grid = np.concatenate([np.geomspace(w_lo, grid[0], 101)[:-1], grid])
-        found, best = [], math.inf
-        while True:
-            xi = X(grid).imag
-            sc = np.nonzero(np.sign(xi[:-1]) * np.sign(xi[1:]) < 0)[0]
-            w = _illinois(lambda _, x: X(x).imag, grid[sc], grid[sc + 1], xi[sc], xi[sc + 1], 1e-13)
-            found.append(w)
-            xv = X(w)
-            ok = (xv.real > 0) & (np.abs(xv.imag) <= 1e-6 * np.abs(xv))
-            best = min(best, float(np.min(xv.real[ok]))) if ok.any() else best
-            w_end = float(grid[-1])
-            # increasing lower bound on |X| beyond ω_a: |jω − r| ≥ ω − |r|, |E| ≤ 1
-            lower = c[0] * max(w_end - w_a, 0.0) ** 4 / (p.k + p.b * w_end)
-            if lower > (best if k_stop is None else k_stop) or w_end > 1e4 * (w_a + 1 / tau):
-                break
-            grid = np.linspace(w_end, 2 * w_end, math.ceil(w_end / step) + 1)
-        wc = np.concatenate(found)
+        w_lo = 1e-2 * float(np.min(nz)) if h != NO_HAND else None  # a slow hand mode
+
+        def lower(w: float) -> float:  # |jω − r| ≥ ω − |r|, |E| ≤ 1: increasing past ω_a
+            return c[0] * max(w - w_a, 0.0) ** 4 / (p.k + p.b * w)
+
+        wc = _scan_imaginary_axis(X, w_a, tau, lower, k_stop, w_lo)
     xv = X(wc)
     ok = (xv.real > 0) & (np.abs(xv.imag) <= 1e-6 * np.abs(xv))
     wc, Kc = wc[ok], xv.real[ok]

@@ -60,7 +60,7 @@ first K_c where that count turns positive.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -593,6 +593,44 @@ def _chi(p: HapticParams, K: Any, s: Any) -> Any:
     return s * num + K * E * (p.b * s + p.k)
 
 
+def _scan_imaginary_axis(
+    X: Callable[[Any], Any],
+    w_a: float,
+    tau: float,
+    lower: Callable[[float], float],
+    limit: float | None,
+    w_lo: float | None = None,
+) -> np.ndarray:
+    """Frequencies ω > 0 [rad/s] where Im X(ω) changes sign (D-subdivision: a crossing of
+    the imaginary axis where X, the gain that puts a root at jω, is real and > 0).
+
+    Log grid below ω_a (the largest mode; from ``w_lo`` if lower), then linear chunks of
+    doubling span with a step fine against both the delay's phase period π/(16τ) and the
+    modes, each bracket refined by regula falsi. ``lower(ω)``: an increasing lower bound
+    on |X| for ω ≥ ω_a; the scan stops once it exceeds ``limit`` (None: the smallest real
+    positive X found so far, i.e. up to the first crossing) or at 10⁴ (ω_a + 1/τ)."""
+    step = min(w_a / 50.0, math.pi / (16.0 * tau))
+    grid = w_a * np.logspace(-4, 0, 401)
+    if w_lo is not None and w_lo < grid[0]:  # a slow mode below the grid: start lower
+        grid = np.concatenate([np.geomspace(w_lo, grid[0], 101)[:-1], grid])
+    found, best = [], math.inf
+    while True:
+        xi = X(grid).imag
+        sc = np.nonzero(np.sign(xi[:-1]) * np.sign(xi[1:]) < 0)[0]
+        w = _illinois(lambda _, x: X(x).imag, grid[sc], grid[sc + 1], xi[sc], xi[sc + 1], 1e-13)
+        found.append(w)
+        xv = X(w)
+        ok = (xv.real > 0) & (np.abs(xv.imag) <= 1e-6 * np.abs(xv))
+        best = min(best, float(np.min(xv.real[ok]))) if ok.any() else best
+        w_end = float(grid[-1])
+        if (w_end >= w_a and lower(w_end) > (best if limit is None else limit)) or (
+            w_end > 1e4 * (w_a + 1 / tau)
+        ):
+            break
+        grid = np.linspace(w_end, 2 * w_end, math.ceil(w_end / step) + 1)
+    return np.concatenate(found)
+
+
 def _crossings(
     p: HapticParams, k_stop: float | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -622,26 +660,11 @@ def _crossings(
         rts = np.roots(poly.imag[::-1])
         wc = np.sort(rts.real[(np.abs(rts.imag) < 1e-9 * np.abs(rts)) & (rts.real > 0)])
     else:
-        # log grid below ω_a, then linear chunks of doubling span (step fine against both
-        # the delay's phase period and the modes), each bracket refined by regula falsi
-        step = min(w_a / 50.0, math.pi / (16.0 * tau))
-        grid = w_a * np.logspace(-4, 0, 401)
-        found, best = [], math.inf
-        while True:
-            xi = X(grid).imag
-            sc = np.nonzero(np.sign(xi[:-1]) * np.sign(xi[1:]) < 0)[0]
-            w = _illinois(lambda _, x: X(x).imag, grid[sc], grid[sc + 1], xi[sc], xi[sc + 1], 1e-13)
-            found.append(w)
-            xv = X(w)
-            ok = real_positive(xv)
-            best = min(best, float(np.min(xv.real[ok]))) if ok.any() else best
-            w_end = grid[-1]
-            s_end = 1j * w_end
-            lower = abs(s_end * np.polyval(a, s_end)) / abs(p.k + p.b * s_end)
-            if lower > (best if k_stop is None else k_stop) or w_end > 1e4 * (w_a + 1 / tau):
-                break
-            grid = np.linspace(w_end, 2 * w_end, math.ceil(w_end / step) + 1)
-        wc = np.concatenate(found)
+
+        def lower(w: float) -> float:  # |X| ≥ ω|Num(jω)|/|k + jbω| (|E| ≤ 1), increasing
+            return abs(1j * w * np.polyval(a, 1j * w)) / abs(p.k + p.b * 1j * w)
+
+        wc = _scan_imaginary_axis(X, w_a, tau, lower, k_stop)
     xv = X(wc)
     ok = real_positive(xv)
     wc, Kc = wc[ok], xv.real[ok]

@@ -69,7 +69,7 @@ from numpy.polynomial import polynomial as P
 
 from geometry.validation import ParameterError
 from mrclutch.haptics.actuator import HapticParams
-from mrclutch.haptics.model import _hold, _illinois, _num_coeffs
+from mrclutch.haptics.model import _hold, _illinois, _num_coeffs, _scan_imaginary_axis
 
 __all__ = [
     "ZWIDTH_KEYS",
@@ -537,22 +537,11 @@ def _ray_crossings(p: HapticParams, c: float, sg: float, rho_stop: float) -> tup
         rts = np.roots(np.trim_zeros(poly.imag[::-1], "f"))
         wc = np.sort(rts.real[(np.abs(rts.imag) < 1e-9 * np.abs(rts)) & (rts.real > 0)])
     else:
-        step = min(w_a / 50.0, math.pi / (16.0 * tau))
-        grid = w_a * np.logspace(-4, 0, 401)
-        found = []
-        while True:
-            xi = X(grid).imag
-            sc = np.nonzero(np.sign(xi[:-1]) * np.sign(xi[1:]) < 0)[0]
-            found.append(
-                _illinois(lambda _, x: X(x).imag, grid[sc], grid[sc + 1], xi[sc], xi[sc + 1], 1e-13)
-            )
-            w_end = float(grid[-1])
-            # increasing lower bound on |ρ(ω)| beyond ω_a (|H| ≤ 1, |jω − r| ≥ ω − |r|)
-            lower = a[0] * w_end * (w_end - w_a) ** 3 / ((p.k + p.b * w_end) * (c + sg * w_end))
-            if (w_end > w_a and lower > rho_stop) or w_end > 1e4 * (w_a + 1.0 / tau):
-                break
-            grid = np.linspace(w_end, 2 * w_end, math.ceil(w_end / step) + 1)
-        wc = np.concatenate(found)
+
+        def lower(w: float) -> float:  # |ρ(ω)| past ω_a (|H| ≤ 1, |jω − r| ≥ ω − |r|)
+            return a[0] * w * max(w - w_a, 0.0) ** 3 / ((p.k + p.b * w) * (c + sg * w))
+
+        wc = _scan_imaginary_axis(X, w_a, tau, lower, rho_stop)
     xv = X(wc)
     ok = (xv.real > 0) & (np.abs(xv.imag) <= 1e-6 * np.abs(xv))
     wc, rc = wc[ok], xv.real[ok]
