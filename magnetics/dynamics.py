@@ -386,6 +386,18 @@ def eddy_parts(
     return out
 
 
+def eddy_transfer(parts: Mapping[str, EddyPart], s: ArrayLike) -> NDArray:
+    """The gap flux's eddy response Φ(s)/Φ(0) (S, F) with each part's full diffusion
+    response F_i(s) in place of its first order: R_i → R_i/F_i(s) in D, to first order in
+    the parts' shares, 1/(1 + Σ_i w_i (1/F_i(s) − 1)) (module docstring, combination rule);
+    its low-frequency group delay is τ_eddy. Above 1/τ₁ of the slow parts the phase grows
+    like √ω, not like ωτ_eddy (docs/dynamics.md: against the time-harmonic FEM)."""
+    ss = np.atleast_1d(np.asarray(s))
+    den = 1.0 + sum(p.weight[:, None] * (1.0 / diffusion_response(p.shape, p.tau1[:, None], ss)
+                                         - 1.0) for p in parts.values())  # fmt: skip
+    return 1.0 / den
+
+
 # ---- the torque response ------------------------------------------------------------------------
 
 
