@@ -48,6 +48,9 @@ computed here from the design (one design or S designs as arrays, like the circu
    little of the MMF and lags the flux little; a saturated core (low μ, but most of the
    reluctance) dominates. The slowest part alone would overstate the lag by orders of
    magnitude (the poles' own τ₁ reaches ~0.1 s at low flux).
+   Against the time-harmonic FEM (``magnetics.fem.eddy``, docs/dynamics.md) τ_eddy is
+   within −11 … +23 %, the drums' shorted-turn lag missing and the shell's overstated; its
+   first-order lag overstates the phase above ~10 Hz 2–3× (``eddy_transfer`` does not).
 
 3. **Fluid.** The particle chains form in a fraction of a millisecond; the fluid is a
    first-order lag of ``FLUID_RESPONSE_TIME`` — an assumption (sub-millisecond is the

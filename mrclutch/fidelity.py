@@ -189,7 +189,7 @@ def registry() -> tuple[Method, ...]:
     ms.append(Method("stability", "exact delay", "D-subdivision", _exact_stability, 3, True))
     ms.append(Method("bandwidth", "lumped", "√(K/(m1+m2))", lumped_bandwidth))
     ms.append(Method("bandwidth", "full response", "k_eff zero", _full_bandwidth, 5, True))
-    ms.append(Method("eddy_delay", "diffusion 1-D", "per-part slab/cylinder", diffusion_eddy_delay))
+    ms.append(Method("eddy_delay", "diffusion 1-D", "1-D cuts per part", diffusion_eddy_delay))
     for s in EDDY_FEM_SIZES_MM:
         ms.append(Method("eddy_delay", "harmonic fem", f"size {s:g} mm",
                          lambda d, s=s: fem_eddy_delay(d, s * 1e-3), 1 if s < 0.5 else 2,

@@ -2,8 +2,8 @@
 
 A sinusoidal coil current I·e^{jωt} about an operating point I_b drives, in the linearised
 steel, the axisymmetric A_φ problem ∇×(ν∇×A) + jωσA = J. In the flux function ψ = r·A_φ
-of ``magnetics.fem`` (test function v/r, volume 2πr dr dz; Meunier, *The Finite Element
-Method for Electromagnetic Modeling*, 2008, §5.3 and §5.5 for the eddy term):
+of ``magnetics.fem`` (test function v/r, volume 2πr dr dz; [meunier2008] §5.3, with the
+eddy term jωσA·(v/r) integrated like the source):
 
     ∫ ν (1/r) ∇ψ·∇v dr dz + jω ∫ σ (1/r) ψ v dr dz = ∫ J_φ v dr dz,   ψ = 0 on axis and box.
 
@@ -23,8 +23,8 @@ Method for Electromagnetic Modeling*, 2008, §5.3 and §5.5 for the eddy term):
 * **Laminations** (``magnetics.dynamics.Laminations``): a laminated or slotted part carries
   no azimuthal current (σ_φ = 0: the sheets cut the path); the currents inside each sheet
   of thickness d are homogenised as a complex reluctivity ν·x/tanh(x), x = (d/2)√(jωμσ)
-  (the slab's tanh(x)/x flux ratio, [stoll1974] ch. 2; Gyselinck et al., IEEE Trans. Magn.
-  35 (1999) 1191), whose first order jωσd²/12 is the 1-D model's mean delay μσd²/12.
+  (the slab's tanh(x)/x flux ratio, [stoll1974] ch. 2; a stack homogenised as in the
+  paper [gyselinck1999]), whose first order jωσd²/12 is the 1-D model's mean delay μσd²/12.
 
 Conductivities: AISI 1018 from ``magnetics.dynamics.STEEL_CONDUCTIVITY`` (one source of
 truth); stainless 304 (hub, caps, sleeve, drum bands) is left out by default, like the 1-D
@@ -82,8 +82,8 @@ _LAMINATED_BY = {"core": "core", "poles": "shell", "back_iron": "shell"}
 
 def cylinder_flux_ratio(omega: ArrayLike, mu: float, sigma: float, radius: float) -> ComplexArray:
     """Φ(jω)/Φ(0) of a long solid cylinder in a uniform axial field H₀e^{jωt} at its surface:
-    2J₁(ka)/(ka J₀(ka)), k = √(−jωμσ) (H = H₀J₀(kr)/J₀(ka); [stoll1974] ch. 2, Jackson,
-    *Classical Electrodynamics*, 3rd ed., 1999, §5.18)."""
+    2J₁(ka)/(ka J₀(ka)), k = √(−jωμσ) (H = H₀J₀(kr)/J₀(ka); [stoll1974] ch. 2,
+    [lammeraner-stafl1964])."""
     from scipy.special import jv
 
     ka = np.sqrt(-1j * np.asarray(omega, float) * mu * sigma) * radius

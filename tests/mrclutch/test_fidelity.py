@@ -137,7 +137,7 @@ def test_eddy_delay_rows_in_the_data_and_the_chart(paper, tmp_path):
     rows = measure(paper, ("eddy_delay",), repeats=1, methods=ms)
     by = {r.setting: r for r in rows}
     assert by["size 0.25 mm"].error_rel == 0.0 and 5e-4 < by["size 0.25 mm"].value < 3e-3
-    assert 0.01 < by["per-part slab/cylinder"].error_rel < 0.15
+    assert 0.01 < by["1-D cuts per part"].error_rel < 0.15
     assert by["size 0.5 mm"].error_rel < by["size 1 mm"].error_rel < 0.06
     assert UNITS["eddy_delay"] == "s" and "eddy_delay" in COLOURS
     assert "eddy_delay,harmonic fem,size 0.25 mm" in rows_csv(rows)
