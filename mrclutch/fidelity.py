@@ -26,6 +26,7 @@ from geometry.materials import MRF, STEEL
 from geometry.section import build_section
 from geometry.validation import ParameterError
 from magnetics.dynamics import torque_response
+from magnetics.fem.eddy import bias_current, eddy_response
 from magnetics.materials import MATERIALS, MU0, linear_materials
 from magnetics.torque import torque_curve
 from mrclutch.design import ClutchDesign
@@ -160,8 +161,6 @@ def diffusion_eddy_delay(design: ClutchDesign) -> float:
 def fem_eddy_delay(design: ClutchDesign, size: float) -> float:
     """The eddy lag's low-frequency group delay [s] by the time-harmonic FEM at element
     ``size`` [m] (``magnetics.fem.eddy``), at the same operating point."""
-    from magnetics.fem.eddy import bias_current, eddy_response
-
     sec = build_section(design.clutch)
     i_b = bias_current(sec, design.current_limit)
     return eddy_response(sec, i_b, (), size=size, laminations=design.laminations).delay

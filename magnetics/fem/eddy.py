@@ -54,7 +54,7 @@ from magnetics.dynamics import (
     eddy_parts,
     eddy_transfer,
 )
-from magnetics.fem import build_grid, solve_fem
+from magnetics.fem import DEFAULT_SIZE, build_grid, solve_fem
 from magnetics.fem.grid import Grid
 from magnetics.materials import MATERIALS, Magnetic
 
@@ -318,7 +318,7 @@ class EddyFEM:
     ``frequencies`` [Hz], the low-frequency group delay [s] and each part's share of it."""
 
     current: float  # A, the operating point
-    size: float  # m, element size inside the clutch
+    size: float  # m, element size inside the clutch (nan: a grid passed in)
     frequencies: FloatArray  # Hz
     ratio: ComplexArray  # Φ(jω)/Φ(0)
     delay: float  # s, −dφ/dω at ω → 0
@@ -388,7 +388,8 @@ def eddy_response(
     mats = MATERIALS if materials is None else materials
     g = build_grid(section, size, mats) if grid is None else grid
     psi0 = solve_fem(section, current, mats, grid=g).psi
-    assert psi0 is not None
+    if psi0 is None:
+        raise ParameterError("the magnetostatic FEM returned no field ψ to linearise about")
     basis = g.basis
     shape = g.r_qp.shape
     nu, nu_along, direction = _operating_point(g, psi0, linearisation)
@@ -418,9 +419,9 @@ def eddy_response(
     shares = {p: float(per_el[parts == p].sum()) for p in ("core", "poles", "back_iron", "drums",
                                                           "other")}  # fmt: skip
     ratio = harmonic_ratio(sys, 2 * np.pi * freq) if freq.size else np.zeros(0, complex)
-    return EddyFEM(float(current), float(g.r_lines[1] - g.r_lines[0]) if size is None else size,
-                   freq, ratio, delay, shares, float(probe @ psi0), int(basis.N),
-                   linearisation)  # fmt: skip
+    h = float(size) if size is not None else (DEFAULT_SIZE if grid is None else math.nan)
+    return EddyFEM(float(current), h, freq, ratio, delay, shares, float(probe @ psi0),
+                   int(basis.N), linearisation)  # fmt: skip
 
 
 def _gap_probe(grid: Grid) -> FloatArray:
