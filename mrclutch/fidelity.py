@@ -25,6 +25,8 @@ from geometry.mass import analytic_mass, brep_mass, mesh_mass
 from geometry.materials import MRF, STEEL
 from geometry.section import build_section
 from geometry.validation import ParameterError
+from magnetics.dynamics import torque_response
+from magnetics.fem.eddy import bias_current, eddy_response
 from magnetics.materials import MATERIALS, MU0, linear_materials
 from magnetics.torque import torque_curve
 from mrclutch.design import ClutchDesign
@@ -42,12 +44,14 @@ from mrclutch.trust import (
     warn,
 )
 
-QUANTITIES: tuple[str, ...] = ("inertia", "torque", "stability", "bandwidth")
-UNITS = {"inertia": "kg·m²", "torque": "N·m", "stability": "N/m", "bandwidth": "Hz"}
+QUANTITIES: tuple[str, ...] = ("inertia", "torque", "stability", "bandwidth", "eddy_delay")
+UNITS = {"inertia": "kg·m²", "torque": "N·m", "stability": "N/m", "bandwidth": "Hz",
+         "eddy_delay": "s"}  # fmt: skip
 MESH_TOLERANCES_MM: tuple[float, ...] = (0.1, 0.03, 0.01, 0.003)
 FEM_SIZES_MM: tuple[float, ...] = (1.0, 0.5, 0.35, 0.25)  # the last is the reference
 PADE_ORDERS: tuple[int, ...] = (1, 2, 4)
 STEPS_PER_DELAY: tuple[int, ...] = (2, 5, 20)
+EDDY_FEM_SIZES_MM: tuple[float, ...] = (1.0, 0.5, 0.25)  # the last is the reference
 
 
 # ---- methods: design → value ------------------------------------------------------------
@@ -146,6 +150,22 @@ def _full_bandwidth(design: ClutchDesign) -> float:
     return float(bandwidth(p, k))
 
 
+def diffusion_eddy_delay(design: ClutchDesign) -> float:
+    """τ_eddy [s] of the 1-D diffusion model, as the torque response computes it (at half
+    the peak gap flux at the current limit; ``magnetics.dynamics``)."""
+    rg = build_section(design.clutch).table
+    resp = torque_response(rg, design.current_limit, design.amplifier, design.laminations)
+    return float(resp.tau_eddy[0])
+
+
+def fem_eddy_delay(design: ClutchDesign, size: float) -> float:
+    """The eddy lag's low-frequency group delay [s] by the time-harmonic FEM at element
+    ``size`` [m] (``magnetics.fem.eddy``), at the same operating point."""
+    sec = build_section(design.clutch)
+    i_b = bias_current(sec, design.current_limit)
+    return eddy_response(sec, i_b, (), size=size, laminations=design.laminations).delay
+
+
 def registry() -> tuple[Method, ...]:
     """Every method of every quantity, cheapest family first; the reference of each
     quantity last within it (``reference=True``)."""
@@ -168,6 +188,11 @@ def registry() -> tuple[Method, ...]:
     ms.append(Method("stability", "exact delay", "D-subdivision", _exact_stability, 3, True))
     ms.append(Method("bandwidth", "lumped", "√(K/(m1+m2))", lumped_bandwidth))
     ms.append(Method("bandwidth", "full response", "k_eff zero", _full_bandwidth, 5, True))
+    ms.append(Method("eddy_delay", "diffusion 1-D", "1-D cuts per part", diffusion_eddy_delay))
+    for s in EDDY_FEM_SIZES_MM:
+        ms.append(Method("eddy_delay", "harmonic fem", f"size {s:g} mm",
+                         lambda d, s=s: fem_eddy_delay(d, s * 1e-3), 1 if s < 0.5 else 2,
+                         s == EDDY_FEM_SIZES_MM[-1]))  # fmt: skip
     return tuple(ms)
 
 

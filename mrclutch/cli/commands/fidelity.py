@@ -26,8 +26,9 @@ def register(sub: Any) -> None:
         "fidelity",
         help="speed against accuracy: time and error of every method (chart + table)",
         description="Run every method of every quantity (inertia, torque at the current "
-        "limit, stability limit of the delayed loop, bandwidth) on a design; time each "
-        "(median of repeats) and compare it with the quantity's reference. Writes "
+        "limit, stability limit of the delayed loop, bandwidth, the eddy lag's delay) on a "
+        "design; time each (median of repeats) and compare it with the quantity's reference. "
+        "Writes "
         "DIR/fidelity.png, DIR/fidelity.csv and DIR/fidelity.json; progress on stderr.",
     )
     add_design_args(p)
@@ -64,9 +65,9 @@ def run(args: argparse.Namespace) -> int:
     with atomic_path(out / "fidelity.json") as tmp:
         tmp.write_text(json.dumps(to_jsonable(doc), indent=2) + "\n")
     plot_fidelity(rows, out / "fidelity.png", title=f"speed against accuracy — {design.name}")
-    print(f"{'quantity':<10}{'method':<20}{'setting':<20}{'time (s)':>11}{'error':>11}")
+    print(f"{'quantity':<12}{'method':<20}{'setting':<20}{'time (s)':>11}{'error':>11}")
     for r in rows:
-        print(f"{r.quantity:<10}{r.method:<20}{r.setting:<20}{r.time_s:>11.3g}"
+        print(f"{r.quantity:<12}{r.method:<20}{r.setting:<20}{r.time_s:>11.3g}"
               f"{r.error_rel:>11.2e}" + ("  (reference)" if r.reference else ""))  # fmt: skip
         for w in r.warnings:
             print(f"    warning: {w}")

@@ -12,7 +12,7 @@ from geometry.atomic import atomic_path
 #: order of double-precision rounding, so no measured error is hidden under it.
 ERROR_FLOOR = 1e-16
 COLOURS = {"inertia": "tab:blue", "torque": "tab:red", "stability": "tab:green",
-           "bandwidth": "tab:purple"}  # fmt: skip
+           "bandwidth": "tab:purple", "eddy_delay": "tab:orange"}  # fmt: skip
 
 
 def plot_fidelity(rows: Sequence[Any], path: str | Path, title: str = "") -> None:
