@@ -22,6 +22,7 @@ import numpy as np
 
 from geometry.atomic import atomic_path
 from geometry.validation import ParameterError
+from magnetics.torque import torque_curve
 from mrclutch.design import ClutchDesign
 from mrclutch.sweep import SweepSpec, read_results
 
@@ -84,8 +85,6 @@ def fem_max_torque(design: ClutchDesign, fem_size: float) -> float:
     """Max torque (yield + drag, N·m) at the current limit with the FEM's yield torque at
     ``fem_size`` (m) on the uniform grid (the error map's reference mesh); runs in a
     worker."""
-    from magnetics.torque import torque_curve
-
     op = design.operating
     curve = torque_curve(design.clutch, [design.current_limit], method="fem", fem_size=fem_size,
                          speed_rpm=op.input_speed_rpm, temperature=op.fluid_temperature,
@@ -121,7 +120,7 @@ def verify_top(
         futures = [executor.submit(fem_max_torque, d, fem_size) for d in designs]
         fem = [f.result() for f in futures]
     ids = [int(res["design_id"][i]) for i in rows]
-    keys, fast, bounds = (res[c][rows].astype(float) for c in (key, TORQUE, BOUND))
+    keys, fast, bounds = (res[c][rows].astype(float).tolist() for c in (key, TORQUE, BOUND))
     return [VerifiedRow(*row) for row in zip(ids, keys, fast, fem, bounds, strict=True)]
 
 

@@ -19,6 +19,9 @@ Two meshes of the clutch (``mesh=``):
   the stack the rest at 2 A; the shell under 5 %);
   in z, every region edge inside the gaps' axial span (zone ends, band ends, drum tips),
   where the field turns. Every region edge stays a grid line.
+
+``Grid.assembly`` (``Assembly``): the forms' current-independent parts on the grid, built
+once and reused by every Newton step and every current.
 """
 
 from __future__ import annotations
@@ -99,10 +102,8 @@ class Grid:
 
     @functools.cached_property
     def assembly(self):  # type: ignore[no-untyped-def]
-        """The current-independent parts of the forms on this grid (``forms.Assembly``),
+        """The current-independent parts of the forms on this grid (``Assembly``),
         built on first use and kept: every Newton step and every current reuses them."""
-        from magnetics.fem.forms import Assembly
-
         return Assembly(self)
 
 
@@ -155,3 +156,90 @@ def build_grid(
         cen, np.asarray(basis.global_coordinates())[0], in_coil, coil.area,
         basis.get_dofs().all(), mesh,
     )  # fmt: skip
+
+
+class Assembly:
+    """The forms of ``forms`` assembled without scikit-fem's generic loop, on one grid.
+
+    Everything that does not depend on the field is computed once per grid (the grid and
+    the forms' linear parts do not change with the current): the basis gradients times
+    the quadrature weights over r, the load per unit current density, the sparsity
+    pattern of the free–free block and the map of each element entry into it. A Newton
+    step is then two einsums and one bincount. The same sums as ``skfem.asm`` of
+    ``forms.forms()`` (tests/magnetics/test_fem.py checks them to 1e-12)."""
+
+    def __init__(self, grid: Grid) -> None:
+        from scipy import sparse
+
+        basis = grid.basis
+        self.grid = grid
+        self.n = basis.N
+        self.dofs = np.asarray(basis.element_dofs)  # (4, E)
+        grads = np.stack([np.asarray(b[0].grad) for b in basis.basis])  # (4, 2, E, Q)
+        self.grads = grads
+        wr = np.asarray(basis.dx) / grid.r_qp  # dx/r, (E, Q)
+        self.wr = wr
+        #: ∫ (∇φ_i·∇φ_j)/r per quadrature point, (4, 4, E, Q): the ν term's fixed part
+        self.gg_wr = np.einsum("ikeq,jkeq,eq->ijeq", grads, grads, wr)
+        #: ∫ φ_i dr dz per element, (4, E): the load of a unit current density
+        self.phi_dx = np.stack([(np.asarray(b[0]) * basis.dx).sum(1) for b in basis.basis])
+        free = np.ones(self.n, dtype=bool)
+        free[grid.fixed] = False
+        self.free = np.flatnonzero(free)
+        red = np.full(self.n, -1)
+        red[self.free] = np.arange(self.free.size)
+        rows = red[np.broadcast_to(self.dofs[:, None, :], (4, 4, self.dofs.shape[1]))]
+        cols = red[np.broadcast_to(self.dofs[None, :, :], (4, 4, self.dofs.shape[1]))]
+        keep = (rows >= 0) & (cols >= 0)
+        self._keep = keep
+        m = self.free.size
+        key = rows[keep].astype(np.int64) * m + cols[keep]
+        uniq, self._slot = np.unique(key, return_inverse=True)  # sorted: CSR order
+        indptr = np.searchsorted(uniq // m, np.arange(m + 1))
+        self._pattern = (uniq % m, indptr, (m, m))
+        self._nnz = uniq.size
+        self._csr = sparse.csr_matrix
+        #: the last factorised Jacobian (newton._step's preconditioner), None until then
+        self.factors: Any = None
+        # elements of each material, for ν(|B|)
+        self._by_material = [np.flatnonzero(grid.material_index == k)
+                             for k in range(len(grid.materials))]  # fmt: skip
+
+    def load(self, j_element: FloatArray) -> FloatArray:
+        """∫ J φ_i (all dofs) of a current density constant per element (A/m²)."""
+        return np.bincount(self.dofs.ravel(), (self.phi_dx * j_element).ravel(), self.n)
+
+    def gradient(self, psi: FloatArray) -> FloatArray:
+        """∇ψ at the quadrature points, (2, E, Q)."""
+        return np.einsum("ie,ikeq->keq", psi[self.dofs], self.grads)
+
+    def nu_terms(self, psi: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """``forms.nu_terms`` (same values), from the stored gradients."""
+        g = self.gradient(psi)
+        b = np.sqrt(g[0] ** 2 + g[1] ** 2) / self.grid.r_qp
+        nu = np.empty_like(b)
+        dnu = np.zeros_like(b)
+        for m, sel in zip(self.grid.materials, self._by_material, strict=True):
+            if not sel.size:
+                continue
+            bb = b[sel]
+            hh = m.h_of_b(bb)
+            dh = m.dh_db(bb)
+            small = bb < 1e-12
+            nu[sel] = np.where(small, dh, hh / np.where(small, 1.0, bb))
+            dnu[sel] = np.where(small, 0.0, (dh * bb - hh) / np.where(small, 1.0, bb) ** 3)
+        return g, nu, dnu / self.grid.r_qp**2
+
+    def residual(self, g: FloatArray, nu: FloatArray, f: FloatArray) -> FloatArray:
+        """∫ ν ∇ψ·∇φ_i / r − ∫ J φ_i (all dofs), ``f`` the load."""
+        gi = np.einsum("keq,ikeq->ieq", g, self.grads)
+        return np.bincount(self.dofs.ravel(), np.einsum("ieq,eq->ie", gi, nu * self.wr).ravel(),
+                           self.n) - f  # fmt: skip
+
+    def jacobian(self, g: FloatArray, nu: FloatArray, dnu: FloatArray) -> Any:
+        """The Jacobian's free–free block (CSR), ``forms.forms()[0]`` condensed."""
+        gi = np.einsum("keq,ikeq->ieq", g, self.grads)
+        k = np.einsum("ijeq,eq->ije", self.gg_wr, nu)
+        k += np.einsum("ieq,jeq,eq->ije", gi, gi, dnu * self.wr)
+        data = np.bincount(self._slot, k[self._keep], self._nnz)
+        return self._csr((data, *self._pattern[:2]), shape=self._pattern[2])

@@ -10,6 +10,7 @@ import time
 import numpy as np
 
 from geometry.validation import check_choice
+from magnetics.error_map import load as load_error_map
 from mrclutch.cli.commands._common import (
     add_design_args,
     atomic_path,
@@ -388,9 +389,7 @@ def _verify_options(args: argparse.Namespace, columns: tuple[str, ...]) -> float
     if key not in columns:
         raise CLIError(f"--objective {key}: not a column of this sweep ({', '.join(columns)})")
     if args.verify_fem_size_mm is None:
-        from magnetics.error_map import load
-
-        return load().reference_fem_size
+        return load_error_map().reference_fem_size
     mm = args.verify_fem_size_mm
     if not (math.isfinite(mm) and 0.02 <= mm <= 5.0):
         raise CLIError(f"--verify-fem-size-mm = {mm:g}: must be in [0.02, 5] mm")
