@@ -100,7 +100,7 @@ def reference() -> np.ndarray:
 CASES = [("old", "uniform", h) for h in (0.5e-3, 0.25e-3, 0.125e-3, 0.09e-3)] + [
     ("new", m, h)
     for m, hs in (("uniform", (0.5e-3, 0.25e-3, 0.125e-3, 0.09e-3)),
-                  ("graded", (0.25e-3, 0.18e-3, 0.125e-3, 0.09e-3)))
+                  ("graded", (0.25e-3, 0.18e-3, 0.125e-3, 0.09e-3, 0.08e-3)))
     for h in hs
 ]  # fmt: skip
 
