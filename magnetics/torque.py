@@ -31,7 +31,7 @@ from magnetics.circuit import (
     solve_path,
 )
 from magnetics.drag import ROOM_TEMPERATURE, Drag, Support, clutch_drag
-from magnetics.fem import build_grid, solve_fem
+from magnetics.fem import MESHES, build_grid, solve_fem
 from magnetics.materials import FLUIDS, MATERIALS, Magnetic, MRFluid, magnetic
 from magnetics.thermal import Network, coil_resistance, continuous_current_sq
 
@@ -102,10 +102,15 @@ def torque_curve(
     fem_size: float | None = None,
     temperature: float = ROOM_TEMPERATURE,
     support: Support | None = None,
+    fem_mesh: str = "uniform",
 ) -> TorqueCurve:
     """Torque of ``clutch`` (or its already built section) at ``currents`` (A) by the
-    circuit or the FEM, the drag at ``speed_rpm`` and fluid ``temperature`` (°C) added."""
+    circuit or the FEM, the drag at ``speed_rpm`` and fluid ``temperature`` (°C) added.
+    ``fem_mesh``: the FEM's "uniform" grid (the error map's reference) or its "graded" one
+    (as accurate at the same ``fem_size`` on the paper preset with ~3× fewer unknowns,
+    magnetics.fem.grid; benchmarks/bench_fem_speed.py)."""
     check_choice("method", method, METHODS)
+    check_choice("fem_mesh", fem_mesh, MESHES)
     rpm = check_finite("speed_rpm", speed_rpm, " rpm")
     cur = np.atleast_1d(np.asarray(currents, dtype=float))
     if cur.ndim != 1 or not np.all(np.isfinite(cur)):
@@ -118,12 +123,14 @@ def torque_curve(
         per = _gap_torque(path, np.abs(res.flux), res.radial_mmf, materials, fluid)[0]
         labels = res.gap_label
     else:
-        grid = build_grid(section, fem_size, materials)  # one grid, Newton warm-started
-        sols, psi = [], None
-        for i in cur:
-            sols.append(solve_fem(section, float(i), materials=materials, grid=grid, psi0=psi))
-            psi = sols[-1].psi
-        per = np.array([s.gap_yield_torque(fluid) for s in sols])
+        # One grid (its forms' current-independent parts and the Newton preconditioner kept
+        # on it); currents in increasing |I|, each Newton started from the last field.
+        grid = build_grid(section, fem_size, materials, mesh=fem_mesh)
+        per = np.empty((cur.size, len(section.gaps)))
+        psi = None
+        for k in np.argsort(np.abs(cur), kind="stable"):
+            sol = solve_fem(section, float(cur[k]), materials=materials, grid=grid, psi0=psi)
+            per[k], psi = sol.gap_yield_torque(fluid), sol.psi
         labels = tuple(f"gap{g.index}" for g in section.gaps)
     ty = per.sum(axis=-1)
     if section.table is None:

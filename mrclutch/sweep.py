@@ -292,6 +292,18 @@ def is_parquet(out: str | Path) -> bool:
     return Path(out).suffix.lower() == ".parquet"
 
 
+def read_results(path: str | Path) -> dict[str, np.ndarray]:
+    """A sweep's CSV (or Parquet dataset, a folder ending in .parquet) as columns of floats
+    (empty cells → NaN)."""
+    if is_parquet(path):
+        import pyarrow.parquet as pq
+
+        table = pq.read_table(path)
+        return {name: table[name].to_numpy().astype(float) for name in table.column_names}
+    data = np.genfromtxt(path, delimiter=",", names=True, dtype=float, ndmin=1)
+    return {name: np.atleast_1d(data[name]) for name in data.dtype.names}
+
+
 def _meta_path(out: Path) -> Path:
     return out.with_name(out.name + ".meta.json")
 

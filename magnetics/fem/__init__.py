@@ -8,7 +8,8 @@ Method for Electromagnetic Modeling*, 2008, §5.3 axisymmetric magnetostatics):
 
 with ν = H(B)/B per material. Bilinear quadrilaterals on a tensor grid whose lines include
 every region edge of the section (so no element straddles two materials), refined to the
-target ``size`` inside the clutch and graded outwards to an air box 3× the clutch's size.
+target ``size`` inside the clutch (uniformly, or graded away from the core and the gap/drum
+stack: ``mesh="graded"``) and graded outwards to an air box 3× the clutch's size.
 Newton's method with the exact Jacobian of ν(|B|) and a backtracking line search on the
 residual norm; converged when ‖R‖ ≤ 1e-8·‖load‖, else FEMConvergenceError.
 
@@ -25,13 +26,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from geometry.section import Section
-from magnetics.fem.grid import DEFAULT_SIZE, Grid, build_grid
+from magnetics.fem.grid import DEFAULT_SIZE, MESHES, Grid, build_grid
 from magnetics.fem.newton import FEMConvergenceError, newton
 from magnetics.fem.post import FEMSolution, post_process
 from magnetics.materials import Magnetic
 
-__all__ = ["DEFAULT_SIZE", "FEMConvergenceError", "FEMSolution", "Grid", "build_grid",
-           "solve_fem"]  # fmt: skip
+__all__ = ["DEFAULT_SIZE", "MESHES", "FEMConvergenceError", "FEMSolution", "Grid",
+           "build_grid", "solve_fem"]  # fmt: skip
 
 
 def solve_fem(
@@ -43,11 +44,14 @@ def solve_fem(
     tol: float = 1e-8,
     psi0: NDArray[np.float64] | None = None,
     grid: Grid | None = None,
+    *,
+    mesh: str = "uniform",
 ) -> FEMSolution:
     """Solve the clutch's field at ``current`` (A) on a grid of target element ``size`` (m).
     ``grid`` reuses a grid built for this section (``build_grid``); ``psi0`` starts Newton
-    from a field on that grid (e.g. the previous current's ``FEMSolution.psi``)."""
-    g = build_grid(section, size, materials) if grid is None else grid
+    from a field on that grid (e.g. the previous current's ``FEMSolution.psi``); without
+    ``grid``, one of kind ``mesh`` ("uniform" | "graded", magnetics.fem.grid) is built."""
+    g = build_grid(section, size, materials, mesh=mesh) if grid is None else grid
     j_coil = section.clutch.coil_turns * current / g.coil_area  # smeared ampere-turns per m²
     psi, it, res = newton(g, current, np.where(g.coil_mask, j_coil, 0.0), psi0, max_iter, tol)
     return post_process(g, current, psi, it, res)

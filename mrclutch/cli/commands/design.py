@@ -7,7 +7,10 @@ import math
 import sys
 import time
 
+import numpy as np
+
 from geometry.validation import check_choice
+from magnetics.error_map import load as load_error_map
 from mrclutch.cli.commands._common import (
     add_design_args,
     atomic_path,
@@ -29,6 +32,7 @@ from mrclutch.pipeline import (
     evaluate,
 )
 from mrclutch.sweep import is_parquet, load_spec, run_sweep
+from mrclutch.verify import TORQUE, verified_path, verify_top, write_verified
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -120,8 +124,33 @@ def register(sub: argparse._SubParsersAction) -> None:
         "cost), max_stable_K_N_per_m (×8), zwidth_area_N2_s_per_m2 (×7)",
     )
     p.add_argument("--pareto", metavar="FILE.png", help="also draw the Pareto front")
+    p.add_argument(
+        "--verify-top",
+        type=int,
+        metavar="N",
+        help="after the sweep, re-solve the N best rows (by --objective) with the FEM at the "
+        "error map's reference size, on the same workers, print the circuit's error on each "
+        "and write it to <RESULTS>.verified.csv",
+    )
+    p.add_argument(
+        "--objective",
+        metavar="COLUMN",
+        help=f"the results column that ranks the rows for --verify-top (default {TORQUE})",
+    )
+    side = p.add_mutually_exclusive_group()
+    side.add_argument("--maximize", dest="minimize", action="store_false",
+                      help="best = largest --objective (the default)")  # fmt: skip
+    side.add_argument("--minimize", dest="minimize", action="store_true",
+                      help="best = smallest --objective")  # fmt: skip
+    p.add_argument(
+        "--verify-fem-size-mm",
+        type=float,
+        metavar="MM",
+        help="FEM element size for --verify-top (default: the error map's reference, "
+        "0.25 mm; a coarser one is quicker and less accurate)",
+    )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
-    p.set_defaults(func=_sweep)
+    p.set_defaults(func=_sweep, minimize=False)
 
     p = sub.add_parser(
         "optimize",
@@ -344,11 +373,35 @@ def _report(args: argparse.Namespace) -> int:
     return 0
 
 
+def _verify_options(args: argparse.Namespace, columns: tuple[str, ...]) -> float | None:
+    """The FEM size (m) for --verify-top, None without it; bad options refused before the
+    sweep runs."""
+    if args.verify_top is None:
+        for opt, given in (("--objective", args.objective is not None),
+                           ("--verify-fem-size-mm", args.verify_fem_size_mm is not None),
+                           ("--minimize", args.minimize)):  # fmt: skip
+            if given:
+                raise CLIError(f"{opt}: only with --verify-top N")
+        return None
+    if args.verify_top < 1:
+        raise CLIError(f"--verify-top = {args.verify_top}: must be >= 1")
+    key = args.objective or TORQUE
+    if key not in columns:
+        raise CLIError(f"--objective {key}: not a column of this sweep ({', '.join(columns)})")
+    if args.verify_fem_size_mm is None:
+        return load_error_map().reference_fem_size
+    mm = args.verify_fem_size_mm
+    if not (math.isfinite(mm) and 0.02 <= mm <= 5.0):
+        raise CLIError(f"--verify-fem-size-mm = {mm:g}: must be in [0.02, 5] mm")
+    return mm * 1e-3
+
+
 def _sweep(args: argparse.Namespace) -> int:
     spec, rest = load_spec(args.spec)
     base = design_from_mapping({"clutch": spec.base.to_mm(), **rest}, where=args.spec)
     check_writable("--out", args.results, folder=is_parquet(args.results))
     evaluator = BatchEvaluator(base, tuple(args.optional))
+    fem_size = _verify_options(args, evaluator.columns)
     where = (args.workers, args.scheduler, args.dask_local, args.connect_timeout)
     with sweep_executor(*where) as (executor, workers):
         res = run_sweep(
@@ -362,6 +415,13 @@ def _sweep(args: argparse.Namespace) -> int:
             overwrite=args.overwrite,
             progress=not args.no_progress,
         )
+        verified = None
+        if res.complete and fem_size is not None:
+            t0 = time.perf_counter()
+            key = args.objective or TORQUE
+            verified = verify_top(spec, base, res.path, args.verify_top, key,
+                                  not args.minimize, fem_size, executor)  # fmt: skip
+            t_verify = time.perf_counter() - t0
     if not res.complete:
         print(
             f"mrclutch sweep: interrupted after {res.rows} of {spec.n_designs} designs; "
@@ -373,10 +433,34 @@ def _sweep(args: argparse.Namespace) -> int:
         f"{res.rows} designs in {res.path}"
         + (f" (resumed at {res.resumed_from})" if res.resumed_from else "")
     )
+    if verified is not None and fem_size is not None:
+        side = write_verified(verified_path(res.path), verified, args.objective or TORQUE,
+                              fem_size)  # fmt: skip
+        print(format_verified(verified, args.objective or TORQUE, fem_size, workers, t_verify))
+        print(f"verified rows: {side}")
     if args.pareto:
         pareto_plot(res.path, args.pareto)
         print(f"Pareto front: {args.pareto}")
     return 0
+
+
+def format_verified(rows: list, key: str, fem_size: float, workers: int, seconds: float
+                    ) -> str:  # fmt: skip
+    """The --verify-top table: the circuit's max torque against the FEM's, row by row."""
+    head = (f"{'design':>8} {key:>24} {'fast (circuit) N·m':>19} "
+            f"{f'FEM {fem_size * 1e3:g} mm N·m':>17} {'error':>8} {'map bound':>10}")  # fmt: skip
+    lines = [f"FEM check of the {len(rows)} best rows by {key} ({len(rows)} designs on "
+             f"{workers} worker{'s' * (workers != 1)}, {seconds:.1f} s):", head]  # fmt: skip
+    for r in rows:
+        bound = "off map" if not math.isfinite(r.bound) else f"{r.bound:.1%}"
+        lines.append(f"{r.design_id:>8} {r.objective_value:>24.6g} {r.fast_torque:>19.5f} "
+                     f"{r.fem_torque:>17.5f} {r.error:>+8.2%} {bound:>10}")  # fmt: skip
+    if rows:
+        err = np.abs([r.error for r in rows])
+        inside = sum(r.within_bound for r in rows)
+        lines.append(f"circuit vs FEM: max |error| {err.max():.2%}, median {np.median(err):.2%}; "
+                     f"{inside} of {len(rows)} within the map's bound")  # fmt: skip
+    return "\n".join(lines)
 
 
 #: exit status of ``optimize`` when the reference re-check violates a requirement.

@@ -7,19 +7,9 @@ from pathlib import Path
 import numpy as np
 
 from geometry.atomic import atomic_path
-from mrclutch.sweep import is_parquet, pareto_front
+from mrclutch.sweep import pareto_front, read_results
 
-
-def read_results(path: str | Path) -> dict[str, np.ndarray]:
-    """A sweep's CSV (or Parquet dataset, a folder ending in .parquet) as columns of floats
-    (empty cells → NaN)."""
-    if is_parquet(path):
-        import pyarrow.parquet as pq
-
-        table = pq.read_table(path)
-        return {name: table[name].to_numpy().astype(float) for name in table.column_names}
-    data = np.genfromtxt(path, delimiter=",", names=True, dtype=float, ndmin=1)
-    return {name: np.atleast_1d(data[name]) for name in data.dtype.names}
+__all__ = ["pareto_plot", "read_results"]
 
 
 def pareto_plot(results: str | Path, out: str | Path) -> Path:

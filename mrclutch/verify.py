@@ -1,0 +1,138 @@
+"""FEM re-check of a sweep's best rows (issue 12): the sweep ranks on the fast path (the
+saturating circuit), this re-solves the N best designs by one column with the FEM at the
+error map's reference size, through the same executor as the sweep (one design a task, so
+a Dask cluster runs them in parallel), and tabulates the circuit's error on each.
+
+A row's design is rebuilt from the spec and its design id (``SweepSpec.chunk``: the same
+SI fields the sweep evaluated, not the rounded numbers of the file). "max torque" is the
+sweep's: yield + drag at the current limit and the input speed (``clutch_figures``), here
+with the torque by the FEM.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Sequence
+from concurrent.futures import Executor
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from geometry.atomic import atomic_path
+from geometry.validation import ParameterError
+from magnetics.torque import torque_curve
+from mrclutch.design import ClutchDesign
+from mrclutch.sweep import SweepSpec, read_results
+
+TORQUE = "max_torque_N_m"
+BOUND = "circuit_error_bound"
+#: the sidecar's columns: each number's fidelity named beside it
+COLUMNS = ("design_id", "objective", "objective_value", "fast_max_torque_N_m",
+           "fast_fidelity", "fem_max_torque_N_m", "fem_fidelity", "relative_error",
+           "circuit_error_bound", "within_bound")  # fmt: skip
+
+
+@dataclass(frozen=True)
+class VerifiedRow:
+    design_id: int
+    objective_value: float
+    fast_torque: float  # N·m, the sweep's (circuit)
+    fem_torque: float  # N·m, the FEM's at fem_size
+    bound: float  # the row's circuit_error_bound (inf: off the map)
+
+    @property
+    def error(self) -> float:
+        """Relative error of the fast torque against the FEM's."""
+        return self.fast_torque / self.fem_torque - 1
+
+    @property
+    def within_bound(self) -> bool:
+        return abs(self.error) <= self.bound
+
+
+def verified_path(out: str | Path) -> Path:
+    """The sidecar ``<out>.verified.csv``."""
+    out = Path(out)
+    return out.with_name(out.name + ".verified.csv")
+
+
+def top_rows(results: dict[str, np.ndarray], key: str, n: int, maximize: bool) -> np.ndarray:
+    """Indices into ``results`` of the ``n`` best valid rows by column ``key`` (fewer when
+    fewer rows have a finite value), best first; ties by design id."""
+    if key not in results:
+        raise ParameterError(f"--objective {key}: not a column of the results "
+                             f"({', '.join(k for k in results if k != 'design_id')})")  # fmt: skip
+    v = results[key]
+    ok = np.isfinite(v) & (results.get("valid", np.ones_like(v)) == 1)
+    idx = np.flatnonzero(ok)
+    order = np.lexsort((results["design_id"][idx], -v[idx] if maximize else v[idx]))
+    return idx[order[:n]]
+
+
+def design_of(spec: SweepSpec, base: ClutchDesign, design_id: int) -> ClutchDesign:
+    """The sweep's design number ``design_id``: its chunk regenerated (SI fields)."""
+    if not 0 <= design_id < spec.n_designs:
+        raise ParameterError(f"design id {design_id}: not in the sweep (0..{spec.n_designs - 1})")
+    ids, fields = spec.chunk(design_id // spec.chunk_size)
+    row = int(design_id - ids[0])
+    values = {k: (int(v[row]) if v.dtype.kind == "i" else float(v[row])) for k, v in fields.items()}
+    return replace(base, clutch=replace(base.clutch, **values))
+
+
+def fem_max_torque(design: ClutchDesign, fem_size: float) -> float:
+    """Max torque (yield + drag, N·m) at the current limit with the FEM's yield torque at
+    ``fem_size`` (m) on the uniform grid (the error map's reference mesh); runs in a
+    worker."""
+    op = design.operating
+    curve = torque_curve(design.clutch, [design.current_limit], method="fem", fem_size=fem_size,
+                         speed_rpm=op.input_speed_rpm, temperature=op.fluid_temperature,
+                         support=design.support)  # fmt: skip
+    return float(curve.torque[0])
+
+
+def verify_top(
+    spec: SweepSpec,
+    base: ClutchDesign,
+    results_path: str | Path,
+    n: int,
+    key: str,
+    maximize: bool,
+    fem_size: float,
+    executor: Executor | None = None,
+) -> list[VerifiedRow]:
+    """The ``n`` best rows of the sweep's results by ``key``, each re-solved by the FEM at
+    ``fem_size`` (m) on ``executor`` (in this process when None), best first."""
+    if not (isinstance(n, int) and n >= 1):
+        raise ParameterError(f"--verify-top = {n!r}: must be an integer >= 1")
+    if not (math.isfinite(fem_size) and fem_size > 0):
+        raise ParameterError(f"FEM size = {fem_size!r} m: must be finite and > 0")
+    res = read_results(results_path)
+    for col in (TORQUE, BOUND):
+        if col not in res:
+            raise ParameterError(f"{results_path}: no {col} column; cannot verify")
+    rows = top_rows(res, key, n, maximize)
+    designs = [design_of(spec, base, int(res["design_id"][i])) for i in rows]
+    if executor is None:
+        fem = [fem_max_torque(d, fem_size) for d in designs]
+    else:
+        futures = [executor.submit(fem_max_torque, d, fem_size) for d in designs]
+        fem = [f.result() for f in futures]
+    ids = [int(res["design_id"][i]) for i in rows]
+    keys, fast, bounds = (res[c][rows].astype(float).tolist() for c in (key, TORQUE, BOUND))
+    return [VerifiedRow(*row) for row in zip(ids, keys, fast, fem, bounds, strict=True)]
+
+
+def write_verified(path: str | Path, rows: Sequence[VerifiedRow], key: str, fem_size: float
+                   ) -> Path:  # fmt: skip
+    """The sidecar CSV: one row a design, each torque with the fidelity it came from."""
+    fem = f"fem@{fem_size * 1e3:g}mm uniform"
+    with atomic_path(path) as tmp, tmp.open("w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(COLUMNS)
+        for r in rows:
+            w.writerow([r.design_id, key, repr(r.objective_value), repr(r.fast_torque),
+                        "circuit (sweep fast path)", repr(r.fem_torque), fem, repr(r.error),
+                        repr(r.bound), int(r.within_bound)])  # fmt: skip
+    return Path(path)
