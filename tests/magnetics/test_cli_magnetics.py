@@ -62,3 +62,18 @@ def test_torque_both_methods_chart_and_error(tmp_path, capsys):
     )
     assert data["max_torque_error_rel"] <= 0.10  # issue 4's aim
     assert png.stat().st_size > 1000
+
+
+def test_torque_reports_flux_linkage_and_inductance(capsys):
+    """λ(I) from the circuit rises with current and flattens as the iron saturates: its
+    slope (the incremental inductance) is the printed L and falls with current; L at 0 A
+    equals the centred difference of λ at small currents."""
+    import numpy as np
+
+    assert main(["torque", "--preset", "paper", "--current", "0:7:0.5", "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    lam, ind = np.array(d["flux_linkage_Wb"]), np.array(d["inductance_H"])
+    cur = np.array([p["current_A"] for p in d["points"]])
+    assert np.all(np.diff(lam) > 0) and np.all(np.diff(ind) < 0)
+    mid = np.gradient(lam, cur)[1:-1]
+    assert ind[1:-1] == pytest.approx(mid, rel=0.15)  # a 0.5 A step: a coarse difference

@@ -6,6 +6,7 @@ Nothing heavy at module level (magnetics, scikit-fem and matplotlib load inside 
 from __future__ import annotations
 
 import argparse
+from typing import Any
 
 import numpy as np
 
@@ -91,11 +92,13 @@ def _torque(args: argparse.Namespace) -> int:
         c, f = curves[0].torque, curves[1].torque
         keep = f > 10 * curves[1].off_state_torque
         err = float(np.max(np.abs(c[keep] / f[keep] - 1))) if keep.any() else 0.0
+    lam, ind = _inductance(clutch, curves[0].currents)
     if args.json:
         data = {**_curve_json(curves[0])}
         if err is not None:
             data = {"circuit": _curve_json(curves[0]), "fem": _curve_json(curves[1]),
                     "max_torque_error_rel": err}  # fmt: skip
+        data["flux_linkage_Wb"], data["inductance_H"] = lam, ind  # by the circuit
         print_json(data)
         return 0
     for tc in curves:
@@ -103,12 +106,25 @@ def _torque(args: argparse.Namespace) -> int:
             f"method {tc.method}, {tc.speed_rpm:g} rpm, fluid at {tc.drag.temperature:g} °C: "
             f"off-state {tc.off_state_torque:.4g} N·m, damping {tc.damping:.4g} N·m·s"
         )
-    print("current_A  " + "  ".join(f"{tc.method}_N_m" for tc in curves))
+    print("current_A  " + "  ".join(f"{tc.method}_N_m" for tc in curves)
+          + "  flux_linkage_mWb  L_inc_mH (circuit)")  # fmt: skip
     for k, i in enumerate(curves[0].currents):
-        print(f"{i:9.4g}  " + "  ".join(f"{tc.torque[k]:.5g}" for tc in curves))
+        print(f"{i:9.4g}  " + "  ".join(f"{tc.torque[k]:.5g}" for tc in curves)
+              + f"  {lam[k] * 1e3:.4g}  {ind[k] * 1e3:.4g}")  # fmt: skip
     if err is not None:
         print(f"largest circuit-vs-FEM difference: {err * 100:.2f} %")
     return 0
+
+
+def _inductance(clutch: Any, currents: Any) -> tuple[Any, Any]:
+    """Flux linkage λ = N·Φ (Wb) and incremental inductance dλ/dI (H) at the currents, by
+    the saturating circuit (magnetics.dynamics.flux_linkage)."""
+    from geometry.section import build_section
+    from magnetics.circuit import path_from_section
+    from magnetics.dynamics import flux_linkage
+
+    lam, ind = flux_linkage(path_from_section(build_section(clutch)), np.asarray(currents)[None, :])
+    return lam[0], ind[0]
 
 
 def _curve_json(tc) -> dict:  # type: ignore[no-untyped-def]
