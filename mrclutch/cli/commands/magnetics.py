@@ -12,7 +12,9 @@ import numpy as np
 
 from geometry.section import build_section
 from geometry.validation import ParameterError, check_choice, check_range
+from magnetics.circuit import path_from_section
 from magnetics.drag import ROOM_TEMPERATURE
+from magnetics.dynamics import flux_linkage
 from magnetics.fem import FEMConvergenceError, solve_fem
 from magnetics.torque import torque_curve
 from mrclutch.cli.commands._common import add_design_args, atomic_path, load_clutch, print_json
@@ -119,10 +121,6 @@ def _torque(args: argparse.Namespace) -> int:
 def _inductance(clutch: Any, currents: Any) -> tuple[Any, Any]:
     """Flux linkage λ = N·Φ (Wb) and incremental inductance dλ/dI (H) at the currents, by
     the saturating circuit (magnetics.dynamics.flux_linkage)."""
-    from geometry.section import build_section
-    from magnetics.circuit import path_from_section
-    from magnetics.dynamics import flux_linkage
-
     lam, ind = flux_linkage(path_from_section(build_section(clutch)), np.asarray(currents)[None, :])
     return lam[0], ind[0]
 
