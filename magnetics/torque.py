@@ -37,6 +37,11 @@ from magnetics.thermal import Network, coil_resistance, continuous_current_sq
 
 FloatArray = NDArray[np.float64]
 METHODS = ("circuit", "fem")
+#: How a gap's torque reads its field across the gap's thickness (``_gap_torque``,
+#: ``FEMSolution.gap_yield_torque``): "mid-line", r²·τy(H) at the gap's mid radius;
+#: "weakest-layer", min over r in [r0, r1] of r²·τy(H(r)) (the fluid yields first there).
+CONVENTIONS = ("mid-line", "weakest-layer")
+DEFAULT_CONVENTION = "mid-line"
 
 
 def rpm_to_rad_s(rpm: float) -> float:
@@ -103,13 +108,16 @@ def torque_curve(
     temperature: float = ROOM_TEMPERATURE,
     support: Support | None = None,
     fem_mesh: str = "uniform",
+    convention: str = DEFAULT_CONVENTION,
 ) -> TorqueCurve:
     """Torque of ``clutch`` (or its already built section) at ``currents`` (A) by the
     circuit or the FEM, the drag at ``speed_rpm`` and fluid ``temperature`` (°C) added.
     ``fem_mesh``: the FEM's "uniform" grid (the error map's reference) or its "graded" one
     (as accurate at the same ``fem_size`` on the paper preset with ~3× fewer unknowns,
-    magnetics.fem.grid; benchmarks/bench_fem_speed.py)."""
+    magnetics.fem.grid; benchmarks/bench_fem_speed.py). ``convention``: how each gap's
+    torque reads the field across its thickness (``CONVENTIONS``), in both solvers."""
     check_choice("method", method, METHODS)
+    check_choice("convention", convention, CONVENTIONS)
     check_choice("fem_mesh", fem_mesh, MESHES)
     rpm = check_finite("speed_rpm", speed_rpm, " rpm")
     cur = np.atleast_1d(np.asarray(currents, dtype=float))
@@ -120,7 +128,8 @@ def torque_curve(
     if method == "circuit":
         path = path_from_section(section, materials)
         res = solve_path(path, cur[None, :], materials)
-        per = _gap_torque(path, np.abs(res.flux), res.radial_mmf, materials, fluid)[0]
+        per = _gap_torque(path, np.abs(res.flux), res.radial_mmf, materials, fluid,
+                          convention)[0]  # fmt: skip
         labels = res.gap_label
     else:
         # One grid (its forms' current-independent parts and the Newton preconditioner kept
@@ -130,7 +139,7 @@ def torque_curve(
         psi = None
         for k in np.argsort(np.abs(cur), kind="stable"):
             sol = solve_fem(section, float(cur[k]), materials=materials, grid=grid, psi0=psi)
-            per[k], psi = sol.gap_yield_torque(fluid), sol.psi
+            per[k], psi = sol.gap_yield_torque(fluid, materials, convention), sol.psi
         labels = tuple(f"gap{g.index}" for g in section.gaps)
     ty = per.sum(axis=-1)
     if section.table is None:
@@ -149,10 +158,11 @@ def yield_torque_at(
     materials: Mapping[str, Magnetic] | None = None,
     fluid: MRFluid | None = None,
     rtol: float = 1e-7,
+    convention: str = DEFAULT_CONVENTION,
 ) -> FloatArray:
     """Yield torque (N·m, shape S) of the S designs of ``path``, each at its current (flux
     solved to the relative tolerance ``rtol``)."""
-    return yield_torque_and_flux(path, current, materials, fluid, rtol)[0]
+    return yield_torque_and_flux(path, current, materials, fluid, rtol, None, convention)[0]
 
 
 def yield_torque_and_flux(
@@ -162,13 +172,15 @@ def yield_torque_and_flux(
     fluid: MRFluid | None = None,
     rtol: float = 1e-7,
     start: FloatArray | None = None,
+    convention: str = DEFAULT_CONVENTION,
 ) -> tuple[FloatArray, FloatArray]:
     """``yield_torque_at`` and the gap flux (S, 1) it solved for (a warm start for a nearby
     current: ``continuous_torque``'s ``hint``); ``start``: a first flux guess (S, 1)."""
-    return _solved_point(path, current, materials, fluid, rtol, start)[:2]
+    return _solved_point(path, current, materials, fluid, rtol, start, convention)[:2]
 
 
-def _solved_point(path, current, materials, fluid, rtol, start=None):  # type: ignore[no-untyped-def]
+def _solved_point(path, current, materials, fluid, rtol, start=None,  # type: ignore[no-untyped-def]
+                  convention=DEFAULT_CONVENTION):  # fmt: skip
     """(yield torque (S,), gap flux (S, 1), dF/dΦ there (S, 1)) at ``current``."""
     mats = MATERIALS if materials is None else materials
     cur = np.broadcast_to(np.asarray(current, dtype=float), path.turns.shape)
@@ -176,7 +188,8 @@ def _solved_point(path, current, materials, fluid, rtol, start=None):  # type: i
     phi = np.abs(solve_flux(path, (path.turns * cur)[:, None], mats, rtol=rtol, kernels=kern,
                             start=start))  # fmt: skip
     m = _mmf(path, mats, phi, kern)
-    return _gap_torque(path, phi, 0.5 * m["radial"], mats, fluid).sum(-1)[:, 0], phi, m["dtotal"]
+    t = _gap_torque(path, phi, 0.5 * m["radial"], mats, fluid, convention).sum(-1)[:, 0]
+    return t, phi, m["dtotal"]
 
 
 def max_torque_batch(
@@ -184,6 +197,7 @@ def max_torque_batch(
     current: ArrayLike,
     materials: Mapping[str, Magnetic] | None = None,
     fluid: MRFluid | None = None,
+    convention: str = DEFAULT_CONVENTION,
 ) -> FloatArray:
     """Yield torque (N·m, shape S) of S designs, each at its current (broadcast to S);
     NaN for designs that fail DrumClutch's validation."""
@@ -192,7 +206,7 @@ def max_torque_batch(
 
     def one(rg: Regions, rows: np.ndarray) -> dict[str, FloatArray]:
         return {"t": yield_torque_at(path_from_regions(rg, materials), cur[rows], materials,
-                                     fluid)}  # fmt: skip
+                                     fluid, convention=convention)}  # fmt: skip
 
     return per_topology(p, valid(p), one)["t"]
 
@@ -203,6 +217,7 @@ def torque_grid_batch(
     materials: Mapping[str, Magnetic] | None = None,
     fluid: MRFluid | None = None,
     n_table: int = 192,
+    convention: str = DEFAULT_CONVENTION,
 ) -> FloatArray:
     """Yield torque (S, C) of S designs at every one of C currents (``torque_table`` per
     drum count); NaN rows for designs that fail DrumClutch's validation."""
@@ -210,7 +225,7 @@ def torque_grid_batch(
 
     def one(rg: Regions, rows: np.ndarray) -> dict[str, FloatArray]:
         path = path_from_regions(rg, materials)
-        return {"t": torque_table(path, currents, materials, fluid, n_table)}
+        return {"t": torque_table(path, currents, materials, fluid, n_table, convention)}
 
     return per_topology(p, valid(p), one)["t"]
 
@@ -221,6 +236,7 @@ def torque_table(
     materials: Mapping[str, Magnetic] | None = None,
     fluid: MRFluid | None = None,
     n_table: int = 192,
+    convention: str = DEFAULT_CONVENTION,
 ) -> FloatArray:
     """Yield torque (S, C) of the designs of ``path`` at every one of C currents.
 
@@ -237,7 +253,7 @@ def torque_table(
     grid = np.linspace(0.0, 1.0, n_table)[None, :] ** 1.5 * phi_max[:, None]  # (S, M)
     parts = _mmf(path, mats, grid)
     table = parts["total"]  # (S, M), increasing in each row
-    ty = _gap_torque(path, grid, 0.5 * parts["radial"], mats, fluid).sum(-1)  # (S, M)
+    ty = _gap_torque(path, grid, 0.5 * parts["radial"], mats, fluid, convention).sum(-1)
     ni = path.turns[:, None] * cur[None, :]  # (S, C)
     span = table[:, -1:] + ni.max(axis=1, keepdims=True) + 1.0
     offs = np.cumsum(np.concatenate([[0.0], span[:-1, 0]]))[:, None]
@@ -250,32 +266,67 @@ def torque_table(
     return t0 + u * (np.take_along_axis(ty, j, 1) - t0)
 
 
-def _gap_torque(path, phi, radial, materials, fluid) -> FloatArray:  # type: ignore[no-untyped-def]
+def _gap_torque(path, phi, radial, materials, fluid, convention=DEFAULT_CONVENTION):  # type: ignore[no-untyped-def]
     """Yield torque (S, C, K) of every gap entry at gap flux ``phi`` ≥ 0 (S, C): the zone
-    (uniform H over the steel overlap) plus the half band next to it, where the radial
-    potential falls linearly: B(u) = F_r·u/(r·R_b·…) = q·u, u ∈ (0, 1) (circuit docstring),
-    so the band's ∫ τy dz = (b/2)·∫0^1 τy(H(q u)) du = (b/2)·C(q)/q (``_yield_table``)."""
+    (B = Φ/(2π r L) over the steel overlap) plus the half band next to it, where the radial
+    potential falls linearly: B(r, u) = F_r·u/(r·S_b) = q1·u/r, u ∈ (0, 1) (circuit
+    docstring), so the band's ∫ τy dz at radius r = (b/2)·∫0^1 τy(H(q u)) du = (b/2)·C(q)/q
+    with q = q1/r (``_yield_table``).
+
+    ``convention`` "mid-line": r = the gap's mid radius. "weakest-layer": the torque an
+    annulus transmits is the same at every r (steady shear), so it yields where r²·τy is
+    least ([carlson-jolly2000] eq. 1 per layer): T = 2π·∫ min_r r²·τy(H(r, z)) dz. At each
+    z the field is c/r, so f(r) = r²·g(c/r), g(B) = τy(H(B)), has
+    d ln f/d ln r = 2 − e(B), e = d ln g/d ln B: f rises with r wherever e < 2, and its
+    minimum is at r0, r1 or an interior r = c/B* where e falls through 2 as B falls
+    (``_YieldTable.turns``, empty for MRF-132DG: e ≤ 1.93, so there the minimum is the
+    inner wall r0, exactly)."""
     mats = MATERIALS if materials is None else materials
+    check_choice("convention", convention, CONVENTIONS)
     tab = _yield_table(magnetic(path.fluid, mats), FLUIDS[path.fluid] if fluid is None else fluid)
-    rmid = path.gap_r_mid[:, None, :]
     length = path.gap_len[:, None, :]
-    b = np.abs(phi[:, :, None] / (2 * np.pi * rmid * length))
-    q = np.abs(radial[:, :, None] / (path.gap_r_mid * path.band_reluctance[:, None])[:, None, :])
     band = (0.5 * path.band_len)[:, None, None]
-    tau = tab.tau(b) * length + band * tab.mean_tau(q)  # ∫ τy dz, Pa·m
-    return np.where(path.gap_mask[:, None, :], 2 * np.pi * rmid**2 * tau, 0.0)
+    c = phi[:, :, None] / (2 * np.pi * length)  # B·r in the zone, T·m
+    q1 = np.abs(radial[:, :, None] / path.band_reluctance[:, None, None])  # band: B·r at u = 1
+    if convention == "mid-line":
+        r = path.gap_r_mid[:, None, :]
+        zone = r**2 * tab.tau(np.abs(c / r))
+        bandt = r**2 * tab.mean_tau(q1 / r)
+    else:
+        r0, r1 = path.gap_r0[:, None, :], path.gap_r1[:, None, :]
+        zone = np.minimum(r0**2 * tab.tau(np.abs(c / r0)), r1**2 * tab.tau(np.abs(c / r1)))
+        for bs in tab.turns:  # interior minima (none for MRF-132DG)
+            r = np.clip(np.abs(c) / bs, r0, r1)
+            zone = np.minimum(zone, r**2 * tab.tau(np.abs(c / r)))
+        if tab.turns.size == 0:  # f rises with r at every u: the inner wall, exactly
+            bandt = np.minimum(r0**2 * tab.mean_tau(q1 / r0), r1**2 * tab.mean_tau(q1 / r1))
+        else:  # the minimum moves with u: Gauss–Legendre over u of min_r r²·τy
+            x, w = np.polynomial.legendre.leggauss(32)
+            bandt = 0.0
+            for uk, wk in zip(0.5 * (x + 1), 0.5 * w, strict=True):
+                cu = q1 * uk
+                m = np.minimum(r0**2 * tab.tau(cu / r0), r1**2 * tab.tau(cu / r1))
+                for bs in tab.turns:
+                    r = np.clip(cu / bs, r0, r1)
+                    m = np.minimum(m, r**2 * tab.tau(cu / r))
+                bandt = bandt + wk * m
+    tau = zone * length + band * bandt  # ∫ r²·τy dz, Pa·m³
+    return np.where(path.gap_mask[:, None, :], 2 * np.pi * tau, 0.0)
 
 
 @dataclass(frozen=True)
 class _YieldTable:
     """τy(H(B)) of one fluid on a uniform B grid, and its running integral
     C(B) = ∫0^B τy(H(b)) db (trapezoid on the grid); past the grid's end H ≥ 2 MA/m, where
-    tanh(6.33e-6·H) = 1 to 1e-11, so τy = τy,max there."""
+    tanh(6.33e-6·H) = 1 to 1e-11, so τy = τy,max there. ``turns``: the B* where
+    e = d ln τy/d ln B falls through 2 as B falls (the interior minima of r²·τy(H(c/r))
+    in r, ``_gap_torque``)."""
 
     step: float
     tau_grid: FloatArray
     cum: FloatArray
     tau_max: float
+    turns: FloatArray
 
     def _at(self, table: FloatArray, x: FloatArray) -> FloatArray:
         """Linear interpolation of ``table`` at x ≥ 0 by direct index (uniform grid);
@@ -304,7 +355,12 @@ def _yield_table(bh: Magnetic, fluid: MRFluid, n: int = 8192) -> _YieldTable:
     grid = np.linspace(0.0, b_end, n)
     tau = fluid.tau_y(bh.h_of_b(grid))
     cum = np.concatenate([[0.0], np.cumsum(0.5 * (tau[1:] + tau[:-1]) * np.diff(grid))])
-    return _YieldTable(float(grid[1]), tau, cum, fluid.tau_y_max)
+    # e = d ln τy/d ln B between grid nodes; B* where e > 2 above and ≤ 2 below
+    with np.errstate(divide="ignore", invalid="ignore"):
+        e = np.diff(np.log(tau[1:])) / np.diff(np.log(grid[1:]))
+    e = np.nan_to_num(e, nan=0.0)
+    turns = grid[2:-1][(e[:-1] <= 2.0) & (e[1:] > 2.0)]
+    return _YieldTable(float(grid[1]), tau, cum, fluid.tau_y_max, turns)
 
 
 def continuous_torque(
@@ -318,6 +374,7 @@ def continuous_torque(
     fluid: MRFluid | None = None,
     passes: int = 3,
     hint: tuple[FloatArray, FloatArray] | None = None,
+    convention: str = DEFAULT_CONVENTION,
 ) -> tuple[Any, Any]:
     """(current A, torque N·m), shape S: the largest torque the clutch holds forever while
     slipping at ``slip_speed``, its coil's Joule heat and its slip heat T·ω both in the
@@ -385,7 +442,7 @@ def continuous_torque(
         if phi is not None:
             tangent = np.abs(phi) + turns * (i[:, None] - i_old) / dfdphi
             start = np.maximum(np.minimum(tangent, lin * i[:, None]), 1e-30)
-        t, phi, dfdphi = _solved_point(path, i, mats, fluid, 1e-3, start)
+        t, phi, dfdphi = _solved_point(path, i, mats, fluid, 1e-3, start, convention)
         i_old = i[:, None]
         c1 = np.where(i > 0, t / np.where(i > 0, i, 1.0), 0.0)
         i = fixed_point(c1, 8 if k == passes - 1 else 4)  # the last one exact, others near

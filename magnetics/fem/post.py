@@ -9,6 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from geometry.validation import ParameterError
 from magnetics.fem.grid import Grid
 from magnetics.materials import Magnetic, MRFluid, magnetic
 
@@ -35,6 +36,10 @@ class FEMSolution:
     gap_profiles: tuple[tuple[FloatArray, FloatArray, FloatArray, FloatArray], ...]
     #: the node field ψ (a warm start for a nearby current on the same grid)
     psi: FloatArray | None = None
+    #: per gap, on every grid line r_i across it (walls included) and every row j of
+    #: cells along z: (r (I,), dz (J,), B_r (I, J), B_z (I, J)); B_r exact on the line
+    #: (the normal component, from ψ at its two nodes), B_z the adjacent gap cells' mean
+    gap_lines: tuple[tuple[FloatArray, FloatArray, FloatArray, FloatArray], ...] = ()
 
     @property
     def b(self) -> FloatArray:
@@ -49,9 +54,16 @@ class FEMSolution:
         return out
 
     def gap_yield_torque(
-        self, fluid: MRFluid, materials: Mapping[str, Magnetic] | None = None
+        self,
+        fluid: MRFluid,
+        materials: Mapping[str, Magnetic] | None = None,
+        convention: str = "mid-line",
     ) -> FloatArray:
-        """T_k = 2π r_k² ∫ τy(H_r(z)) dz along each gap's mid-radius line (wetted length).
+        """T_k = 2π r_k² ∫ τy(H_r(z)) dz along each gap's mid-radius line (wetted length),
+        |B| and |B_r| averaged over the gap's cells of each row (``convention``
+        "mid-line"), or T_k = 2π ∫ min_i r_i²·τy(H_r(r_i, z)) dz over the grid lines r_i
+        across the gap, both walls included ("weakest-layer": the layer that yields first,
+        magnetics.torque._gap_torque).
 
         Only the field component across the gap (H_r, normal to the sheared walls) counts:
         chains along z lie on the shear's vorticity axis and are not tilted by the flow, so
@@ -60,6 +72,15 @@ class FEMSolution:
         """
         fl = magnetic(fluid.name, materials)
         out = []
+        if convention == "weakest-layer":
+            for r, dz, br, bz in self.gap_lines:
+                b = np.hypot(br, bz)
+                h_r = fl.h_of_b(b) * np.abs(br) / np.where(b > 0, b, 1.0)
+                f = r[:, None] ** 2 * fluid.tau_y(h_r)  # (I, J)
+                out.append(2 * np.pi * np.sum(f.min(axis=0) * dz))
+            return np.array(out)
+        if convention != "mid-line":
+            raise ParameterError(f"convention = {convention!r}: mid-line or weakest-layer")
         for r, (_z, dz, b, br) in zip(self.gap_r_mid, self.gap_profiles, strict=True):
             h_r = fl.h_of_b(b) * br / np.where(b > 0, b, 1.0)
             out.append(2 * np.pi * r**2 * np.sum(fluid.tau_y(h_r) * dz))
@@ -76,6 +97,26 @@ def post_process(grid: Grid, current: float, psi: FloatArray, iterations: int, r
     bmag = np.hypot(br, bz)
     # Gap profiles: |B| averaged over the gap's radial cells, row by row along z.
     dz_el = np.ptp(mesh.p[1, mesh.t], axis=0)
+    # ψ and the cells' B_z on the tensor grid's (r, z) indices
+    rl, zl = grid.r_lines, grid.z_lines
+    psi_g = np.empty((rl.size, zl.size))
+    psi_g[np.searchsorted(rl, mesh.p[0]), np.searchsorted(zl, mesh.p[1])] = psi
+    bz_g = np.zeros((rl.size - 1, zl.size - 1))
+    bz_g[np.searchsorted(rl, cen[0]) - 1, np.searchsorted(zl, cen[1]) - 1] = bz
+    lines = []
+    for gp in grid.section.gaps:
+        # the lines on the gap's edges (grid lines are region edges rounded to 1e-12 m)
+        i0 = np.searchsorted(rl, gp.r_inner - 1e-11)
+        i1 = np.searchsorted(rl, gp.r_outer + 1e-11) - 1
+        j0, j1 = np.searchsorted(zl, gp.z0 - 1e-11), np.searchsorted(zl, gp.z1 + 1e-11) - 1
+        r = rl[i0 : i1 + 1]
+        dzj = np.diff(zl[j0 : j1 + 1])
+        br_l = -np.diff(psi_g[i0 : i1 + 1, j0 : j1 + 1], axis=1) / (r[:, None] * dzj)
+        cells = bz_g[i0:i1, j0:j1]  # (I - 1, J) gap cells
+        bz_l = np.empty_like(br_l)
+        bz_l[0], bz_l[-1] = cells[0], cells[-1]
+        bz_l[1:-1] = 0.5 * (cells[:-1] + cells[1:])
+        lines.append((r, dzj, br_l, bz_l))
     profiles, rmid = [], []
     for gp in grid.section.gaps:
         sel = (cen[0] > gp.r_inner) & (cen[0] < gp.r_outer) & (cen[1] > gp.z0) & (cen[1] < gp.z1)
@@ -89,4 +130,4 @@ def post_process(grid: Grid, current: float, psi: FloatArray, iterations: int, r
         rmid.append(gp.r_mean)
     return FEMSolution(float(current), grid.r_lines, grid.z_lines, cen[0], cen[1], br, bz,
                        grid.names, grid.material_index, iterations, residual, np.array(rmid),
-                       tuple(profiles), psi)  # fmt: skip
+                       tuple(profiles), psi, tuple(lines))  # fmt: skip
