@@ -2,7 +2,8 @@
 
 ``write_report(design, out_dir)`` writes
 
-* ``clutch.step`` and ``<part>.stl`` (CAD, mm),
+* ``clutch.step`` and ``<part>.stl`` (CAD, mm), ``clutch.materials.json`` (each STEP
+  solid's material and density: ``mrclutch inertia clutch.step`` weighs it),
 * ``view.png`` (3D, half-section cut) and ``section.png`` (r–z drawing),
 * ``torque.png`` (torque–current: circuit curve with FEM points),
 * ``haptic.png`` (Bode magnitude, effective stiffness and damping, rendering areas of
@@ -111,8 +112,13 @@ def _cad(design: ClutchDesign, folder: Path) -> dict[str, Any]:
     res = export_clutch(design.clutch, folder)
     return {
         "step": res.step.name,
+        "materials": res.materials.name if res.materials is not None else None,
         "stl": {name: p.name for name, p in res.stl.items()},
         "part_volumes_m3": {n: v * 1e-9 for n, v in res.volumes_mm3.items()},
+        "stl_volume_error_rel": {
+            n: res.stl_volumes_mm3[n] / v - 1 for n, v in res.volumes_mm3.items()
+        },
+        "notes": list(res.notes),
     }
 
 
@@ -287,6 +293,8 @@ def render_html(m: dict[str, Any]) -> str:
     budget = budget_html(m["budget"]) if "budget" in m else ""
     stl = ", ".join(f'<a href="{e_(p)}">{e_(p)}</a>' for p in m["cad"]["stl"].values())
     methods = ", ".join(f"{k}: {v}" for k, v in c["methods"].items())
+    side = m["cad"].get("materials") or ""
+    cad_notes = "".join(f"<p class=small>Note: {e_(n)}</p>" for n in m["cad"].get("notes", ()))
     return f"""<!doctype html>
 <html lang="en"><head><meta charset="utf-8"><title>mrclutch report: {e_(m["design"])}</title>
 <style>
@@ -318,7 +326,8 @@ render the same virtual spring K.</p></div></div>
 <div><h2>Torque against current</h2><img src="torque.png" alt="torque-current"></div>
 <div><h2>Section</h2><img src="section.png" alt="r-z section"></div></div>
 <h2>3D view</h2><img src="view.png" alt="3D view">
-<h2>Files</h2><p>CAD assembly: <a href="{e_(m["cad"]["step"])}">{e_(m["cad"]["step"])}</a>;
-parts (STL): {stl}.</p>
+<h2>Files</h2><p>CAD assembly: <a href="{e_(m["cad"]["step"])}">{e_(m["cad"]["step"])}</a>
+(materials and densities: <a href="{e_(side)}">{e_(side)}</a>); parts (STL): {stl}.</p>
+{cad_notes}
 </body></html>
 """

@@ -60,6 +60,7 @@ def test_transmission_lever_in_a_design_file(here, capsys):
     [
         (["inertia", "--tolerance-mm", "1e-6"], "--tolerance-mm = 1e-06 mm: must be >= 0.00294"),
         (["export", "--out", "x", "--tolerance-mm", "1e-6"], "--tolerance-mm = 1e-06 mm"),
+        (["export", "--out", "x", "--tolerance-mm", "100"], "--tolerance-mm = 100 mm: must be <="),
         (["haptic", "--lever-mm", "1e-9"], "--lever-mm = 1e-09 mm: must be in [1, 2000] mm"),
         (["haptic", "--gearing", "1e-6"], "--gearing = 1e-06: must be in [0.01, 100]"),
     ],

@@ -9,9 +9,9 @@ import pytest
 from mrclutch.cli.main import main
 
 EXPECTED = {
-    "clutch.step", "rotor.stl", "shaft.stl", "input.stl", "housing.stl", "coil.stl",
-    "fluid.stl", "view.png", "section.png", "torque.png", "haptic.png", "zwidth.png",
-    "response.png", "metrics.json", "report.html",
+    "clutch.step", "clutch.materials.json", "rotor.stl", "shaft.stl", "input.stl",
+    "housing.stl", "coil.stl", "fluid.stl", "view.png", "section.png", "torque.png",
+    "haptic.png", "zwidth.png", "response.png", "metrics.json", "report.html",
 }  # fmt: skip
 
 
