@@ -15,14 +15,18 @@
   torque curve and the artefact list),
 * ``report.html`` (one page, read first).
 
-Everything is built in a temporary folder beside ``out_dir`` and moved in only when all
-of it succeeded, so an error or Ctrl-C never leaves a half-written report.
+Everything is built in a temporary folder beside ``out_dir`` (``.<name>-partial-<pid>-…``)
+and moved in only when all of it succeeded, so an error, Ctrl-C or ``kill`` (SIGTERM, turned
+into KeyboardInterrupt while the report is built) never leaves a half-written report; the
+staging folders of processes that died harder (SIGKILL, power loss) are removed by the next
+report into the same place.
 """
 
 from __future__ import annotations
 
 import html
 import json
+import os
 import shutil
 import tempfile
 from collections.abc import Callable
@@ -45,6 +49,7 @@ from mrclutch.cli.view import screenshot
 from mrclutch.design import ClutchDesign
 from mrclutch.outputs import CLUTCH_ROWS, HAND_ROWS, output, row_label
 from mrclutch.pipeline import evaluate
+from mrclutch.sweep import sigterm_as_interrupt
 
 #: Currents of the report's torque curve (A): the paper's Fig. 2b range.
 CURVE_CURRENTS = np.linspace(0.0, 7.0, 29)
@@ -71,8 +76,51 @@ def write_report(
     if out.exists() and not out.is_dir():
         raise ParameterError(f"--out {out}: exists and is not a directory")
     out.parent.mkdir(parents=True, exist_ok=True)
-    tick = progress if progress is not None else (lambda _msg: None)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}-partial-", dir=out.parent))
+    report = progress if progress is not None else (lambda _msg: None)
+    remove_stale_partials(out)
+    with sigterm_as_interrupt() as terminated:
+
+        def tick(msg: str) -> None:
+            if terminated.is_set():  # the signal's KeyboardInterrupt was swallowed
+                raise KeyboardInterrupt
+            report(msg)
+
+        return _build(design, out, fidelity, tick)
+
+
+def _partial_prefix(out: Path) -> str:
+    return f".{out.name}-partial-"
+
+
+def remove_stale_partials(out: Path) -> list[Path]:
+    """Remove the staging folders beside ``out`` left by report processes that no longer
+    run (the pid in the name); returns what was removed. Folders of live processes stay."""
+    removed = []
+    prefix = _partial_prefix(out)
+    for p in out.parent.glob(f"{prefix}*"):
+        pid, _, _ = p.name[len(prefix) :].partition("-")
+        if p.is_dir() and pid.isdigit() and not _alive(int(pid)):
+            shutil.rmtree(p, ignore_errors=True)
+            removed.append(p)
+    return removed
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # someone else's process: alive
+        return True
+    except OverflowError:  # not a pid at all
+        return False
+    return True
+
+
+def _build(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[str], None]) -> Report:
+    tmp = Path(tempfile.mkdtemp(prefix=f"{_partial_prefix(out)}{os.getpid()}-", dir=out.parent))
     try:
         tick("evaluating the design")
         ev = evaluate(design, fidelity)
@@ -100,6 +148,7 @@ def write_report(
         tick("report.html")
         (tmp / "report.html").write_text(render_html(metrics))
         files = tuple(sorted(p.name for p in tmp.iterdir()))
+        tick("moving the files into place")
         out.mkdir(exist_ok=True)
         for name in files:
             (tmp / name).replace(out / name)

@@ -15,10 +15,21 @@ EXPECTED = {
 }  # fmt: skip
 
 
+def _dead_pid() -> int:
+    child = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                           capture_output=True, text=True, check=True)  # fmt: skip
+    return int(child.stdout)
+
+
 @pytest.fixture(scope="module")
 def report_dir(tmp_path_factory):
     out = tmp_path_factory.mktemp("rep") / "paper"
+    # what a report killed by SIGKILL leaves: the next report into the same place removes it
+    stale = out.parent / f".paper-partial-{_dead_pid()}-x1y2"
+    stale.mkdir()
+    (stale / "view.png").write_bytes(b"half")
     assert main(["report", "--preset", "paper", "--out", str(out), "--no-progress"]) == 0
+    assert not stale.exists()
     return out
 
 
@@ -83,3 +94,57 @@ def test_interrupted_report_leaves_nothing(tmp_path, monkeypatch, capsys):
     assert main(["report", "--out", str(out), "--fidelity", "fast", "--no-progress"]) == 130
     assert "interrupted" in capsys.readouterr().err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_sigterm_while_building_removes_the_staging_folder(tmp_path):
+    """Issue 16: ``kill`` of a running report left ``.NAME-partial-…`` behind. A real
+    process, killed by SIGTERM once its staging folder exists (the report is being built),
+    exits as interrupted and leaves nothing."""
+    import os
+    import signal
+    import time
+
+    out = tmp_path / "paper"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "mrclutch", "report", "--preset", "paper", "--out", str(out),
+         "--no-progress"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+    )  # fmt: skip
+    try:
+        deadline = time.monotonic() + 120
+        written: list = []  # wait for the first artefact in the staging folder (CAD)
+        while not written and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+            written = list(tmp_path.glob(".paper-partial-*/*"))
+        assert written, "the report never started writing"
+        assert written[0].parent.name.startswith(f".paper-partial-{proc.pid}-")  # its pid
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+    # 130, or killed by SIGINT (the shell's 130 as well): CPython exits by SIGINT when a
+    # KeyboardInterrupt once escaped code that a C extension ran (PyRun_String), even if
+    # main caught it later
+    assert proc.returncode in (130, -signal.SIGINT), err
+    assert "interrupted" in err and "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_only_staging_folders_of_dead_processes_are_removed(tmp_path):
+    import os
+
+    from mrclutch.cli.report import remove_stale_partials
+
+    out = tmp_path / "paper"
+    dead = tmp_path / f".paper-partial-{_dead_pid()}-aa"
+    live = tmp_path / f".paper-partial-{os.getppid()}-bb"  # a process that runs
+    mine = tmp_path / f".paper-partial-{os.getpid()}-cc"  # this one
+    other = tmp_path / f".other-partial-{_dead_pid()}-dd"  # another report's
+    unnamed = tmp_path / ".paper-partial-zz"  # no pid: not ours to judge
+    for d in (dead, live, mine, other, unnamed):
+        d.mkdir()
+    assert remove_stale_partials(out) == [dead]
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        p.name for p in (live, mine, other, unnamed)
+    )

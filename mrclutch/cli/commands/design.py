@@ -327,7 +327,7 @@ def _pct(v: float | None) -> str:
 def _report(args: argparse.Namespace) -> int:
     design = load_design_args(args)
     check_choice("fidelity", args.fidelity, FIDELITIES)
-    steps = 7
+    steps = 9  # the tick() calls of mrclutch.cli.report._build
     if args.no_progress:
         rep = write_report(design, args.out, fidelity=args.fidelity)
     else:
