@@ -344,15 +344,21 @@ def render_html(m: dict[str, Any]) -> str:
     methods = ", ".join(f"{k}: {v}" for k, v in c["methods"].items())
     side = m["cad"].get("materials") or ""
     cad_notes = "".join(f"<p class=small>Note: {e_(n)}</p>" for n in m["cad"].get("notes", ()))
-    return f"""<!doctype html>
+    page = f"""<!doctype html>
 <html lang="en"><head><meta charset="utf-8"><title>mrclutch report: {e_(m["design"])}</title>
+<meta name="viewport" content="width=device-width, initial-scale=1">
 <style>
 body{{font-family:system-ui,sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}}
+p,li,h1,h2,h3{{overflow-wrap:anywhere}}
+.scroll{{overflow-x:auto;max-width:100%}}
 table{{border-collapse:collapse;margin:.5em 0 1.5em}}
 td,th{{padding:.2em .8em;border-bottom:1px solid #ddd}}
 td.n{{text-align:right;font-variant-numeric:tabular-nums}}
-img{{max-width:100%;border:1px solid #eee}}
-.grid{{display:grid;grid-template-columns:1fr 1fr;gap:1em}} .small{{color:#666;font-size:.9em}}
+img{{max-width:100%;height:auto;border:1px solid #eee;box-sizing:border-box}}
+.grid{{display:grid;grid-template-columns:1fr 1fr;gap:1em}} .grid>div{{min-width:0}}
+.small{{color:#666;font-size:.9em}}
+@media (max-width:700px){{.grid{{grid-template-columns:1fr}} body{{margin:1em auto}}
+td,th{{padding:.2em .4em}}}}
 </style></head><body>
 <h1>MR drum clutch design “{e_(m["design"])}”</h1>
 <p class=small>Fidelity <b>{e_(m["fidelity"])}</b> ({e_(methods)}). All figures SI unless marked.
@@ -380,3 +386,7 @@ render the same virtual spring K.</p></div></div>
 {cad_notes}
 </body></html>
 """
+    # every table scrolls inside its own box on a narrow screen instead of widening the page
+    return page.replace("<table>", "<div class=scroll><table>").replace(
+        "</table>", "</table></div>"
+    )
