@@ -8,9 +8,10 @@ import math
 from dataclasses import replace
 from typing import Any
 
-from geometry.validation import check_choice, check_nonnegative, check_positive, check_range
+from geometry.validation import check_choice, check_positive, check_range
 from mrclutch.cli.commands._common import atomic_path, print_json
 from mrclutch.cli.plots.haptic import compare_figure
+from mrclutch.design import MAX_DELAY
 from mrclutch.haptics.actuator import (
     GEARING_RANGE,
     LEVER_RANGE,
@@ -73,7 +74,7 @@ def _edge(args: argparse.Namespace) -> tuple[float | None, float | None, float]:
     K = None if args.stiffness is None else check_positive("--stiffness", args.stiffness, " N/m")
     delay = None
     if args.delay_ms is not None:
-        delay = check_nonnegative("--delay-ms", args.delay_ms, " ms") * 1e-3
+        delay = check_range("--delay-ms", args.delay_ms, 0.0, MAX_DELAY * 1e3, " ms") * 1e-3
     workspace = check_positive("--workspace-mm", args.workspace_mm, " mm") * 1e-3
     return K, delay, workspace
 
