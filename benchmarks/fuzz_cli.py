@@ -132,7 +132,7 @@ def run_one(argv: list[str], timeout: float) -> tuple[str, str]:
     except MemoryError:
         return "memory", "MemoryError"
     except TimeoutError as exc:
-        return "slow", str(exc)
+        return "slow", f"{argv[0]}: {exc}"
     except Exception as exc:
         return "traceback", f"{type(exc).__name__}: {str(exc)[:160]}"
     finally:
@@ -160,8 +160,14 @@ def child(args: argparse.Namespace) -> None:
         for k in range(args.start, args.stop):
             rng = random.Random(f"{args.seed}-{k}")
             argv = make_input(rng, keys, Path(tmp), k)
+            t = time.perf_counter()
             cls, detail = run_one(argv, args.timeout)
-            report.write(json.dumps({"k": k, "class": cls, "detail": detail, "argv": argv}) + "\n")
+            rec = {"k": k, "class": cls, "detail": detail, "argv": argv,
+                   "s": time.perf_counter() - t}  # fmt: skip
+            files = [a for a in argv if a.endswith(".toml")]
+            if cls != "ok" and files:
+                rec["design"] = Path(files[0]).read_text()
+            report.write(json.dumps(rec) + "\n")
             report.flush()
 
 
@@ -206,7 +212,7 @@ def parent(args: argparse.Namespace) -> int:
     for rec in (r for part in parts for r in part):
         counts[rec["class"]] += 1
         if rec["class"] != "ok":
-            ex = examples[rec["class"]].setdefault(rec["detail"][:90], [0, rec["argv"]])
+            ex = examples[rec["class"]].setdefault(rec["detail"][:90], [0, rec])
             ex[0] += 1
     total = sum(counts.values())
     dt = time.perf_counter() - t0
@@ -215,8 +221,13 @@ def parent(args: argparse.Namespace) -> int:
     for c, n in counts.items():
         print(f"  {c:<10} {n}")
     for c, exs in examples.items():
-        for detail, (n, argv) in sorted(exs.items(), key=lambda t: -t[1][0])[: args.show]:
-            print(f"{c}: {n}× {detail}\n    e.g. mrclutch {' '.join(argv or [])}")
+        for detail, (n, rec) in sorted(exs.items(), key=lambda t: -t[1][0])[: args.show]:
+            print(f"{c}: {n}× {detail}\n    e.g. mrclutch {' '.join(rec.get('argv') or [])}")
+            if rec.get("design"):
+                print("    with " + rec["design"].strip().replace("\n", "\n         "))
+    slowest = sorted((r for part in parts for r in part), key=lambda r: -r.get("s", 0))[:3]
+    for r in slowest:
+        print(f"slowest: {r.get('s', 0):.1f} s  mrclutch {' '.join(r.get('argv') or [])}")
     bad = counts["traceback"] + counts["nan"] + counts["memory"]
     return 1 if bad else 0
 
