@@ -125,13 +125,36 @@ def part_solids(
     return out
 
 
-def assembly(clutch: DrumClutch, parts: dict[str, Any] | None = None) -> Any:
-    """A build123d Compound whose children are the parts, labelled and coloured."""
+def solid_label(part: str, material: str) -> str:
+    """STEP product name of one material's solid inside a part that mixes materials (letters,
+    digits and ``_`` only: the STEP writer turns other characters into ``_``)."""
+    return f"{part}_{material}"
+
+
+def assembly(
+    clutch: DrumClutch,
+    parts: dict[str, Any] | None = None,
+    materials: dict[tuple[str, str], Any] | None = None,
+) -> Any:
+    """A build123d Compound whose children are the parts, labelled and coloured.
+
+    With ``materials`` (``material_solids``), a part that mixes materials becomes a
+    sub-assembly of one solid per material, labelled ``solid_label(part, material)``, so
+    the file says what each solid is made of (``geometry.export`` writes the densities).
+    """
     from build123d import Color, Compound
 
     parts = parts if parts is not None else part_solids(clutch)
     children = []
     for name, shape in parts.items():
+        mats = [(m, s) for (p, m), s in (materials or {}).items() if p == name]
+        if len(mats) > 1:
+            subs = []
+            for material, sub in mats:
+                sub.label = solid_label(name, material)
+                sub.color = Color(*MATERIAL_COLOURS[material])
+                subs.append(sub)
+            shape = Compound(children=subs)
         shape.label = name
         shape.color = Color(*MATERIAL_COLOURS[PART_MATERIAL[name]])
         children.append(shape)
@@ -152,6 +175,11 @@ def brep_volume_mm3(shape: Any) -> float:
 #: circle and a volume error ~1e-4 (chord error h/R); finer only multiplies the triangles
 #: (``--tolerance-mm 1e-6`` on the paper clutch was killed at 24 GB).
 MIN_RELATIVE_TOLERANCE = 1e-4
+#: Coarsest chord height relative to the clutch's size: up to here the angular tolerance
+#: (0.5 rad) bounds the facets and the paper clutch's parts keep their volume to 1 %;
+#: far beyond, the facets of one wall cross the opposite one (``--tolerance-mm 100`` lost
+#: 36 % of the shaft).
+MAX_RELATIVE_TOLERANCE = 0.02
 
 
 def clutch_size(clutch: DrumClutch) -> float:
@@ -160,17 +188,25 @@ def clutch_size(clutch: DrumClutch) -> float:
 
 
 def check_tolerance(name: str, tolerance: float, clutch: DrumClutch, scale: float = 1.0) -> float:
-    """A chord height ``tolerance`` (m) that is finite, > 0 and ≥ MIN_RELATIVE_TOLERANCE ×
-    the clutch's size; the message names ``name`` in the caller's unit (value × ``scale``:
-    1e3 for an ``_mm`` option)."""
+    """A chord height ``tolerance`` (m) that is finite, > 0 and within MIN_RELATIVE_TOLERANCE
+    … MAX_RELATIVE_TOLERANCE × the clutch's size; the message names ``name`` in the caller's
+    unit (value × ``scale``: 1e3 for an ``_mm`` option)."""
     unit = " mm" if scale == 1e3 else " m"
     check_finite(name, tolerance * scale, unit)
-    floor = MIN_RELATIVE_TOLERANCE * clutch_size(clutch)
+    size = clutch_size(clutch)
+    floor = MIN_RELATIVE_TOLERANCE * size
+    ceiling = MAX_RELATIVE_TOLERANCE * size
     if not tolerance >= floor:
         raise ParameterError(
             f"{name} = {tolerance * scale:.6g}{unit}: must be >= {floor * scale:.3g}{unit} "
-            f"({MIN_RELATIVE_TOLERANCE:g} × the clutch's size {clutch_size(clutch) * scale:.4g}"
+            f"({MIN_RELATIVE_TOLERANCE:g} × the clutch's size {size * scale:.4g}"
             f"{unit}; a finer mesh only multiplies the triangles and the memory)"
+        )
+    if not tolerance <= ceiling:
+        raise ParameterError(
+            f"{name} = {tolerance * scale:.6g}{unit}: must be <= {ceiling * scale:.3g}{unit} "
+            f"({MAX_RELATIVE_TOLERANCE:g} × the clutch's size {size * scale:.4g}{unit}; a "
+            f"coarser mesh loses the thin walls and the parts' volume)"
         )
     return tolerance
 

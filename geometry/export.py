@@ -4,24 +4,44 @@ Every file goes through ``geometry.atomic.atomic_path``: it appears complete or 
 (an error or Ctrl-C leaves any previous file untouched). ``export_clutch`` then checks the
 round trip: the STEP re-imported gives every part's volume to ``1e-6`` relative, and every
 STL read back is watertight; a failed check raises ParameterError (nothing is half-done:
-the files that passed stay, the message names the one that failed).
+the files that passed stay, the message names the one that failed). Each STL's volume is
+compared with its B-rep's: a difference above ``STL_VOLUME_RTOL`` is written as a note.
+
+Materials: in the STEP a part that mixes materials is a sub-assembly of one solid per
+material (``geometry.cad.solid_label``); beside it, ``<stem>.materials.json``
+(``sidecar_path``) names every solid in file order with its material, density and volume,
+so ``mrclutch inertia clutch.step`` can weigh the tool's own export (``read_materials``).
 """
 
 from __future__ import annotations
 
+import json
+import math
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from geometry.atomic import atomic_path
-from geometry.cad import assembly, brep_volume_mm3, part_solids, tessellate
+from geometry.cad import (
+    assembly,
+    brep_volume_mm3,
+    material_solids,
+    part_solids,
+    solid_label,
+    tessellate,
+)
 from geometry.mass import check_mesh
 from geometry.params import DrumClutch
+from geometry.section import build_section
 from geometry.validation import ParameterError, check_positive
 
 #: Relative volume agreement demanded of the STEP round trip.
 STEP_RTOL = 1e-6
+#: Relative difference of an STL's volume from its B-rep's above which export notes it.
+STL_VOLUME_RTOL = 1e-2
+#: Format tag of the materials sidecar.
+SIDECAR_FORMAT = "mrclutch-materials/1"
 
 
 @dataclass(frozen=True)
@@ -33,6 +53,9 @@ class ExportResult:
     volumes_mm3: dict[str, float]
     step_volumes_mm3: dict[str, float]
     stl_triangles: dict[str, int]
+    stl_volumes_mm3: dict[str, float] = field(default_factory=dict)
+    materials: Path | None = None
+    notes: tuple[str, ...] = ()
 
 
 def write_step(shape: Any, path: str | os.PathLike[str]) -> Path:
@@ -48,10 +71,11 @@ def write_step(shape: Any, path: str | os.PathLike[str]) -> Path:
 
 def write_stl(
     shape: Any, path: str | os.PathLike[str], tolerance: float, angular_tolerance: float = 0.5
-) -> int:
+) -> tuple[int, float]:
     """Binary STL of ``shape`` (mm) at chord height ``tolerance`` (m), atomically.
 
-    Returns the triangle count. The mesh is checked watertight before it is written.
+    Returns the triangle count and the mesh's volume (mm³). The mesh is checked watertight
+    before it is written.
     """
     import trimesh
 
@@ -62,7 +86,7 @@ def write_stl(
     check_mesh(mesh, dest.stem)
     with atomic_path(dest) as tmp:
         mesh.export(tmp, file_type="stl")
-    return len(mesh.faces)
+    return len(mesh.faces), float(mesh.volume)
 
 
 def read_step_parts(path: str | os.PathLike[str]) -> dict[str, Any]:
@@ -88,6 +112,60 @@ def read_step_parts(path: str | os.PathLike[str]) -> dict[str, Any]:
     return out
 
 
+def sidecar_path(step: str | os.PathLike[str]) -> Path:
+    """``clutch.step`` -> ``clutch.materials.json`` beside it."""
+    p = Path(step)
+    return p.with_name(f"{p.stem}.materials.json")
+
+
+def step_solids(parts: dict[str, Any]) -> list[tuple[str, str, Any]]:
+    """(part, solid label, shape) of every solid in file order: a sub-assembly's children,
+    or the part itself."""
+    out = []
+    for part, shape in parts.items():
+        kids = list(getattr(shape, "children", ()) or ())
+        for k, ch in enumerate(kids or [shape]):
+            out.append((part, (ch.label or f"{part}.{k + 1}") if kids else part, ch))
+    return out
+
+
+def write_materials(step: Path, solids: list[tuple[str, str, str, float, float]]) -> Path:
+    """The sidecar of ``step``: (part, solid label, material, kg/m³, mm³) per solid."""
+    doc = {
+        "format": SIDECAR_FORMAT,
+        "step": step.name,
+        "units": {"density": "kg/m3", "volume": "mm3", "lengths": "mm"},
+        "solids": [
+            {"part": p, "name": n, "material": m, "density_kg_m3": rho, "volume_mm3": v}
+            for p, n, m, rho, v in solids
+        ],
+    }
+    dest = sidecar_path(step)
+    with atomic_path(dest) as tmp:
+        tmp.write_text(json.dumps(doc, indent=2) + "\n")
+    return dest
+
+
+def read_materials(step: str | os.PathLike[str]) -> dict[str, dict[str, Any]] | None:
+    """The sidecar of ``step`` as solid label -> entry, or None when there is none; a
+    sidecar that cannot be read or lacks a density raises ParameterError (one line)."""
+    path = sidecar_path(step)
+    if not path.is_file():
+        return None
+    try:
+        doc = json.loads(path.read_bytes())
+        solids = doc["solids"]
+        out = {}
+        for e in solids:
+            rho, vol = float(e["density_kg_m3"]), float(e["volume_mm3"])
+            if not (math.isfinite(rho) and rho > 0 and math.isfinite(vol) and vol > 0):
+                raise ValueError(f"solid {e['name']}: density {rho}, volume {vol}")
+            out[str(e["name"])] = {**e, "density_kg_m3": rho, "volume_mm3": vol}
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise ParameterError(f"{path}: not a materials sidecar ({exc})") from None
+    return out
+
+
 def export_clutch(
     clutch: DrumClutch,
     out_dir: str | os.PathLike[str],
@@ -101,11 +179,31 @@ def export_clutch(
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise ParameterError(f"--out {out}: exists and is not a directory")
-    parts = part_solids(clutch)
-    step = write_step(assembly(clutch, parts), out / "clutch.step")
+    section = build_section(clutch)
+    parts = part_solids(clutch, section)
+    mats = material_solids(clutch, section)
+    step = write_step(assembly(clutch, parts, mats), out / "clutch.step")
+    solids = []
+    for part in parts:
+        own = [(m, sh) for (p, m), sh in mats.items() if p == part]
+        for material, sh in own:
+            name = solid_label(part, material) if len(own) > 1 else part
+            rho = float(section.densities[material])
+            solids.append((part, name, material, rho, brep_volume_mm3(sh)))
+    side = write_materials(step, solids)
     stl = {name: out / f"{name}.stl" for name in parts}
-    tris = {n: write_stl(s, stl[n], tolerance, angular_tolerance) for n, s in parts.items()}
+    tris: dict[str, int] = {}
+    stl_vols: dict[str, float] = {}
+    for n, s in parts.items():
+        tris[n], stl_vols[n] = write_stl(s, stl[n], tolerance, angular_tolerance)
     vols = {n: brep_volume_mm3(s) for n, s in parts.items()}
+    notes = tuple(
+        f"{n}.stl: mesh volume {stl_vols[n]:.6g} mm³ is {(stl_vols[n] / v - 1) * 100:+.2g} % "
+        f"off the exact {v:.6g} mm³ (chord height {tolerance * 1e3:g} mm; a smaller "
+        "--tolerance-mm follows the curves closer)"
+        for n, v in vols.items()
+        if abs(stl_vols[n] / v - 1) > STL_VOLUME_RTOL
+    )
     back: dict[str, float] = {}
     if check:
         back = {n: brep_volume_mm3(s) for n, s in read_step_parts(step).items()}
@@ -117,4 +215,4 @@ def export_clutch(
                     f"{step}: part {name} volume {back[name]:.9g} mm³ after re-import, "
                     f"{v:.9g} mm³ before (rtol {STEP_RTOL:g})"
                 )
-    return ExportResult(step, stl, vols, back, tris)
+    return ExportResult(step, stl, vols, back, tris, stl_vols, side, notes)

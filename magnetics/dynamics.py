@@ -170,8 +170,9 @@ class Amplifier:
 
     def __post_init__(self) -> None:
         check_range("supply_voltage", self.supply_voltage, 0.0, 1e4, " V", lo_open=True)
-        check_range("current_bandwidth_hz", self.current_bandwidth_hz, 0.0, 1e7, " Hz",
-                    lo_open=True)  # fmt: skip
+        # a current loop slower than 10 Hz is no haptic amplifier (its lag alone would be
+        # 16 ms); 10 MHz stands for an ideal (instant) loop
+        check_range("current_bandwidth_hz", self.current_bandwidth_hz, 10.0, 1e7, " Hz")
 
     @property
     def time_constant(self) -> float:

@@ -65,6 +65,8 @@ from magnetics.materials import FLUIDS
 from magnetics.thermal import adiabatic_current_density
 from mrclutch.haptics.actuator import MR_170, MR_DELAY, Transmission
 
+#: Largest actuator delay accepted (s): beyond it no haptic loop renders anything.
+MAX_DELAY = 1.0
 #: Where the haptic model's actuator delay comes from (``Operating.delay_source``).
 DELAY_SOURCES: tuple[str, ...] = ("fixed", "geometry")
 
@@ -95,7 +97,7 @@ class Operating:
         if j is not None and not (math.isinf(j) and j > 0):
             check_positive("max_current_density", j, " A/m²")
         check_range("input_speed", self.input_speed, 0.0, 1e5, " rad/s", lo_open=True)
-        check_range("delay", self.delay, 0.0, 1.0, " s")
+        check_range("delay", self.delay, 0.0, MAX_DELAY, " s")
         check_range("coil_temperature", self.coil_temperature, -60.0, 250.0, " °C")
         lo, hi = FLUIDS[MRF].temperature_range
         check_range("fluid_temperature", self.fluid_temperature, lo, hi, " °C")

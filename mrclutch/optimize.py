@@ -22,6 +22,11 @@ cost of the rest of the fast path), the largest passive K on arrays (×1.7). So:
 
 The stability and Z-width columns are computed only where needed; the Z-width objective
 (about ×7 the cost) only when it is chosen.
+
+**Candidates.** Besides the optimum, ``Optimum.candidates`` ranks up to MAX_CANDIDATES
+designs meeting every limit on the fast path (the best of each drum count, then the other
+members of the final populations): the CLI re-checks them in order at reference fidelity
+and reports the first that passes there (docs/optimize.md).
 """
 
 from __future__ import annotations
@@ -92,6 +97,18 @@ class Constraints:
         return np.where(r["valid"] == 1, np.nan_to_num(v, nan=np.inf), np.inf)
 
 
+#: How many ranked candidates ``optimize`` keeps for a check at higher fidelity.
+MAX_CANDIDATES = 8
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """A design meeting every limit on the fast path, and its objective column."""
+
+    design: ClutchDesign
+    value: float
+
+
 @dataclass(frozen=True)
 class Optimum:
     design: ClutchDesign
@@ -101,6 +118,11 @@ class Optimum:
     feasible: bool
     per_drum_count: dict[int, float]  # best feasible objective column for each drum count
     stability_searches: int = 0  # drum counts searched again with stability in the penalty
+    #: the fields searched (DrumClutch lengths, m) besides n_drums
+    varied: tuple[str, ...] = ()
+    #: the designs to fall back on, best first (``candidates[0]`` is the optimum): the best
+    #: of each drum count, then the other feasible members of the final populations
+    candidates: tuple[Candidate, ...] = ()
 
 
 def optimize(
@@ -176,40 +198,53 @@ def optimize(
         )
         return res.population[np.argsort(res.population_energies)].T
 
-    def best_of(pop: np.ndarray, n: int) -> tuple[tuple[float, np.ndarray] | None, bool]:
-        """The best member of a population meeting every limit, stability included, and
-        whether some member met every limit but stability."""
+    def feasible_of(pop: np.ndarray, n: int) -> tuple[list[tuple[float, np.ndarray]], bool]:
+        """The members of a population meeting every limit, stability included, best first,
+        and whether some member met every limit but stability."""
         r = results(pop, n, stability=cons.stable)
         v = cons.violation(r)
         value = sign * np.asarray(r[key], dtype=float)
         score = np.where((v == 0) & ~np.isnan(value), value, -np.inf)
-        j = int(np.argmax(score))
+        order = [int(j) for j in np.argsort(-score, kind="stable") if np.isfinite(score[j])]
         unstable = bool(np.any(replace(cons, stable=False).violation(r) == 0))
-        return ((float(r[key][j]), pop[:, j]) if np.isfinite(score[j]) else None), unstable
+        return [(float(r[key][j]), pop[:, j]) for j in order], unstable
 
-    best: tuple[float, int, np.ndarray] | None = None
+    firsts: list[tuple[float, int, np.ndarray]] = []
+    rest: list[tuple[float, int, np.ndarray]] = []
     per_count: dict[int, float] = {}
     again = 0
     stability_in_search = cons.stable and not cons.passive
     for n in drum_counts:
-        found, rest_met = best_of(search(n, stability_in_search), n)
-        if found is None and rest_met and cons.stable and not stability_in_search:
+        found, rest_met = feasible_of(search(n, stability_in_search), n)
+        if not found and rest_met and cons.stable and not stability_in_search:
             # members meet every other limit but none is stable: search again with
             # stability in the penalty
             again += 1
-            found = best_of(search(n, True), n)[0]
-        if found is None:
+            found = feasible_of(search(n, True), n)[0]
+        if not found:
             continue
-        value, x = found
-        per_count[n] = value
-        if best is None or sign * value > sign * best[0]:
-            best = (value, n, x)
-    if best is None:
-        return Optimum(base, objective, -np.inf, evaluations, False, per_count, again)
-    value, n, x = best
-    clutch = replace(base.clutch, n_drums=n, **{k: float(v) for k, v in zip(names, x, strict=True)})
-    design = replace(base, clutch=clutch, name=f"{base.name}-optimum")
-    return Optimum(design, objective, value, evaluations, True, per_count, again)
+        per_count[n] = found[0][0]
+        firsts.append((found[0][0], n, found[0][1]))
+        rest += [(val, n, x) for val, x in found[1:]]
+    if not firsts:
+        return Optimum(base, objective, -np.inf, evaluations, False, per_count, again,
+                       tuple(names))  # fmt: skip
+    ranked: list[tuple[float, int, np.ndarray]] = []
+    for group in (firsts, rest):
+        for val, n, x in sorted(group, key=lambda t: -sign * t[0]):
+            if len(ranked) < MAX_CANDIDATES and not any(
+                n == m and np.allclose(x, y, rtol=1e-6, atol=0) for _, m, y in ranked
+            ):
+                ranked.append((val, n, x))
+
+    def design_of(n: int, x: np.ndarray) -> ClutchDesign:
+        fields = {name: float(v) for name, v in zip(names, x, strict=True)}
+        clutch = replace(base.clutch, n_drums=n, **fields)
+        return replace(base, clutch=clutch, name=f"{base.name}-optimum")
+
+    cands = tuple(Candidate(design_of(n, x), val) for val, n, x in ranked)
+    return Optimum(cands[0].design, objective, cands[0].value, evaluations, True, per_count,
+                   again, tuple(names), cands)  # fmt: skip
 
 
 def parse_bounds(specs: Sequence[str]) -> dict[str, tuple[float, float]]:

@@ -21,6 +21,7 @@ import math
 import os
 import re
 import signal
+import threading
 import tomllib
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import Executor, Future
@@ -568,19 +569,25 @@ def _display(name: str, values: np.ndarray) -> np.ndarray:
 
 
 @contextmanager
-def _sigterm_as_interrupt() -> Iterator[None]:
-    """``kill`` (SIGTERM) stops a sweep as Ctrl-C does: after the current chunk is safe."""
+def sigterm_as_interrupt() -> Iterator[threading.Event]:
+    """``kill`` (SIGTERM) stops the work as Ctrl-C does (KeyboardInterrupt), so ``finally``
+    clauses run: a sweep after the current chunk is safe, a report removing its staging
+    folder (mrclutch.cli.report). Yields an event set by the signal: a KeyboardInterrupt
+    raised inside a C extension's callback can be swallowed there, so long work checks the
+    event between its steps too."""
+    terminated = threading.Event()
 
     def handler(signum: int, frame: Any) -> None:
+        terminated.set()
         raise KeyboardInterrupt
 
     try:
         old = signal.signal(signal.SIGTERM, handler)
     except ValueError:  # not the main thread
-        yield
+        yield terminated
         return
     try:
-        yield
+        yield terminated
     finally:
         signal.signal(signal.SIGTERM, old)
 
@@ -637,7 +644,7 @@ def run_sweep(
 
         bar = tqdm(total=spec.n_designs, initial=start_rows, unit="design", desc="sweep")
     try:
-        with _sigterm_as_interrupt(), sink:
+        with sigterm_as_interrupt(), sink:
             chunks = _results(spec, evaluate, outputs, first_chunk, executor, max_pending, fmt)
             for k, (n, payload) in enumerate(chunks, start=first_chunk):
                 sink.write(k, payload)

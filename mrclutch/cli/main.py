@@ -72,3 +72,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"mrclutch {args.command}: interrupted", file=sys.stderr)
         return 130
+    except ImportError as exc:
+        # Ctrl-C or SIGTERM while a C extension initialises (OpenCascade, VTK) surfaces as
+        # "ImportError: initialization failed" caused by the KeyboardInterrupt
+        if isinstance(exc.__cause__ or exc.__context__, KeyboardInterrupt):
+            print(f"mrclutch {args.command}: interrupted", file=sys.stderr)
+            return 130
+        raise

@@ -2,7 +2,8 @@
 
 ``write_report(design, out_dir)`` writes
 
-* ``clutch.step`` and ``<part>.stl`` (CAD, mm),
+* ``clutch.step`` and ``<part>.stl`` (CAD, mm), ``clutch.materials.json`` (each STEP
+  solid's material and density: ``mrclutch inertia clutch.step`` weighs it),
 * ``view.png`` (3D, half-section cut) and ``section.png`` (r–z drawing),
 * ``torque.png`` (torque–current: circuit curve with FEM points),
 * ``haptic.png`` (Bode magnitude, effective stiffness and damping, rendering areas of
@@ -14,14 +15,18 @@
   torque curve and the artefact list),
 * ``report.html`` (one page, read first).
 
-Everything is built in a temporary folder beside ``out_dir`` and moved in only when all
-of it succeeded, so an error or Ctrl-C never leaves a half-written report.
+Everything is built in a temporary folder beside ``out_dir`` (``.<name>-partial-<pid>-…``)
+and moved in only when all of it succeeded, so an error, Ctrl-C or ``kill`` (SIGTERM, turned
+into KeyboardInterrupt while the report is built) never leaves a half-written report; the
+staging folders of processes that died harder (SIGKILL, power loss) are removed by the next
+report into the same place.
 """
 
 from __future__ import annotations
 
 import html
 import json
+import os
 import shutil
 import tempfile
 from collections.abc import Callable
@@ -44,6 +49,7 @@ from mrclutch.cli.view import screenshot
 from mrclutch.design import ClutchDesign
 from mrclutch.outputs import CLUTCH_ROWS, HAND_ROWS, output, row_label
 from mrclutch.pipeline import evaluate
+from mrclutch.sweep import sigterm_as_interrupt
 
 #: Currents of the report's torque curve (A): the paper's Fig. 2b range.
 CURVE_CURRENTS = np.linspace(0.0, 7.0, 29)
@@ -70,8 +76,51 @@ def write_report(
     if out.exists() and not out.is_dir():
         raise ParameterError(f"--out {out}: exists and is not a directory")
     out.parent.mkdir(parents=True, exist_ok=True)
-    tick = progress if progress is not None else (lambda _msg: None)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}-partial-", dir=out.parent))
+    report = progress if progress is not None else (lambda _msg: None)
+    remove_stale_partials(out)
+    with sigterm_as_interrupt() as terminated:
+
+        def tick(msg: str) -> None:
+            if terminated.is_set():  # the signal's KeyboardInterrupt was swallowed
+                raise KeyboardInterrupt
+            report(msg)
+
+        return _build(design, out, fidelity, tick)
+
+
+def _partial_prefix(out: Path) -> str:
+    return f".{out.name}-partial-"
+
+
+def remove_stale_partials(out: Path) -> list[Path]:
+    """Remove the staging folders beside ``out`` left by report processes that no longer
+    run (the pid in the name); returns what was removed. Folders of live processes stay."""
+    removed = []
+    prefix = _partial_prefix(out)
+    for p in out.parent.glob(f"{prefix}*"):
+        pid, _, _ = p.name[len(prefix) :].partition("-")
+        if p.is_dir() and pid.isdigit() and not _alive(int(pid)):
+            shutil.rmtree(p, ignore_errors=True)
+            removed.append(p)
+    return removed
+
+
+def _alive(pid: int) -> bool:
+    if pid == os.getpid():
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # someone else's process: alive
+        return True
+    except OverflowError:  # not a pid at all
+        return False
+    return True
+
+
+def _build(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[str], None]) -> Report:
+    tmp = Path(tempfile.mkdtemp(prefix=f"{_partial_prefix(out)}{os.getpid()}-", dir=out.parent))
     try:
         tick("evaluating the design")
         ev = evaluate(design, fidelity)
@@ -99,6 +148,7 @@ def write_report(
         tick("report.html")
         (tmp / "report.html").write_text(render_html(metrics))
         files = tuple(sorted(p.name for p in tmp.iterdir()))
+        tick("moving the files into place")
         out.mkdir(exist_ok=True)
         for name in files:
             (tmp / name).replace(out / name)
@@ -111,8 +161,13 @@ def _cad(design: ClutchDesign, folder: Path) -> dict[str, Any]:
     res = export_clutch(design.clutch, folder)
     return {
         "step": res.step.name,
+        "materials": res.materials.name if res.materials is not None else None,
         "stl": {name: p.name for name, p in res.stl.items()},
         "part_volumes_m3": {n: v * 1e-9 for n, v in res.volumes_mm3.items()},
+        "stl_volume_error_rel": {
+            n: res.stl_volumes_mm3[n] / v - 1 for n, v in res.volumes_mm3.items()
+        },
+        "notes": list(res.notes),
     }
 
 
@@ -287,15 +342,23 @@ def render_html(m: dict[str, Any]) -> str:
     budget = budget_html(m["budget"]) if "budget" in m else ""
     stl = ", ".join(f'<a href="{e_(p)}">{e_(p)}</a>' for p in m["cad"]["stl"].values())
     methods = ", ".join(f"{k}: {v}" for k, v in c["methods"].items())
-    return f"""<!doctype html>
+    side = m["cad"].get("materials") or ""
+    cad_notes = "".join(f"<p class=small>Note: {e_(n)}</p>" for n in m["cad"].get("notes", ()))
+    page = f"""<!doctype html>
 <html lang="en"><head><meta charset="utf-8"><title>mrclutch report: {e_(m["design"])}</title>
+<meta name="viewport" content="width=device-width, initial-scale=1">
 <style>
 body{{font-family:system-ui,sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}}
+p,li,h1,h2,h3{{overflow-wrap:anywhere}}
+.scroll{{overflow-x:auto;max-width:100%}}
 table{{border-collapse:collapse;margin:.5em 0 1.5em}}
 td,th{{padding:.2em .8em;border-bottom:1px solid #ddd}}
 td.n{{text-align:right;font-variant-numeric:tabular-nums}}
-img{{max-width:100%;border:1px solid #eee}}
-.grid{{display:grid;grid-template-columns:1fr 1fr;gap:1em}} .small{{color:#666;font-size:.9em}}
+img{{max-width:100%;height:auto;border:1px solid #eee;box-sizing:border-box}}
+.grid{{display:grid;grid-template-columns:1fr 1fr;gap:1em}} .grid>div{{min-width:0}}
+.small{{color:#666;font-size:.9em}}
+@media (max-width:700px){{.grid{{grid-template-columns:1fr}} body{{margin:1em auto}}
+td,th{{padding:.2em .4em}}}}
 </style></head><body>
 <h1>MR drum clutch design “{e_(m["design"])}”</h1>
 <p class=small>Fidelity <b>{e_(m["fidelity"])}</b> ({e_(methods)}). All figures SI unless marked.
@@ -318,7 +381,12 @@ render the same virtual spring K.</p></div></div>
 <div><h2>Torque against current</h2><img src="torque.png" alt="torque-current"></div>
 <div><h2>Section</h2><img src="section.png" alt="r-z section"></div></div>
 <h2>3D view</h2><img src="view.png" alt="3D view">
-<h2>Files</h2><p>CAD assembly: <a href="{e_(m["cad"]["step"])}">{e_(m["cad"]["step"])}</a>;
-parts (STL): {stl}.</p>
+<h2>Files</h2><p>CAD assembly: <a href="{e_(m["cad"]["step"])}">{e_(m["cad"]["step"])}</a>
+(materials and densities: <a href="{e_(side)}">{e_(side)}</a>); parts (STL): {stl}.</p>
+{cad_notes}
 </body></html>
 """
+    # every table scrolls inside its own box on a narrow screen instead of widening the page
+    return page.replace("<table>", "<div class=scroll><table>").replace(
+        "</table>", "</table></div>"
+    )

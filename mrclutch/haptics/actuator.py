@@ -161,6 +161,12 @@ LEVER_RANGE = (1e-3, 2.0)
 #: Gear factor on the transmission ratio: haptic gearing stays within two decades of 1
 #: (the paper uses 1 and 4); ``gearing = 1e-6`` exhausted memory as the lever did.
 GEARING_RANGE = (1e-2, 1e2)
+#: The handle's mass m2 (kg) and the workspace (m) a transmission accepts: a gram's tenth to
+#: 100 kg, a millimetre to 2 m (1e-300 g gave an overflowing characteristic polynomial).
+M2_RANGE = (1e-4, 1e2)
+WORKSPACE_RANGE = (1e-3, 2.0)
+#: The virtual stiffness (N/m) the command line accepts: beyond any haptic device.
+STIFFNESS_MAX = 1e7
 
 
 @dataclass(frozen=True)
@@ -186,7 +192,9 @@ class Transmission:
         check_positive("k", self.k, " N/m")
         check_nonnegative("b", self.b, " N·s/m")
         check_positive("m2", self.m2, " kg")
+        check_range("m2", self.m2, *M2_RANGE, " kg")
         check_positive("workspace", self.workspace, " m")
+        check_range("workspace", self.workspace, *WORKSPACE_RANGE, " m")
 
     @property
     def reduction(self) -> float:

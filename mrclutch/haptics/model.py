@@ -70,6 +70,9 @@ from numpy.polynomial import polynomial as P
 from geometry.validation import ParameterError, check_nonnegative
 from mrclutch.haptics.actuator import HapticParams
 
+#: Most frequencies one step of the crossing search may take (memory: 8 bytes each).
+MAX_GRID = 2_000_000
+
 __all__ = [
     "BAND_HZ",
     "EffectiveImpedance",
@@ -627,7 +630,13 @@ def _scan_imaginary_axis(
             w_end > 1e4 * (w_a + 1 / tau)
         ):
             break
-        grid = np.linspace(w_end, 2 * w_end, math.ceil(w_end / step) + 1)
+        n = math.ceil(w_end / step) + 1
+        if n > MAX_GRID:  # an absurd delay or stiffness: refuse rather than fill memory
+            raise ParameterError(
+                f"stability search: delay {tau:.3g} s needs more than {MAX_GRID:.0e} "
+                "frequencies per scan step; not a haptic loop"
+            )
+        grid = np.linspace(w_end, 2 * w_end, n)
     return np.concatenate(found)
 
 

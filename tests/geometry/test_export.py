@@ -59,3 +59,30 @@ def test_bad_inputs(tmp_path):
     bad.write_text("not a step file")
     with pytest.raises(ParameterError, match=r"bad\.step"):
         read_step_parts(bad)
+
+
+def test_coarse_mesh_losing_volume_is_noted(tmp_path):
+    """Issue 16: a chord height far beyond the CLI's ceiling loses a third of the shaft;
+    export says so part by part (the fine export of the fixture has no note)."""
+    res = export_clutch(preset("paper"), tmp_path, 0.1)
+    noted = {n.split(".stl")[0] for n in res.notes}
+    assert "shaft" in noted
+    for name in noted:
+        assert abs(res.stl_volumes_mm3[name] / res.volumes_mm3[name] - 1) > 0.01
+
+
+def test_fine_export_has_no_volume_note_and_a_sidecar(exported):
+    assert exported.notes == ()
+    for name, v in exported.volumes_mm3.items():
+        assert exported.stl_volumes_mm3[name] == pytest.approx(v, rel=1e-2)
+    assert exported.materials.name == "clutch.materials.json"
+
+
+def test_tolerance_ceiling_is_one_line_with_the_limit():
+    from geometry.cad import MAX_RELATIVE_TOLERANCE, check_tolerance, clutch_size
+
+    c = preset("paper")
+    top = MAX_RELATIVE_TOLERANCE * clutch_size(c)
+    assert check_tolerance("t", top, c) == top
+    with pytest.raises(ParameterError, match=r"--tolerance-mm = 100 mm: must be <= 0\.588 mm"):
+        check_tolerance("--tolerance-mm", 0.1, c, scale=1e3)

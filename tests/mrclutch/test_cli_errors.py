@@ -50,6 +50,18 @@ def test_non_utf8_design_file(here, capsys):
     _fails(capsys, ["evaluate", "d.toml"], "d.toml: not UTF-8 text")
 
 
+@pytest.mark.parametrize(
+    ("table", "fragment"),
+    [  # found by benchmarks/fuzz_cli.py: LinAlgError, numpy 'Maximum allowed size exceeded'
+        ("[transmission]\nm2_g = 1e-300", "transmission.m2_g = 1e-300: m2 = 1e-303 kg: must be"),
+        ("[amplifier]\ncurrent_bandwidth_Hz = 1e-18", "current_bandwidth"),
+    ],
+)
+def test_fuzzed_design_files(here, capsys, table, fragment):
+    (here / "d.toml").write_text(f'[clutch]\nbase = "paper"\n{table}\n')
+    _fails(capsys, ["evaluate", "d.toml", "--fidelity", "fast"], fragment)
+
+
 def test_transmission_lever_in_a_design_file(here, capsys):
     (here / "d.toml").write_text('[clutch]\nbase = "paper"\n[transmission]\nlever_mm = 1e-9\n')
     _fails(capsys, ["evaluate", "d.toml", "--fidelity", "fast"], "transmission.lever_mm = 1e-09")
@@ -60,7 +72,12 @@ def test_transmission_lever_in_a_design_file(here, capsys):
     [
         (["inertia", "--tolerance-mm", "1e-6"], "--tolerance-mm = 1e-06 mm: must be >= 0.00294"),
         (["export", "--out", "x", "--tolerance-mm", "1e-6"], "--tolerance-mm = 1e-06 mm"),
+        (["export", "--out", "x", "--tolerance-mm", "100"], "--tolerance-mm = 100 mm: must be <="),
         (["haptic", "--lever-mm", "1e-9"], "--lever-mm = 1e-09 mm: must be in [1, 2000] mm"),
+        (["compare", "--delay-ms", "1e300"], "--delay-ms = 1e+300 ms: must be in [0, 1000] ms"),
+        # found by benchmarks/fuzz_cli.py: a MemoryError and a 30 s+ stability search
+        (["compare", "--stiffness", "1e300", "--delay-ms", "1e-300"], "--stiffness = 1e+300"),
+        (["compare", "--workspace-mm", "1e-300"], "--workspace-mm = 1e-300 mm: must be in [1,"),
         (["haptic", "--gearing", "1e-6"], "--gearing = 1e-06: must be in [0.01, 100]"),
     ],
 )

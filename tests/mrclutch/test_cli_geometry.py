@@ -75,8 +75,52 @@ def test_bad_input_one_line_exit_2(argv, fragment, tmp_path, capsys):
     assert not (tmp_path / "o").exists()
 
 
-def test_part_density_errors(exported, capsys):
-    step = str(exported / "clutch.step")
+def test_inertia_weighs_the_tools_own_step_export(exported, capsys):
+    """Issue 16: the export's sidecar names each solid's material and density, so the
+    STEP alone (no --density) gives the analytic rotor inertia and clutch mass (the STEP is
+    exact geometry: B-rep volume integrals, 1e-6)."""
+    side = json.loads((exported / "clutch.materials.json").read_text())
+    mats = {(e["part"], e["material"]) for e in side["solids"]}
+    assert {("rotor", "steel_1018"), ("rotor", "stainless_304"), ("coil", "coil")} <= mats
+    assert main(["inertia", "--preset", "paper", "--json"]) == 0
+    ref = json.loads(capsys.readouterr().out)["analytic"]
+    assert main(["inertia", str(exported / "clutch.step"), "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["output_rotor"]["inertia_kg_m2"] == pytest.approx(
+        ref["rotor_inertia_kg_m2"], rel=1e-6
+    )
+    assert out["output_rotor"]["mass_kg"] == pytest.approx(ref["rotor_mass_kg"], rel=1e-6)
+    assert out["total"]["mass_kg"] == pytest.approx(ref["clutch_mass_kg"], rel=1e-6)
+    assert out["parts"]["rotor"]["density_from"] == "sidecar"
+    assert out["parts"]["rotor"]["materials"] == ["stainless_304", "steel_1018"]
+    # a density on the command line wins over the sidecar for that part only
+    argv = ["inertia", str(exported / "clutch.step"), "--json", "--part-density", "coil=1000"]
+    assert main(argv) == 0
+    parts = json.loads(capsys.readouterr().out)["parts"]
+    assert parts["coil"]["density_kg_m3"] == 1000 and parts["coil"]["density_from"] == "option"
+    assert parts["rotor"]["inertia_kg_m2"] == pytest.approx(out["parts"]["rotor"]["inertia_kg_m2"])
+
+
+def test_sidecar_of_another_file_or_broken_is_refused(exported, tmp_path, capsys):
+    import shutil
+
+    step = tmp_path / "clutch.step"
+    shutil.copy(exported / "clutch.step", step)
+    side = json.loads((exported / "clutch.materials.json").read_text())
+    side["solids"][0]["volume_mm3"] *= 1.5
+    (tmp_path / "clutch.materials.json").write_text(json.dumps(side))
+    assert main(["inertia", str(step)]) == 2
+    assert "written for another file" in capsys.readouterr().err
+    (tmp_path / "clutch.materials.json").write_bytes(b"\xff{")
+    assert main(["inertia", str(step)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "not a materials sidecar" in err and "\n" not in err
+
+
+def test_part_density_errors(exported, tmp_path, capsys):
+    import shutil
+
+    step = str(shutil.copy(exported / "clutch.step", tmp_path / "bare.step"))  # no sidecar
     assert main(["inertia", step]) == 2
     assert "no density" in capsys.readouterr().err
     assert main(["inertia", step, "--density", "1", "--part-density", "rotr=7"]) == 2

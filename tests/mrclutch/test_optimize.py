@@ -7,6 +7,7 @@ import json
 import numpy as np
 import pytest
 
+import mrclutch.optimize as opt_mod
 from geometry import ParameterError
 from mrclutch.cli.commands import design as design_cmd
 from mrclutch.cli.commands.design import haptic_verdict, requirement_violations
@@ -264,3 +265,95 @@ def test_evaluate_batch_opt_in_columns_match_the_scalar_path():
     assert backdrive_force(ev.mr, 2 * DEFAULT_AMPLITUDE) == pytest.approx(2 * force, rel=1e-12)
     with pytest.raises(ParameterError, match="frequency"):
         backdrive_force(ev.mr, frequency=0.0)
+
+
+def _quick_search(monkeypatch):
+    """The CLI's search with a small population (the candidates logic is what is tested)."""
+    real = design_cmd.optimize
+    monkeypatch.setattr(design_cmd, "optimize",
+                        lambda *a, **k: real(*a, **k, maxiter=8, popsize=6))  # fmt: skip
+
+
+def _as_reference(design):
+    ev = evaluate(design, "fast").as_json()
+    ev["fidelity"] = "reference"
+    return ev
+
+
+def test_candidates_are_ranked_and_all_feasible_on_the_fast_path(small):
+    cands = small.candidates
+    assert 2 <= len(cands) <= opt_mod.MAX_CANDIDATES
+    assert cands[0].design == small.design and cands[0].value == small.value
+    # the best of each drum count first (best first), then the other members
+    heads = [c.value for c in cands[: len(small.per_drum_count)]]
+    assert heads == sorted(small.per_drum_count.values(), reverse=True)
+    assert len({(c.design.clutch.n_drums, c.design.clutch.gap) for c in cands}) == len(cands)
+    f = {k: np.array([getattr(c.design.clutch, k) for c in cands]) for k in
+         ("gap", "drum_thickness", "drum_inner_diameter", "zone_length", "n_drums")}  # fmt: skip
+    r = evaluate_batch(f, design_preset("paper"), passivity=True, stability=True)
+    assert np.all(Constraints().violation(r) == 0)
+    assert np.allclose(r["bandwidth_hz"], [c.value for c in cands], rtol=1e-9)
+
+
+def test_cli_tries_the_next_candidate_when_the_best_fails_at_reference(
+    tmp_path, capsys, monkeypatch
+):
+    """Issue 16: the winner must pass its own limits at reference fidelity; when the best
+    candidate fails there, the next one is checked and reported (exit 0)."""
+    _quick_search(monkeypatch)
+    seen = []
+    fail = _violating_reference("passive")
+
+    def check(design):
+        seen.append(design)
+        return fail(design) if len(seen) == 1 else _as_reference(design)
+
+    monkeypatch.setattr(design_cmd, "reference_check", check)
+    out = tmp_path / "best.toml"
+    assert main(["optimize", "--drums", "1,2", "--json", "--out", str(out)]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert len(seen) == 2 and seen[0] != seen[1]
+    first, second = data["tried"]
+    assert "passivity was required" in " ".join(first["violations"])
+    assert second["violations"] == [] and data["requirements_met"] is True
+    assert data["design_mm"] == second["design_mm"] != first["design_mm"]
+    assert data["objective_value"] == second["objective_value"]
+    assert data["verdict"]["passive"] and data["verdict"]["fidelity"] == "reference"
+    assert f"gap_mm = {second['design_mm']['gap_mm']!r}" in out.read_text()
+
+
+def test_cli_exits_3_naming_every_candidate_when_none_passes(tmp_path, capsys, monkeypatch):
+    _quick_search(monkeypatch)
+    seen = []
+
+    def check(design):
+        seen.append(design)
+        return _violating_reference("stable")(design)
+
+    monkeypatch.setattr(design_cmd, "reference_check", check)
+    assert main(["optimize", "--drums", "1,2", "--tries", "2"]) == 3
+    cap = capsys.readouterr()
+    assert len(seen) == 2
+    assert "none of the 2 best candidate(s) meets the requirements at reference fidelity" in (
+        cap.err
+    )
+    assert "#1 (" in cap.err and "#2 (" in cap.err and "stability was required" in cap.err
+    assert "candidate #2" in cap.out and "requirements: VIOLATED" in cap.out
+    assert main(["optimize", "--tries", "0"]) == 2
+    assert "--tries = 0: must be an integer in [1, 8]" in capsys.readouterr().err
+
+
+def test_summary_lists_every_varied_field(capsys, monkeypatch):
+    """Issue 16: ``--vary band_length_mm=5:25 --vary gap_mm=0.2:1`` printed no band length."""
+    _quick_search(monkeypatch)
+    argv = ["optimize", "--vary", "band_length_mm=5:25", "--vary", "gap_mm=0.2:1", "--drums",
+            "2", "--no-verify", "--min-torque", "0.2"]  # fmt: skip
+    code = main(argv)
+    text = capsys.readouterr().out
+    assert code == 0, text
+    head = text.splitlines()[0]
+    assert "n_drums 2" in head and "band_length_mm " in head and "gap_mm " in head
+    assert main([*argv, "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["varied"] == ["band_length_mm", "gap_mm"]
+    assert 5 <= data["design_mm"]["band_length_mm"] <= 25

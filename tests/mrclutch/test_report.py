@@ -1,6 +1,8 @@
 """The main job: `mrclutch report` writes every artefact, consistently, or nothing."""
 
+import html
 import json
+import shutil
 import subprocess
 import sys
 
@@ -9,16 +11,27 @@ import pytest
 from mrclutch.cli.main import main
 
 EXPECTED = {
-    "clutch.step", "rotor.stl", "shaft.stl", "input.stl", "housing.stl", "coil.stl",
-    "fluid.stl", "view.png", "section.png", "torque.png", "haptic.png", "zwidth.png",
-    "response.png", "metrics.json", "report.html",
+    "clutch.step", "clutch.materials.json", "rotor.stl", "shaft.stl", "input.stl",
+    "housing.stl", "coil.stl", "fluid.stl", "view.png", "section.png", "torque.png",
+    "haptic.png", "zwidth.png", "response.png", "metrics.json", "report.html",
 }  # fmt: skip
+
+
+def _dead_pid() -> int:
+    child = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"],
+                           capture_output=True, text=True, check=True)  # fmt: skip
+    return int(child.stdout)
 
 
 @pytest.fixture(scope="module")
 def report_dir(tmp_path_factory):
     out = tmp_path_factory.mktemp("rep") / "paper"
+    # what a report killed by SIGKILL leaves: the next report into the same place removes it
+    stale = out.parent / f".paper-partial-{_dead_pid()}-x1y2"
+    stale.mkdir()
+    (stale / "view.png").write_bytes(b"half")
     assert main(["report", "--preset", "paper", "--out", str(out), "--no-progress"]) == 0
+    assert not stale.exists()
     return out
 
 
@@ -83,3 +96,127 @@ def test_interrupted_report_leaves_nothing(tmp_path, monkeypatch, capsys):
     assert main(["report", "--out", str(out), "--fidelity", "fast", "--no-progress"]) == 130
     assert "interrupted" in capsys.readouterr().err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_sigterm_while_building_removes_the_staging_folder(tmp_path):
+    """Issue 16: ``kill`` of a running report left ``.NAME-partial-…`` behind. A real
+    process, killed by SIGTERM once its staging folder exists (the report is being built),
+    exits as interrupted and leaves nothing."""
+    import os
+    import signal
+    import time
+
+    out = tmp_path / "paper"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)}
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "mrclutch", "report", "--preset", "paper", "--out", str(out),
+         "--no-progress"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+    )  # fmt: skip
+    try:
+        deadline = time.monotonic() + 120
+        written: list = []  # wait for the first artefact in the staging folder (CAD)
+        while not written and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+            written = list(tmp_path.glob(".paper-partial-*/*"))
+        assert written, "the report never started writing"
+        assert written[0].parent.name.startswith(f".paper-partial-{proc.pid}-")  # its pid
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+    # 130, or killed by SIGINT (the shell's 130 as well): CPython exits by SIGINT when a
+    # KeyboardInterrupt once escaped code that a C extension ran (PyRun_String), even if
+    # main caught it later
+    assert proc.returncode in (130, -signal.SIGINT), err
+    assert "interrupted" in err and "Traceback" not in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_only_staging_folders_of_dead_processes_are_removed(tmp_path):
+    import os
+
+    from mrclutch.cli.report import remove_stale_partials
+
+    out = tmp_path / "paper"
+    dead = tmp_path / f".paper-partial-{_dead_pid()}-aa"
+    live = tmp_path / f".paper-partial-{os.getppid()}-bb"  # a process that runs
+    mine = tmp_path / f".paper-partial-{os.getpid()}-cc"  # this one
+    other = tmp_path / f".other-partial-{_dead_pid()}-dd"  # another report's
+    unnamed = tmp_path / ".paper-partial-zz"  # no pid: not ours to judge
+    for d in (dead, live, mine, other, unnamed):
+        d.mkdir()
+    assert remove_stale_partials(out) == [dead]
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        p.name for p in (live, mine, other, unnamed)
+    )
+
+
+# ---- the page in a real browser (Debian's chromium), where one is installed -------------
+
+CHROMIUM = next(
+    (c for c in ("chromium", "chromium-browser", "google-chrome") if shutil.which(c)), None
+)
+needs_chromium = pytest.mark.skipif(
+    CHROMIUM is None, reason="no chromium on PATH (Debian: apt-get install chromium)"
+)
+#: Appended to a copy of report.html: after every image has loaded (or failed), the page's
+#: width and each image's natural size go into a <pre> that --dump-dom prints.
+PROBE = """<script>
+window.addEventListener('load', () => {
+  const r = {scrollWidth: document.documentElement.scrollWidth, innerWidth: innerWidth,
+    images: [...document.images].map(i => ({src: i.getAttribute('src'),
+      naturalWidth: i.naturalWidth, right: i.getBoundingClientRect().right})),
+    tables: [...document.querySelectorAll('table')].map(t =>
+      t.parentElement.getBoundingClientRect().right)};
+  const pre = document.createElement('pre'); pre.id = 'probe';
+  pre.textContent = JSON.stringify(r); document.body.appendChild(pre);
+});
+</script>"""
+
+
+def _chromium(tmp_path, *args):
+    cmd = [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
+           f"--user-data-dir={tmp_path / 'profile'}", "--window-size=500,2000", *args]  # fmt: skip
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=120, check=True)
+
+
+@needs_chromium
+def test_page_fits_500_px_and_every_image_loads_in_chromium(report_dir, tmp_path):
+    """Issue 16: at 500 px the page overflowed. Now the grid is one column, tables scroll in
+    their own box, images shrink: nothing is wider than the window, and every <img> loads."""
+    import re
+
+    page = tmp_path / "page"
+    shutil.copytree(report_dir, page)
+    (page / "probe.html").write_text((page / "report.html").read_text() + PROBE)
+    dom = _chromium(tmp_path, "--run-all-compositor-stages-before-draw",
+                    "--virtual-time-budget=10000", "--dump-dom",
+                    (page / "probe.html").as_uri()).stdout  # fmt: skip
+    found = re.search(r'<pre id="probe">(.*?)</pre>', dom, re.S)
+    assert found, dom[-2000:]
+    r = json.loads(html.unescape(found.group(1)))
+    assert r["innerWidth"] == 500
+    assert r["scrollWidth"] <= 500, r
+    srcs = {i["src"] for i in r["images"]}
+    assert srcs == {"haptic.png", "zwidth.png", "response.png", "torque.png", "section.png",
+                    "view.png"}  # fmt: skip
+    for img in r["images"]:
+        assert img["naturalWidth"] > 0, img  # loaded
+        assert img["right"] <= 500, img
+    assert r["tables"] and max(r["tables"]) <= 500
+
+    shot = tmp_path / "shot.png"
+    _chromium(tmp_path, f"--screenshot={shot}", (report_dir / "report.html").as_uri())
+    head = shot.read_bytes()[:24]
+    assert head[:8] == b"\x89PNG\r\n\x1a\n"
+    assert int.from_bytes(head[16:20], "big") == 500  # the screenshot is 500 px wide
+
+
+def test_html_is_responsive_without_a_browser(report_dir):
+    """The rules the browser test relies on, checked where no browser is installed."""
+    page = (report_dir / "report.html").read_text()
+    assert 'name="viewport"' in page
+    assert "@media (max-width:700px){.grid{grid-template-columns:1fr}" in page
+    assert page.count("<table>") == page.count("<div class=scroll><table>") > 0
+    assert "img{max-width:100%" in page

@@ -9,7 +9,7 @@ import time
 
 import numpy as np
 
-from geometry.validation import check_choice
+from geometry.validation import check_choice, check_int
 from magnetics.error_map import load as load_error_map
 from mrclutch.cli.commands._common import (
     add_design_args,
@@ -23,7 +23,16 @@ from mrclutch.cli.executors import sweep_executor
 from mrclutch.cli.plots.design import pareto_plot
 from mrclutch.cli.report import write_report
 from mrclutch.design import ClutchDesign, design_from_mapping, design_to_toml
-from mrclutch.optimize import MINIMISED, OBJECTIVES, Constraints, Optimum, optimize, parse_bounds
+from mrclutch.optimize import (
+    MAX_CANDIDATES,
+    MINIMISED,
+    OBJECTIVES,
+    Candidate,
+    Constraints,
+    Optimum,
+    optimize,
+    parse_bounds,
+)
 from mrclutch.outputs import CLUTCH_ROWS, HAND_ROWS, SWEEP_OPTIONAL, output, row_label
 from mrclutch.pipeline import (
     FAST_BANDWIDTH_ERROR,
@@ -198,6 +207,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--no-verify", action="store_true", help="skip the reference-fidelity check")
+    p.add_argument(
+        "--tries",
+        type=int,
+        default=3,
+        metavar="N",
+        help="candidates checked at reference fidelity, best first, until one meets every "
+        f"requirement (1..{MAX_CANDIDATES}, default 3)",
+    )
     p.add_argument("--out", metavar="DESIGN.toml", help="write the optimum as a design file")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=_optimize)
@@ -356,7 +373,7 @@ def _pct(v: float | None) -> str:
 def _report(args: argparse.Namespace) -> int:
     design = load_design_args(args)
     check_choice("fidelity", args.fidelity, FIDELITIES)
-    steps = 7
+    steps = 9  # the tick() calls of mrclutch.cli.report._build
     if args.no_progress:
         rep = write_report(design, args.out, fidelity=args.fidelity)
     else:
@@ -481,6 +498,7 @@ def _optimize(args: argparse.Namespace) -> int:
         passive=not args.allow_active,
         stable=not args.allow_unstable,
     )
+    check_int("--tries", args.tries, 1, MAX_CANDIDATES)
     t0 = time.perf_counter()
     opt = optimize(
         base,
@@ -493,47 +511,78 @@ def _optimize(args: argparse.Namespace) -> int:
     t_fast = time.perf_counter() - t0
     if not opt.feasible:
         raise CLIError("no design meets the constraints in the search box; relax a limit")
-    fast = evaluate(opt.design, "fast").as_json()
     key = OBJECTIVES[args.objective]
+    tried: list[dict] = []
+    chosen: tuple[Candidate, dict] | None = None
+    for rank, cand in enumerate(
+        opt.candidates[: args.tries] or (Candidate(opt.design, opt.value),)
+    ):
+        data = _check_candidate(args, cand, cons)
+        tried.append({"rank": rank + 1, "n_drums": cand.design.clutch.n_drums,
+                      "design_mm": cand.design.clutch.to_mm(), "objective_value": cand.value,
+                      "fidelity": data["verdict"]["fidelity"],
+                      "violations": data["violations"]})  # fmt: skip
+        if chosen is None or (not data["violations"] and chosen[1]["violations"]):
+            chosen = (cand, data)
+        if not data["violations"]:
+            break
+    assert chosen is not None
+    cand, data = chosen
     data = {
         "objective": args.objective,
         "objective_column": key,
-        "objective_value": opt.value,
+        "objective_value": cand.value,
         "evaluations": opt.evaluations,
         "optimisation_time_s": t_fast,
         "best_per_drum_count": {str(k): v for k, v in opt.per_drum_count.items()},
-        "design_mm": opt.design.clutch.to_mm(),
+        "varied": [f"{n}_mm" for n in opt.varied],
+        **data,
+        "tried": tried,
+    }
+    if args.out:
+        with atomic_path(args.out) as tmp:
+            tmp.write_text(design_to_toml(cand.design))
+    if args.json:
+        print_json(data)
+    else:
+        _print_optimum(args, opt, cand, t_fast, data)
+    violations = data["violations"]
+    if violations:
+        fid = data["verdict"]["fidelity"]
+        each = "; ".join(
+            f"#{t['rank']} ({t['n_drums']} drums): {', '.join(t['violations'])}" for t in tried
+        )
+        print(
+            f"mrclutch optimize: none of the {len(tried)} best candidate(s) meets the "
+            f"requirements at {fid} fidelity: {each}",
+            file=sys.stderr,
+        )
+        return EXIT_REQUIREMENT_VIOLATED
+    return 0
+
+
+def _check_candidate(args: argparse.Namespace, cand: Candidate, cons: Constraints) -> dict:
+    """One candidate on the fast path and (unless --no-verify) at reference fidelity: its
+    evaluations, verdict and the requirements it misses at the highest fidelity run."""
+    fast = evaluate(cand.design, "fast").as_json()
+    data: dict = {
+        "design_mm": cand.design.clutch.to_mm(),
         "required": {"passive": cons.passive, "stable": cons.stable},
         "fast": fast,
         "fast_bandwidth_error_stated": FAST_BANDWIDTH_ERROR,
     }
     checked = fast
     if not args.no_verify:
-        ref = reference_check(opt.design)
+        ref = reference_check(cand.design)
         b_fast, b_ref = fast["haptic"]["bandwidth_hz"], ref["haptic"]["bandwidth_hz"]
         data["reference"] = ref
         data["bandwidth_change_reference_vs_fast"] = b_ref / b_fast - 1
         checked = ref
-    verdict = haptic_verdict(checked)
     violations = requirement_violations(checked, cons)
-    data["verdict"] = {**verdict, "fidelity": checked["fidelity"]}
+    data["verdict"] = {**haptic_verdict(checked), "fidelity": checked["fidelity"]}
     data["requirements_met"] = not violations
     data["violations"] = violations
-    if args.out:
-        with atomic_path(args.out) as tmp:
-            tmp.write_text(design_to_toml(opt.design))
-    if args.json:
-        print_json(data)
-    else:
-        _print_optimum(args, opt, t_fast, data)
-    if violations:
-        print(
-            f"mrclutch optimize: the optimum violates a requirement at {checked['fidelity']} "
-            f"fidelity: {'; '.join(violations)}",
-            file=sys.stderr,
-        )
-        return EXIT_REQUIREMENT_VIOLATED
-    return 0
+    return data
 
 
 def reference_check(design: ClutchDesign) -> dict:
@@ -578,18 +627,22 @@ def requirement_violations(ev: dict, cons: Constraints) -> list[str]:
     return out
 
 
-def _print_optimum(args: argparse.Namespace, opt: Optimum, t_fast: float, data: dict) -> None:
-    c = opt.design.clutch
+def _print_optimum(
+    args: argparse.Namespace, opt: Optimum, cand: Candidate, t_fast: float, data: dict
+) -> None:
+    c = cand.design.clutch
     key = data["objective_column"]
-    print(
-        f"optimum ({opt.evaluations} designs in {t_fast:.2f} s): {c.n_drums} drums, "
-        f"gap {c.gap * 1e3:.3g} mm, drum {c.drum_thickness * 1e3:.3g} mm, "
-        f"inner Ø {c.drum_inner_diameter * 1e3:.3g} mm, zone {c.zone_length * 1e3:.3g} mm"
-    )
+    varied = ", ".join(f"{n}_mm {getattr(c, n) * 1e3:.4g}" for n in opt.varied)
+    print(f"optimum ({opt.evaluations} designs in {t_fast:.2f} s): n_drums {c.n_drums}, {varied}")
     sense = "minimised" if args.objective in MINIMISED else "maximised"
-    print(f"objective {args.objective} ({key}, {sense}): {opt.value:.4g} on the fast path")
+    print(f"objective {args.objective} ({key}, {sense}): {cand.value:.4g} on the fast path")
     for k, v in opt.per_drum_count.items():
         print(f"  best with {k} drum(s): {key} {v:.4g}")
+    for t in data["tried"]:
+        if t["violations"]:
+            print(f"  candidate #{t['rank']} ({t['n_drums']} drums, {key} "
+                  f"{t['objective_value']:.4g}) fails at {t['fidelity']} fidelity: "
+                  f"{'; '.join(t['violations'])}")  # fmt: skip
     print(f"\nfast path:\n{format_evaluation(data['fast'])}")
     if "reference" in data:
         change = data["bandwidth_change_reference_vs_fast"]

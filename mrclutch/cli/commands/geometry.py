@@ -11,11 +11,17 @@ import math
 from pathlib import Path
 from typing import Any
 
-from geometry.cad import check_tolerance, material_solids
-from geometry.export import export_clutch, read_step_parts
+from geometry.cad import brep_volume_mm3, check_tolerance, material_solids
+from geometry.export import (
+    export_clutch,
+    read_materials,
+    read_step_parts,
+    sidecar_path,
+    step_solids,
+)
 from geometry.mass import analytic_mass, brep_mass, check_mesh, mesh_mass, weigh_mesh, weigh_shape
 from geometry.params import DrumClutch
-from geometry.section import build_section
+from geometry.section import OUTPUT_PARTS, build_section
 from geometry.validation import ParameterError, check_positive
 from mrclutch.cli.commands._common import add_design_args, load_clutch, print_json
 from mrclutch.cli.errors import CLIError
@@ -83,8 +89,11 @@ def cmd_export(args: argparse.Namespace) -> int:
     clutch = load_clutch(args)
     res = export_clutch(clutch, args.out, _tolerance(args, clutch))
     print(f"{res.step}")
+    print(f"{res.materials}  (material and density of every solid: mrclutch inertia reads it)")
     for name, path in res.stl.items():
         print(f"{path}  ({res.stl_triangles[name]} triangles)")
+    for note in res.notes:
+        print(f"note: {note}")
     return 0
 
 
@@ -134,7 +143,12 @@ def cmd_inertia(args: argparse.Namespace) -> int:
     return 0
 
 
-def _densities(args: argparse.Namespace, names: list[str]) -> dict[str, float]:
+def _densities(
+    args: argparse.Namespace, names: list[str], optional: bool = False
+) -> dict[str, float]:
+    """Density of each part named on the command line (``--part-density``, else
+    ``--density``); with ``optional`` (a sidecar has the rest) a part without one is left
+    out instead of refused."""
     per: dict[str, float] = {}
     for item in args.part_density:
         name, sep, val = item.partition("=")
@@ -156,9 +170,52 @@ def _densities(args: argparse.Namespace, names: list[str]) -> dict[str, float]:
             out[n] = per[n]
         elif args.density is not None:
             out[n] = check_positive("--density", args.density, " kg/m³")
+        elif optional:
+            continue
         else:
-            raise ParameterError(f"part {n}: no density; give --density or --part-density {n}=…")
+            raise ParameterError(
+                f"part {n}: no density; give --density or --part-density {n}=… "
+                "(or keep the export's <stem>.materials.json beside the STEP)"
+            )
     return out
+
+
+def _weigh_step(args: argparse.Namespace, path: Path) -> dict[str, dict[str, Any]]:
+    """Every part of a STEP weighed: densities given on the command line win; the others
+    come from the sidecar (``geometry.export.read_materials``) solid by solid."""
+    shapes = read_step_parts(path)
+    side = read_materials(path)
+    dens = _densities(args, list(shapes), optional=side is not None)
+    results: dict[str, dict[str, Any]] = {}
+    for part, shape in shapes.items():
+        if part in dens:
+            pm = weigh_shape(shape, dens[part], args.axis)
+            results[part] = {"mass_kg": pm.mass, "inertia_kg_m2": pm.inertia,
+                             "density_kg_m3": dens[part], "density_from": "option"}  # fmt: skip
+            continue
+        mass = inertia = 0.0
+        materials = []
+        for _, name, solid in step_solids({part: shape}):
+            entry = (side or {}).get(name)
+            if entry is None:
+                raise ParameterError(
+                    f"{sidecar_path(path)}: no entry for solid {name!r} of {path.name}; "
+                    "give --density or --part-density"
+                )
+            vol = brep_volume_mm3(solid)
+            if abs(vol / entry["volume_mm3"] - 1) > 1e-5:
+                raise ParameterError(
+                    f"{sidecar_path(path)}: solid {name} is {vol:.6g} mm³ in {path.name}, "
+                    f"{entry['volume_mm3']:.6g} mm³ in the sidecar (written for another file?)"
+                )
+            pm = weigh_shape(solid, entry["density_kg_m3"], args.axis)
+            mass, inertia = mass + pm.mass, inertia + pm.inertia
+            materials.append(str(entry.get("material", name)))
+        vol_m3 = brep_volume_mm3(shape) * 1e-9
+        results[part] = {"mass_kg": mass, "inertia_kg_m2": inertia,
+                         "density_kg_m3": mass / vol_m3, "density_from": "sidecar",
+                         "materials": materials}  # fmt: skip
+    return results
 
 
 def _weigh_file(args: argparse.Namespace) -> int:
@@ -182,26 +239,22 @@ def _weigh_file(args: argparse.Namespace) -> int:
         results[name] = {"mass_kg": pm.mass, "inertia_kg_m2": pm.inertia, "density_kg_m3": rho}
         method = "mesh"
     else:
-        shapes = read_step_parts(path)
-        dens = _densities(args, list(shapes))
-        for name, shape in shapes.items():
-            pm = weigh_shape(shape, dens[name], args.axis)
-            results[name] = {
-                "mass_kg": pm.mass,
-                "inertia_kg_m2": pm.inertia,
-                "density_kg_m3": dens[name],
-            }
+        results = _weigh_step(args, path)
         method = "brep"
     total = {
         "mass_kg": sum(r["mass_kg"] for r in results.values()),
         "inertia_kg_m2": sum(r["inertia_kg_m2"] for r in results.values()),
     }
     out = {"file": str(path), "method": method, "axis": args.axis, "parts": results, "total": total}
+    rows = [*results.items(), ("total", total)]
+    if set(OUTPUT_PARTS) <= set(results):  # the tool's own part names: the output rotor too
+        out["output_rotor"] = {k: sum(results[p][k] for p in OUTPUT_PARTS) for k in total}
+        rows.append(("+".join(OUTPUT_PARTS), out["output_rotor"]))
     if args.json:
         print_json(out)
         return 0
     print(f"{path} ({method}, axis {args.axis} through the origin, lengths in mm)")
-    for name, r in [*results.items(), ("total", total)]:
+    for name, r in rows:
         print(f"  {name:<12} {r['mass_kg'] * 1e3:10.4f} g  {r['inertia_kg_m2'] * 1e7:12.5f} g·cm²")
     return 0
 

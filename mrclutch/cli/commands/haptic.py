@@ -8,14 +8,17 @@ import math
 from dataclasses import replace
 from typing import Any
 
-from geometry.validation import check_choice, check_nonnegative, check_positive, check_range
+from geometry.validation import check_choice, check_range
 from mrclutch.cli.commands._common import atomic_path, print_json
 from mrclutch.cli.plots.haptic import compare_figure
+from mrclutch.design import MAX_DELAY
 from mrclutch.haptics.actuator import (
     GEARING_RANGE,
     LEVER_RANGE,
+    STIFFNESS_MAX,
     TABLE2_EM_136206,
     TABLE2_MR,
+    WORKSPACE_RANGE,
     actuator,
     reflect,
     transmission_for,
@@ -70,11 +73,14 @@ def _common(p: argparse.ArgumentParser) -> None:
 
 def _edge(args: argparse.Namespace) -> tuple[float | None, float | None, float]:
     """mm/ms at the edge → SI, validated with the option's own name."""
-    K = None if args.stiffness is None else check_positive("--stiffness", args.stiffness, " N/m")
+    K = None
+    if args.stiffness is not None:
+        K = check_range("--stiffness", args.stiffness, 0.0, STIFFNESS_MAX, " N/m", lo_open=True)
     delay = None
     if args.delay_ms is not None:
-        delay = check_nonnegative("--delay-ms", args.delay_ms, " ms") * 1e-3
-    workspace = check_positive("--workspace-mm", args.workspace_mm, " mm") * 1e-3
+        delay = check_range("--delay-ms", args.delay_ms, 0.0, MAX_DELAY * 1e3, " ms") * 1e-3
+    lo, hi = WORKSPACE_RANGE
+    workspace = check_range("--workspace-mm", args.workspace_mm, lo * 1e3, hi * 1e3, " mm") * 1e-3
     return K, delay, workspace
 
 
