@@ -503,7 +503,7 @@ def evaluate_batch(
         path = path_from_regions(rg)
         out["yield_torque"], flux = yield_torque_and_flux(path, current[rows])
         resp = torque_response(rg, current[rows], base.amplifier, base.laminations, path=path,
-                               coil_temperature=op.coil_temperature, nodes=3,
+                               coil_temperature=op.coil_temperature,
                                flux_peak=flux[:, 0])  # fmt: skip
         out["torque_delay"] = resp.equivalent_delay
         net = thermal.network(rg, op.ambient_temperature, FLUID_LIMIT)

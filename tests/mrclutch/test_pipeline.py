@@ -53,6 +53,7 @@ def test_batch_equals_single_design_fast_path(batch, i):
         "bandwidth_hz": h["bandwidth_hz"],
         "rendering_area_dB_decade": h["rendering_area_dB_decade"],
         "backdrive_force_N": ev.hand["mr"]["backdrive_force_N"],
+        "torque_delay_s": ev.response["torque_delay_s"],
     }
     for key, single in pairs.items():
         assert batch[key][i] == pytest.approx(single, rel=1e-6), key
