@@ -12,11 +12,13 @@ rounds keep the ratio honest on a shared, noisy machine.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import statistics
 import subprocess
 import sys
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -56,30 +58,37 @@ def _time(tree: Path, code: str, *args: str) -> float:
     return float(out.stdout.strip().splitlines()[-1])
 
 
+@contextlib.contextmanager
+def base_tree(rev: str) -> Iterator[Path]:
+    """The revision ``rev`` checked out in a temporary git worktree (removed afterwards)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        base = Path(tmp) / "base"
+        subprocess.run(["git", "worktree", "add", "--detach", str(base), rev], cwd=ROOT,
+                       check=True, capture_output=True)  # fmt: skip
+        try:
+            yield base
+        finally:
+            subprocess.run(["git", "worktree", "remove", "--force", str(base)], cwd=ROOT,
+                           check=False, capture_output=True)  # fmt: skip
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--base", required=True, help="git revision to compare with")
     ap.add_argument("--designs", type=int, default=100_000)
     ap.add_argument("--rounds", type=int, default=5)
     a = ap.parse_args()
-    with tempfile.TemporaryDirectory() as tmp:
-        base = Path(tmp) / "base"
-        subprocess.run(["git", "worktree", "add", "--detach", str(base), a.base], cwd=ROOT,
-                       check=True, capture_output=True)  # fmt: skip
-        try:
-            for name, code, args in (
-                (f"fast sweep path, {a.designs} designs", SWEEP, (str(a.designs),)),
-                ("mrclutch --help", HELP, ()),
-            ):
-                now, then = [], []
-                for _ in range(a.rounds):
-                    then.append(_time(base, code, *args))
-                    now.append(_time(ROOT, code, *args))
-                mn, mb = statistics.median(now), statistics.median(then)
-                print(f"{name:<38} now {mn:8.3f} s   base {mb:8.3f} s   ratio {mn / mb:5.2f}")
-        finally:
-            subprocess.run(["git", "worktree", "remove", "--force", str(base)], cwd=ROOT,
-                           check=False, capture_output=True)  # fmt: skip
+    with base_tree(a.base) as base:
+        for name, code, args in (
+            (f"fast sweep path, {a.designs} designs", SWEEP, (str(a.designs),)),
+            ("mrclutch --help", HELP, ()),
+        ):
+            now, then = [], []
+            for _ in range(a.rounds):
+                then.append(_time(base, code, *args))
+                now.append(_time(ROOT, code, *args))
+            mn, mb = statistics.median(now), statistics.median(then)
+            print(f"{name:<38} now {mn:8.3f} s   base {mb:8.3f} s   ratio {mn / mb:5.2f}")
 
 
 if __name__ == "__main__":

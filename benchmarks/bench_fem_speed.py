@@ -1,10 +1,11 @@
 """FEM speed against accuracy, old against new, in one run (issue 12).
 
-    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_fem_speed.py [--rounds 3]
+    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_fem_speed.py [--rounds 3] [--base e29d0a4]
 
 Torque of the paper preset at 2, 4 and 7 A. Reference: Richardson extrapolation of the
 uniform grid at 0.25, 0.125 and 0.0625 mm with the observed order per current (printed).
-"old": the FEM as it was before the speed-up (kept here verbatim as ``_old_newton``):
+"old": the FEM as it was before the speed-up, run from that revision (``--base``, default
+e29d0a4) in a temporary worktree (``bench_against.base_tree``):
 scikit-fem's generic assembly every Newton step, SuperLU with its default ordering and a
 fresh factorisation every step, one grid for the curve, each current warm-started.
 "new": ``torque_curve(method="fem")`` — the grid's forms assembled once per grid, CG on the
@@ -17,68 +18,53 @@ Goals: ≤ 0.5 s per current at 0.2 % and ≤ 0.3 s at 1 %.
 from __future__ import annotations
 
 import argparse
+import json
+import os
 import statistics
+import subprocess
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
+from benchmarks.bench_against import base_tree
 from geometry.params import preset
 from geometry.section import build_section
 from magnetics.fem import build_grid
-from magnetics.fem.post import post_process
-from magnetics.materials import MRF_132DG
 from magnetics.torque import torque_curve
 
 CURRENTS = (2.0, 4.0, 7.0)
 
 
-def _old_newton(grid, current, j_element, psi0, tol=1e-8, max_iter=40):  # type: ignore[no-untyped-def]
-    """magnetics/fem/newton.py before the speed-up (commit e29d0a4), for the timing."""
-    import skfem
+#: The FEM before the speed-up, run as it was: that revision checked out beside this one.
+OLD_REVISION = "e29d0a4"
 
-    from magnetics.fem.forms import forms, nu_terms
-
-    jac, resid, load = forms()
-    basis, D = grid.basis, grid.fixed
-    jq = j_element[:, None] * np.ones_like(grid.r_qp)
-    f = skfem.asm(load, basis, j=jq)
-    free = np.setdiff1d(np.arange(basis.N), D)
-    fnorm = max(np.linalg.norm(f[free]), 1e-300)
-
-    def residual(psi):  # type: ignore[no-untyped-def]
-        g, nu, dnu = nu_terms(grid, psi)
-        rv = skfem.asm(resid, basis, nu=nu, g=g, j=jq)
-        return rv, np.linalg.norm(rv[free]), (g, nu, dnu)
-
-    psi = np.zeros(basis.N) if psi0 is None else psi0
-    rv, rn, terms = residual(psi)
-    it = 0
-    while rn > tol * fnorm and it < max_iter:
-        g, nu, dnu = terms
-        K = skfem.asm(jac, basis, nu=nu, dnu=dnu, g=g)
-        delta = skfem.solve(*skfem.condense(K, -rv, D=D))
-        alpha = 1.0
-        while True:
-            trial = psi + alpha * delta
-            rv_t, rn_t, terms_t = residual(trial)
-            if rn_t < (1 - 1e-4 * alpha) * rn or alpha < 1 / 256:
-                break
-            alpha *= 0.5
-        psi, rv, rn, terms = trial, rv_t, rn_t, terms_t
-        it += 1
-    return psi, it, float(rn / fnorm)
+OLD = r"""
+import json, sys, time
+from geometry.params import preset
+from geometry.section import build_section
+from magnetics.fem import build_grid
+from magnetics.torque import torque_curve
+size, cur = float(sys.argv[1]), [float(x) for x in sys.argv[2:]]
+torque_curve(preset("paper"), [1.0], method="fem", fem_size=1e-3)  # imports out of the timing
+t = time.perf_counter()
+c = torque_curve(preset("paper"), cur, method="fem", fem_size=size)
+dt = (time.perf_counter() - t) / len(cur)
+n = int(build_grid(build_section(preset("paper")), size).basis.N)
+print(json.dumps([[float(x) for x in c.yield_torque], n, dt]))
+"""
 
 
-def _old_solve(size: float) -> tuple[np.ndarray, int]:
-    """Old torque_curve: one grid, each current's Newton started from the last field."""
-    s = build_section(preset("paper"))
-    out, psi = [], None
-    g = build_grid(s, size)
-    for i in CURRENTS:
-        j = np.where(g.coil_mask, s.clutch.coil_turns * i / g.coil_area, 0.0)
-        psi, it, res = _old_newton(g, i, j, psi)
-        out.append(post_process(g, i, psi, it, res).gap_yield_torque(MRF_132DG).sum())
-    return np.array(out), g.basis.N
+def _old_solve(tree: Path, size: float) -> tuple[np.ndarray, int, float]:
+    """Old torque_curve (one grid, each current's Newton started from the last field), run
+    in the old revision's tree: (torques, unknowns, seconds per current)."""
+    out = subprocess.run(
+        [sys.executable, "-c", OLD, str(size), *map(str, CURRENTS)], cwd=tree,
+        env={**os.environ, "PYTHONPATH": str(tree)}, check=True, capture_output=True, text=True,
+    )  # fmt: skip
+    t, n, dt = json.loads(out.stdout.strip().splitlines()[-1])
+    return np.array(t), int(n), float(dt)
 
 
 def _new_solve(size: float, mesh: str) -> tuple[np.ndarray, int]:
@@ -108,16 +94,23 @@ CASES = [("old", "uniform", h) for h in (0.5e-3, 0.25e-3, 0.125e-3, 0.09e-3)] + 
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--base", default=OLD_REVISION, help="revision holding the old FEM")
     a = ap.parse_args()
     _new_solve(1e-3, "graded")  # imports out of the timings
     ref = reference()
     times: dict[tuple[str, str, float], list[float]] = {c: [] for c in CASES}
     res: dict[tuple[str, str, float], tuple[np.ndarray, int]] = {}
-    for _ in range(a.rounds):  # interleaved: load on a shared machine hits all alike
-        for c in CASES:
-            t0 = time.perf_counter()
-            res[c] = _old_solve(c[2]) if c[0] == "old" else _new_solve(c[2], c[1])
-            times[c].append((time.perf_counter() - t0) / len(CURRENTS))
+    with base_tree(a.base) as old_tree:
+        for _ in range(a.rounds):  # interleaved: load on a shared machine hits all alike
+            for c in CASES:
+                if c[0] == "old":
+                    t_old, n_old, dt = _old_solve(old_tree, c[2])
+                    res[c] = (t_old, n_old)
+                else:
+                    t0 = time.perf_counter()
+                    res[c] = _new_solve(c[2], c[1])
+                    dt = (time.perf_counter() - t0) / len(CURRENTS)
+                times[c].append(dt)
     med = {c: statistics.median(v) for c, v in times.items()}
     err = {c: float(np.max(np.abs(res[c][0] / ref - 1))) for c in CASES}
     print(f"\n{'code':5}{'mesh':9}{'size mm':>8}{'unknowns':>10}{'s/current':>11}"
