@@ -202,6 +202,14 @@ class Laminations:
 # ---- electrical -----------------------------------------------------------------------------
 
 
+def _linkage(
+    m: Mapping[str, FloatArray], turns: FloatArray, leak: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """λ = N·Φ_shell and dλ/dΦ = N·(1 + P·dF_stack/dΦ) from ``circuit._mmf``'s output at a
+    gap flux Φ (module docstring): the one place the coil's linkage is written."""
+    return turns * m["phi_shell"], turns * (1.0 + leak * m["dstack"])
+
+
 def flux_linkage(
     path: MagneticPath, current: ArrayLike, materials: Mapping[str, Magnetic] | None = None
 ) -> tuple[FloatArray, FloatArray]:
@@ -215,9 +223,8 @@ def flux_linkage(
     kern = _kernels(path)
     phi = np.abs(solve_flux(path, n * cur, mats, kernels=kern))
     m = _mmf(path, mats, phi, kern)
-    lam = n * m["phi_shell"] * np.sign(cur)
-    grow = 1.0 + kern.leak * m["dstack"]  # dΦ_shell/dΦ
-    return lam, n**2 * grow / m["dtotal"]
+    lam, dlam = _linkage(m, n, kern.leak)
+    return lam * np.sign(cur), n * dlam / m["dtotal"]  # dλ/dI = (dλ/dΦ)/(dI/dΦ)
 
 
 @dataclass(frozen=True)
@@ -277,7 +284,7 @@ def current_rise(
     m = _mmf(path, mats, phi, kn)
     i = m["total"] / n_t[:, None]
     di = m["dtotal"] / n_t[:, None]  # di/dΦ
-    dlam = n_t[:, None] * (1.0 + kn.leak * m["dstack"])  # dλ/dΦ
+    dlam = _linkage(m, n_t[:, None], kn.leak)[1]  # dλ/dΦ
     dphi_du = f_end[:, None] - phi
     v = amplifier.supply_voltage
     head = v - res[:, None] * i
@@ -525,8 +532,8 @@ def torque_response(
     f10 = np.minimum(0.1 * ni / m["dtotal"][:, :1], 0.5 * peak)
     f90 = np.clip(peak - 0.1 * ni / m["dtotal"][:, 1:], f10, 0.999 * peak)
     fl = np.concatenate([f10, f90, peak], 1)
-    lam = n_t * m["phi_shell"]
-    L = n_t**2 * (1.0 + kn.leak * m["dstack"]) / m["dtotal"]  # flux_linkage, explicit in Φ
+    lam, dlam = _linkage(m, n_t, kn.leak)
+    L = n_t * dlam / m["dtotal"]  # as flux_linkage, explicit in Φ
     rise = current_rise(pth, res, cur, amp, mats, nodes, flux=fl)
     parts = eddy_parts(pth, cur, laminations, materials=mats, flux=bias * fl[:, 2]) if eddy else {}
     return TorqueResponse(cur.copy(), res.copy(), L[:, 0], L[:, 1], lam[:, 1] / cur, rise,
