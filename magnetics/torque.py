@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from geometry.numerics import illinois
 from geometry.params import DrumClutch, broadcast_fields, valid
 from geometry.regions import Regions, per_topology
 from geometry.section import Section, build_section
@@ -396,32 +397,18 @@ def continuous_torque(
     i_a = np.sqrt(np.maximum(i_max_sq(off * w), 0.0))
     i_a = np.broadcast_to(i_a, path.turns.shape).copy()  # (S,), also for one design
 
-    def fixed_point(c1: FloatArray, steps: int) -> FloatArray:
+    def fixed_point(c1: FloatArray, rtol: float) -> FloatArray:
         """The root of h(I) = I² − I_cont²(ω·(T_off + c1·I)) on [0, I_a] (h increasing:
-        I² grows, the closed form falls with the slip power) by regula falsi with the
-        Illinois modification ([numerical-recipes] §9.2), superlinear: 8 steps agree with
-        60 to 1e-7 on 4000 random designs; the intermediate chords take 4 (their answer
-        only places the next chord's point)."""
+        I² grows, the closed form falls with the slip power), to ``rtol`` of I_a."""
+        x_all = i_a.copy()
 
-        def h(i: FloatArray) -> FloatArray:
-            return i * i - i_max_sq((off + c1 * i) * w)
+        def h(act: np.ndarray, x: FloatArray) -> FloatArray:
+            x_all[act] = x
+            return (x_all * x_all - i_max_sq((off + c1 * x_all) * w))[act]
 
-        lo, hi = np.zeros_like(i_a), i_a.copy()
-        h_lo, h_hi = h(lo), h(hi)  # h(0) < 0 ≤ h(I_a) where I_a > 0
-        side = np.zeros(i_a.shape, dtype=np.int8)
-        for _ in range(steps):
-            den = h_hi - h_lo
-            x = np.where(den > 0, hi - h_hi * (hi - lo) / np.where(den > 0, den, 1.0), lo)
-            x = np.clip(x, lo, hi)
-            hx = h(x)
-            right = hx > 0
-            # Illinois: halve the stale end's value when the same end moves twice
-            h_lo = np.where(right & (side == 1), 0.5 * h_lo, h_lo)
-            h_hi = np.where(~right & (side == -1), 0.5 * h_hi, h_hi)
-            lo, h_lo = np.where(right, lo, x), np.where(right, h_lo, hx)
-            hi, h_hi = np.where(right, x, hi), np.where(right, hx, h_hi)
-            side = np.where(right, 1, -1).astype(np.int8)
-        return np.where(i_a > 0, lo, 0.0)
+        rows, lo = np.arange(i_a.size), np.zeros_like(i_a)
+        h_hi = h(rows, i_a.copy())  # ≥ 0: I_a bounds the answer
+        return illinois(h, lo, i_a, h(rows, lo), h_hi, rtol)
 
     # T(0) = 0 and T is concave past the knee: the fixed point on the chord through the
     # curve at I_k lies at or above the true one, and the next chord goes through it; each
@@ -445,5 +432,5 @@ def continuous_torque(
         t, phi, dfdphi = _solved_point(path, i, mats, fluid, 1e-3, start, convention)
         i_old = i[:, None]
         c1 = np.where(i > 0, t / np.where(i > 0, i, 1.0), 0.0)
-        i = fixed_point(c1, 8 if k == passes - 1 else 4)  # the last one exact, others near
+        i = fixed_point(c1, 1e-9 if k == passes - 1 else 1e-4)  # intermediate: a chord's point
     return i, np.where(i_a > 0, off + c1 * i, 0.0)

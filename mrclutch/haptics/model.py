@@ -67,6 +67,7 @@ from typing import Any
 import numpy as np
 from numpy.polynomial import polynomial as P
 
+from geometry.numerics import illinois
 from geometry.validation import ParameterError, check_nonnegative
 from mrclutch.haptics.actuator import HapticParams
 
@@ -228,38 +229,6 @@ def _flat(p: HapticParams, K: Any) -> tuple[np.ndarray, ...]:
     names = ("m1", "b1", "k", "b", "m2", "delay", "sample_period")
     arrs = np.broadcast_arrays(*(np.asarray(getattr(p, n), float) for n in names), K)
     return tuple(np.ravel(a) for a in arrs)
-
-
-def _illinois(
-    f: Any, lo: np.ndarray, hi: np.ndarray, flo: np.ndarray, fhi: np.ndarray, rtol: float
-) -> np.ndarray:
-    """Roots of f in the brackets [lo, hi] (f(lo), f(hi) of opposite signs), all at once:
-    the Illinois variant of regula falsi ([dowell-jarratt1971]; superlinear, bracketed).
-    ``f(act, x)`` evaluates the functions of the brackets ``act`` at ``x``. Each bracket
-    is refined until hi − lo ≤ rtol·|hi| (or f = 0 exactly); returns the midpoints."""
-    lo, hi, flo, fhi = (np.array(a, dtype=float) for a in (lo, hi, flo, fhi))
-    side = np.zeros(lo.shape)
-    act = np.nonzero(hi - lo > rtol * np.abs(hi))[0]
-    for _ in range(200):
-        if act.size == 0:
-            break
-        lo_a, hi_a, flo_a, fhi_a, sd = lo[act], hi[act], flo[act], fhi[act], side[act]
-        x = hi_a - fhi_a * (hi_a - lo_a) / (fhi_a - flo_a)
-        x = np.where(np.isfinite(x), x, 0.5 * (lo_a + hi_a))
-        # at least δ from either end (Brent's minimum step, [numerical-recipes] §9.3): a root
-        # within δ of an end is then straddled by the next bracket, of width ≤ δ
-        d = 0.4 * rtol * np.abs(hi_a)
-        x = np.clip(x, lo_a + d, hi_a - d)
-        fx = f(act, x)
-        left = fx * flo_a > 0  # x replaces lo
-        hit = fx == 0
-        flo[act] = np.where(left, fx, np.where(sd == -1, 0.5 * flo_a, flo_a))
-        fhi[act] = np.where(left, np.where(sd == 1, 0.5 * fhi_a, fhi_a), fx)
-        lo[act] = np.where(left | hit, x, lo_a)
-        hi[act] = np.where(left & ~hit, hi_a, x)
-        side[act] = np.where(left, 1.0, -1.0)
-        act = act[hi[act] - lo[act] > rtol * np.abs(hi[act])]
-    return 0.5 * (lo + hi)
 
 
 def _pmul(x: list[Any], y: list[Any]) -> list[Any]:
@@ -455,7 +424,7 @@ def bandwidth(p: HapticParams, K: Any, *, rtol: float = 1e-8) -> Any:
     if rows.size:
         pr = tuple(x[rows] for x in (m1, b1, k, b, m2, tau, Kf))
         lo, hi = br[rows, 0], br[rows, 1]  # k_eff itself at the ends (N is scaled)
-        root = _illinois(lambda act, x: _k_eff(*(c[act] for c in pr), x),
+        root = illinois(lambda act, x: _k_eff(*(c[act] for c in pr), x),
                          lo, hi, _k_eff(*pr, lo), _k_eff(*pr, hi), rtol)  # fmt: skip
         out[idx[rows]] = root / TWO_PI
     return out.reshape(shape)
@@ -620,7 +589,7 @@ def _scan_imaginary_axis(
     while True:
         xi = X(grid).imag
         sc = np.nonzero(np.sign(xi[:-1]) * np.sign(xi[1:]) < 0)[0]
-        w = _illinois(lambda _, x: X(x).imag, grid[sc], grid[sc + 1], xi[sc], xi[sc + 1], 1e-13)
+        w = illinois(lambda _, x: X(x).imag, grid[sc], grid[sc + 1], xi[sc], xi[sc + 1], 1e-13)
         found.append(w)
         xv = X(w)
         ok = (xv.real > 0) & (np.abs(xv.imag) <= 1e-6 * np.abs(xv))

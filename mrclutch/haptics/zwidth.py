@@ -67,9 +67,10 @@ from typing import Any
 import numpy as np
 from numpy.polynomial import polynomial as P
 
+from geometry.numerics import illinois
 from geometry.validation import ParameterError
 from mrclutch.haptics.actuator import HapticParams
-from mrclutch.haptics.model import _hold, _illinois, _num_coeffs, _scan_imaginary_axis
+from mrclutch.haptics.model import _hold, _num_coeffs, _scan_imaginary_axis
 
 __all__ = [
     "ZWIDTH_KEYS",
@@ -364,7 +365,7 @@ def zwidth(p: HapticParams, n_b: int = 17) -> dict[str, np.ndarray]:
 
         lo, hi = Bg[bad, j - 1], Bg[bad, j]
         wl, wh = W[bad, j - 1], np.nan_to_num(W[bad, j], nan=-1.0)
-        end = _illinois(width, lo, hi, wl, wh, 1e-6)
+        end = illinois(width, lo, hi, wl, wh, 1e-6)
         top[bad] = end
         Bg[bad, j] = end
         for c in range(1, n_b):  # nodes past the end collapse onto it
