@@ -34,10 +34,15 @@ from magnetics.circuit import (
 from magnetics.drag import ROOM_TEMPERATURE, Drag, Support, clutch_drag
 from magnetics.fem import MESHES, build_grid, solve_fem
 from magnetics.materials import FLUIDS, MATERIALS, Magnetic, MRFluid, magnetic
-from magnetics.thermal import Network, coil_resistance, continuous_current_sq
+from magnetics.network import Network, network_from_regions, solve_network, zone_mmf
+from magnetics.thermal import Network as ThermalNetwork
+from magnetics.thermal import coil_resistance, continuous_current_sq
 
 FloatArray = NDArray[np.float64]
-METHODS = ("circuit", "fem")
+#: "circuit": the single saturating loop (the default); "network": the reluctance ladder
+#: generated from the section (magnetics.network; more accurate off the paper preset, see
+#: docs/magnetics.md); "fem": the axisymmetric FEM reference.
+METHODS = ("circuit", "network", "fem")
 #: How a gap's torque reads its field across the gap's thickness (``_gap_torque``,
 #: ``FEMSolution.gap_yield_torque``): "mid-line", r²·τy(H) at the gap's mid radius;
 #: "weakest-layer", min over r in [r0, r1] of r²·τy(H(r)) (the fluid yields first there).
@@ -112,7 +117,7 @@ def torque_curve(
     convention: str = DEFAULT_CONVENTION,
 ) -> TorqueCurve:
     """Torque of ``clutch`` (or its already built section) at ``currents`` (A) by the
-    circuit or the FEM, the drag at ``speed_rpm`` and fluid ``temperature`` (°C) added.
+    circuit, the network or the FEM (``METHODS``), the drag at ``speed_rpm`` and fluid ``temperature`` (°C) added.
     ``fem_mesh``: the FEM's "uniform" grid (the error map's reference) or its "graded" one
     (as accurate at the same ``fem_size`` on the paper preset with ~3× fewer unknowns,
     magnetics.fem.grid; benchmarks/bench_fem_speed.py). ``convention``: how each gap's
@@ -132,6 +137,12 @@ def torque_curve(
         per = _gap_torque(path, np.abs(res.flux), res.radial_mmf, materials, fluid,
                           convention)[0]  # fmt: skip
         labels = res.gap_label
+    elif method == "network":
+        if section.table is None:
+            raise ParameterError("section: built by hand, without a region table; no network")
+        net = network_from_regions(section.table, materials)
+        per = network_gap_torque(net, cur[None, :], materials, fluid, convention)[0]
+        labels = tuple(f"{f}_{z}" for z in ("A", "B") for f in net.film_name)
     else:
         # One grid (its forms' current-independent parts and the Newton preconditioner kept
         # on it); currents in increasing |I|, each Newton started from the last field.
@@ -287,7 +298,8 @@ def _gap_torque(path, phi, radial, materials, fluid, convention=DEFAULT_CONVENTI
     tab = _yield_table(magnetic(path.fluid, mats), FLUIDS[path.fluid] if fluid is None else fluid)
     length = path.gap_len[:, None, :]
     band = (0.5 * path.band_len)[:, None, None]
-    c = phi[:, :, None] / (2 * np.pi * length)  # B·r in the zone, T·m
+    phi = phi[:, :, None] if phi.ndim == 2 else phi  # one flux for every gap, or one each
+    c = phi / (2 * np.pi * length)  # B·r in the zone, T·m
     q1 = np.abs(radial[:, :, None] / path.band_reluctance[:, None, None])  # band: B·r at u = 1
     if convention == "mid-line":
         r = path.gap_r_mid[:, None, :]
@@ -365,7 +377,7 @@ def _yield_table(bh: Magnetic, fluid: MRFluid, n: int = 8192) -> _YieldTable:
 
 
 def continuous_torque(
-    net: Network,
+    net: ThermalNetwork,
     path: MagneticPath,
     slip_speed: Any,
     off_torque: Any,
@@ -434,3 +446,71 @@ def continuous_torque(
         c1 = np.where(i > 0, t / np.where(i > 0, i, 1.0), 0.0)
         i = fixed_point(c1, 1e-9 if k == passes - 1 else 1e-4)  # intermediate: a chord's point
     return i, np.where(i_a > 0, off + c1 * i, 0.0)
+
+
+# ---- the reluctance network (magnetics.network): one design is a batch of one -------------
+
+
+@dataclass(frozen=True)
+class _NetworkGaps:
+    """The network's films in both zones as K = 2m gap entries (zone A, then B), in the
+    shape ``_gap_torque`` reads."""
+
+    gap_len: FloatArray
+    gap_mask: NDArray[np.bool_]
+    gap_r0: FloatArray
+    gap_r1: FloatArray
+    band_len: FloatArray
+    band_reluctance: FloatArray
+    fluid: str
+
+    @property
+    def gap_r_mid(self) -> FloatArray:
+        return 0.5 * (self.gap_r0 + self.gap_r1)
+
+
+def network_gap_torque(
+    net: Network,
+    currents: ArrayLike,
+    materials: Mapping[str, Magnetic] | None = None,
+    fluid: MRFluid | None = None,
+    convention: str = DEFAULT_CONVENTION,
+) -> FloatArray:
+    """Yield torque (S, C, 2m) of every film in zone A then B at currents (S, C) A.
+
+    The film's flux x_k spreads over its walls' overlap plus the fringing length
+    (``Network.gap_eff``): the zone's field is B = x_k/(2π r L_eff) over the overlap L; the
+    band beyond it is ``_gap_torque``'s linear-potential band with the zone's radial MMF."""
+    mats = MATERIALS if materials is None else materials
+    cur = np.asarray(currents, dtype=float)
+    cur = np.broadcast_to(cur if cur.ndim == 2 else cur.reshape(1, -1),
+                          (net.turns.size, cur.shape[-1] if cur.ndim else 1))  # fmt: skip
+    x = solve_network(net, net.turns[:, None] * cur, mats)
+    radial = zone_mmf(net, x, mats).mean(axis=-1)  # (S, C): the zones' mean radial MMF
+    two = lambda a: np.concatenate([a[..., 0], a[..., 1]], axis=-1)  # noqa: E731
+    length, eff = two(net.gap_len), two(net.gap_eff)
+    gaps = _NetworkGaps(length, length > 0, np.tile(net.gap_r0, 2), np.tile(net.gap_r1, 2),
+                        net.band_len, net.band_reluctance, net.fluid)  # fmt: skip
+    share = np.where(eff > 0, length / np.where(eff > 0, eff, 1.0), 0.0)[:, None, :]
+    xl = np.abs(x[..., : net.m])
+    phi = np.concatenate([xl, xl], axis=-1) * share  # the flux over the overlap
+    return _gap_torque(gaps, phi, radial, mats, fluid, convention)
+
+
+def network_torque_batch(
+    fields: Mapping[str, ArrayLike],
+    currents: ArrayLike,
+    materials: Mapping[str, Magnetic] | None = None,
+    fluid: MRFluid | None = None,
+    convention: str = DEFAULT_CONVENTION,
+) -> FloatArray:
+    """Yield torque (S, C) of S designs at every one of C currents by the network, one
+    batch per drum count; NaN rows for designs that fail DrumClutch's validation."""
+    p = broadcast_fields(fields)
+    cur = np.atleast_1d(np.asarray(currents, dtype=float))
+
+    def one(rg: Regions, rows: np.ndarray) -> dict[str, FloatArray]:
+        net = network_from_regions(rg, materials)
+        return {"t": network_gap_torque(net, cur[None, :], materials, fluid, convention).sum(-1)}
+
+    return per_topology(p, valid(p), one)["t"]

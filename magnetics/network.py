@@ -1,0 +1,394 @@
+"""Reluctance network of the drum clutch, generated from the region table (issue 12).
+
+Why not one loop: the drum walls are steel in the active zones and stainless over the band,
+so each drum is a flux conductor from zone A to zone B in parallel with the core. Flux that
+crosses the outer gaps of zone A can return through a drum's band (stainless and the fluid
+beside it) to zone B without crossing the inner gaps: the outer gaps carry more flux than
+the inner ones (the FEM shows 10× on a 6-drum, 1 mm-gap design), which a single loop — the
+same flux through every gap — cannot represent.
+
+The network is a ladder read from the table. In each active zone the steel regions the
+sheared films lie between (``RegionSpec.walls``: the core, the drum walls, the shell's pole)
+are its nodes, in radial order; the films are its series elements (one per film and zone,
+the exact cylindrical reluctance ln(r1/r0)/(2πμL) [roters1941] ch. 5, L where both walls'
+steel face each other inside the zone), and each wall's zone-A node is joined to its zone-B
+node by a rung:
+
+- the core: its steel, axially (the flux builds up linearly along each zone);
+- each drum: its steel in each zone, axially (same build-up), in series with the regions
+  that span the band radially on the drum's own stations (its stainless band) and half of
+  each neighbouring film's band (μA/l, linear);
+- the shell: pole A radially, the back iron axially, pole B — with the coil's ampere-turns
+  N·I; in parallel with it the coil window (sleeve, coil, half the outer film over the
+  band), whose MMF from the distributed winding falls linearly across the coil (the window
+  element's permeance is weighted accordingly, [roters1941] ch. 5, leakage of a uniformly
+  wound coil).
+
+Every steel and fluid element has its material's non-linear B–H (MMF = Σ w·H(k·Φ) at
+Gauss points, exact for a linear material). Unknowns: the loop fluxes x_k (the flux of
+film k in both zones; the ladder's loops) and the window's flux x_w. The equations are the
+loop MMF balances — the gradient of the network's (convex) magnetic co-energy — so the
+Jacobian is symmetric positive definite and tridiagonal: damped Newton with a backtracking
+line search on the residual, each step one batched Thomas solve, vectorised over designs ×
+currents. A row that does not converge is refused (``NetworkConvergenceError``, the rows
+named), never returned.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from geometry.materials import MRF, STEEL
+from geometry.regions import ZONES, RegionSpec, Regions
+from geometry.validation import ParameterError
+from magnetics.materials import MATERIALS, MU0, Magnetic, magnetic
+
+FloatArray = NDArray[np.float64]
+_POLE_POINTS = 3  # Gauss points in ln r across the thick pole rings
+
+
+class NetworkConvergenceError(ParameterError):
+    """The network's Newton did not converge for some designs (they are named)."""
+
+
+@dataclass(frozen=True)
+class Network:
+    """The ladder of S designs of one drum count; m films (loops), arrays with leading S.
+
+    Kernels: an element's MMF is Σ_j w_j·H(k_j·Φ) over its Gauss points (k = B/Φ, 1/m²;
+    w in m), a zero weight pads unused points.
+    """
+
+    turns: FloatArray  # (S,)
+    film_name: tuple[str, ...]  # m
+    gap_r0: FloatArray  # (S, m)
+    gap_r1: FloatArray  # (S, m)
+    gap_len: FloatArray  # (S, m, 2) length carrying flux in zone A, B
+    gap_eff: FloatArray  # (S, m, 2) the same plus the fringing length at its ends
+    fluid_k: FloatArray  # (S, m, 2)
+    fluid_w: FloatArray
+    wall_k: FloatArray  # (S, m, 2) steel wall inside film k, radially, zones A and B
+    wall_w: FloatArray
+    rung_k: FloatArray  # (S, m + 1, 2) drum steel axially in zone A and B (rungs 1..m-1)
+    rung_w: FloatArray
+    rung_lin: FloatArray  # (S, m + 1) linear reluctance of each rung (the band), 1/H
+    core_k: FloatArray  # (S, 3): band, zone A, zone B
+    core_w: FloatArray
+    shell_k: FloatArray  # (S, 2·_POLE_POINTS): the poles, radially
+    shell_w: FloatArray
+    back_k: FloatArray  # (S, 1): the back iron, axially
+    back_w: FloatArray
+    window: FloatArray  # (S,) reluctance of the coil window, 1/H
+    outer_air: FloatArray  # (S,) reluctance of the air outside the shell, 1/H
+    band_len: FloatArray  # (S,)
+    band_reluctance: FloatArray  # (S,) S_b = Σ ln(ro/ri)/μ over the band's layers
+    steel: str = STEEL
+    fluid: str = MRF
+
+    @property
+    def m(self) -> int:
+        return len(self.film_name)
+
+
+def _overlap(a0, a1, b0, b1):  # type: ignore[no-untyped-def]
+    return np.maximum(np.minimum(a1, b1) - np.maximum(a0, b0), 0.0)
+
+
+def network_from_regions(
+    rg: Regions, materials: Mapping[str, Magnetic] | None = None, fringing: bool = True
+) -> Network:
+    """The ladder of the designs of one region table (the module docstring);
+    ``fringing=False`` leaves out the films' fringing at the ends of the walls' overlap."""
+    mats = MATERIALS if materials is None else materials
+    size = np.size(rg.at["outer"])
+    at = {k: np.broadcast_to(np.asarray(v, dtype=float), (size,)) for k, v in rg.at.items()}
+
+    def box(sp: RegionSpec):  # type: ignore[no-untyped-def]
+        return at[sp.r0], at[sp.r1], at[sp.z0], at[sp.z1]
+
+    steel = {sp.name: sp for sp in rg if sp.material == STEEL}
+    films = rg.films("cylinder")
+    m = len(films)
+    zones = [(name, at[a], at[b]) for name, a, b in ZONES]
+    (_, za0, za1), (_, zb0, zb1) = zones
+    band = zb0 - za1
+
+    def wall(name: str, zone: str) -> RegionSpec:
+        """The steel region of wall ``name`` in ``zone`` (a drum's zone segment, the core,
+        the shell's pole)."""
+        for cand in (f"{name}_{zone}", name):
+            if cand in steel:
+                return steel[cand]
+        raise ParameterError(f"network: no steel region for wall {name!r} in zone {zone}")
+
+    zeros = lambda *shape: np.zeros((size, *shape))  # noqa: E731
+    gap_len, gap_eff, fluid_k, fluid_w = zeros(m, 2), zeros(m, 2), zeros(m, 2), zeros(m, 2)
+    wall_k, wall_w = zeros(m, 2), zeros(m, 2)
+    rung_k, rung_w, rung_lin = zeros(m + 1, 2), zeros(m + 1, 2), zeros(m + 1)
+    gap_r0 = np.stack([at[f.r0] for f in films], axis=1)
+    gap_r1 = np.stack([at[f.r1] for f in films], axis=1)
+    for k, f in enumerate(films):
+        inner, outer = f.walls
+        r0, r1, g0, g1 = box(f)
+        for z, (zname, z0, z1) in enumerate(zones):
+            a, b = wall(inner, zname), wall(outer, zname)
+            lo = np.maximum(np.maximum(at[a.z0], at[b.z0]), g0)
+            hi = np.minimum(np.minimum(at[a.z1], at[b.z1]), g1)
+            length = np.where(_overlap(lo, hi, z0, z1) > 0, np.maximum(hi - lo, 0.0), 0.0)
+            gap_len[:, k, z] = length
+            # Fringing past each end of the walls' overlap, into the fluid the film still
+            # holds there (up to the plane midway to the other zone): two flush edges a gap
+            # g apart, a fluid depth h beyond them, add the permeance of the semicircular
+            # tubes μ·(2πr)·ln(1 + πh/g)/π ([roters1941] ch. 5, fringing at flush pole
+            # edges), i.e. a length δ = (g/π)·ln(1 + πh/g) per end.
+            gap = r1 - r0
+            mid = 0.5 * (zb0 + za1)
+            h_lo = np.maximum(lo - np.maximum(g0, mid if z else g0), 0.0)
+            h_hi = np.maximum(np.minimum(g1, mid if not z else g1) - hi, 0.0)
+            fringe = (gap / np.pi) * (np.log1p(np.pi * h_lo / gap) + np.log1p(np.pi * h_hi / gap))
+            eff = length + (fringe if fringing else 0.0)
+            gap_eff[:, k, z] = np.where(length > 0, eff, 0.0)
+            # 1 Gauss point in ln r: exact for a linear material ([roters1941] ch. 5)
+            rg_ = np.sqrt(r0 * r1)
+            ok = length > 0
+            fluid_k[:, k, z] = np.where(ok, 1 / (2 * np.pi * rg_ * np.where(ok, eff, 1)), 0)
+            fluid_w[:, k, z] = np.where(ok, rg_ * np.log(r1 / r0), 0.0)
+            if k > 0:  # the drum wall inside film k, radially over its zone overlap
+                w0, w1, c0, c1 = box(a)
+                lw = _overlap(c0, c1, z0, z1)
+                rw = np.sqrt(w0 * w1)
+                okw = lw > 0
+                wall_k[:, k, z] = np.where(okw, 1 / (2 * np.pi * rw * np.where(okw, lw, 1)), 0)
+                wall_w[:, k, z] = np.where(okw, rw * np.log(w1 / w0), 0.0)
+                # the same wall axially: flux builds up linearly over the zone, so
+                # ∫0^L H(Φ z/(L A)) dz ≈ L·H(Φ/(2A)) (one Gauss point, exact if linear)
+                area = np.pi * (w1**2 - w0**2)
+                rung_k[:, k, z] = np.where(okw, 0.5 / area, 0.0)
+                rung_w[:, k, z] = lw
+    # Rungs' band: regions spanning the band on a wall's stations, and half of each
+    # neighbouring film (linear, initial μ), μA/l.
+    mu_f = magnetic(MRF, mats).mu_initial
+    spans = [sp for sp in rg if sp.material != STEEL]
+    for k in range(1, m):
+        w = wall(films[k].walls[0], "A")
+        perm = np.zeros(size)
+        for sp in spans:
+            r0, r1, c0, c1 = box(sp)
+            across = (c0 <= za1) & (c1 >= zb0)
+            mu = mu_f if sp.material == MRF else magnetic(sp.material, mats).mu_initial
+            area = np.pi * (r1**2 - r0**2)
+            if sp.r0 == w.r0 and sp.r1 == w.r1:
+                share = 1.0
+            elif sp.film == "cylinder" and (sp.r1 == w.r0 or sp.r0 == w.r1):
+                share = 0.5
+            else:
+                continue
+            perm = perm + np.where(across, share * mu * area / band, 0.0)
+        rung_lin[:, k] = 1.0 / perm
+    core = box(steel["core"])
+    core_area = np.pi * core[1] ** 2
+    core_k = np.stack([1 / core_area, 0.5 / core_area, 0.5 / core_area], axis=1)
+    core_w = np.stack([band, za1 - za0, zb1 - zb0], axis=1)
+    pa, pb, back = box(steel["shell_A"]), box(steel["shell_B"]), box(steel["shell_back"])
+    x, wt = np.polynomial.legendre.leggauss(_POLE_POINTS)
+    sk, sw = [], []
+    for p in (pa, pb):
+        u0, u1 = np.log(p[0]), np.log(back[0])
+        r = np.exp(0.5 * (u0 + u1)[:, None] + 0.5 * (u1 - u0)[:, None] * x)
+        sk.append(1 / (2 * np.pi * r * (p[3] - p[2])[:, None]))
+        sw.append(0.5 * wt * (u1 - u0)[:, None] * r)
+    back_k = (1 / (np.pi * (back[1] ** 2 - back[0] ** 2)))[:, None]
+    back_w = (0.5 * (zb0 + zb1) - 0.5 * (za0 + za1))[:, None]
+    # Coil window: sleeve and coil between the pole radius and the back iron, half the
+    # outer film over the band. In the coil the band's MMF falls linearly from the inner to
+    # the outer winding radius, so a ring at r carries μ·(ro − r)/d of the sleeve's field.
+    pole_r = at[films[-1].r1]
+    perm_w = np.zeros(size)
+    for sp in spans:
+        r0, r1, c0, c1 = box(sp)
+        across = (c0 <= za1) & (c1 >= zb0)
+        mu = mu_f if sp.material == MRF else magnetic(sp.material, mats).mu_initial
+        if sp.film == "cylinder" and sp.r1 == films[-1].r1:
+            perm_w = perm_w + np.where(across, 0.5 * mu * np.pi * (r1**2 - r0**2) / band, 0.0)
+        elif sp.part == "coil":
+            d = r1 - r0
+            # ∫ 2πr (r1 − r)/d dr = π(r1 − r0)(r1 + 2 r0)/3·… exactly: π d (r1 + 2 r0)/3
+            perm_w = perm_w + np.where(across, mu * np.pi * d * (r1 + 2 * r0) / 3 / band, 0.0)
+        elif r0 is not None and sp.r0 == films[-1].r1 and sp.part == "housing":
+            perm_w = perm_w + np.where(across & (r1 <= back[0] + 1e-15) & (r0 >= pole_r - 1e-15),
+                                       mu * np.pi * (r1**2 - r0**2) / band, 0.0)  # fmt: skip
+    # Band reluctance S_b for the band field in the torque (magnetics.circuit docstring).
+    s_band = np.zeros(size)
+    rc = core[1]
+    for sp in rg:
+        r0, r1, c0, c1 = box(sp)
+        layer = (c0 <= za1) & (c1 >= zb0) & (r0 >= rc) & (r1 <= pole_r)
+        mu = mu_f if sp.material == MRF else magnetic(sp.material, mats).mu_initial
+        s_band = s_band + np.where(layer, np.log(r1 / np.where(layer, r0, r1)) / mu, 0.0)
+    return Network(
+        turns=np.broadcast_to(np.asarray(rg.fields["coil_turns"], dtype=float), (size,)).copy(),
+        film_name=tuple(f.name for f in films), gap_eff=gap_eff,
+        gap_r0=gap_r0, gap_r1=gap_r1, gap_len=gap_len, fluid_k=fluid_k, fluid_w=fluid_w,
+        wall_k=wall_k, wall_w=wall_w, rung_k=rung_k, rung_w=rung_w, rung_lin=rung_lin,
+        core_k=core_k, core_w=core_w,
+        shell_k=np.concatenate(sk, axis=1), shell_w=np.concatenate(sw, axis=1),
+        back_k=back_k, back_w=back_w, window=1.0 / perm_w,
+        # Air outside the shell, in parallel with the back iron: with the potential along
+        # the shell's outer face linear over its length, flux from height s above the
+        # centre plane returns at −s on a half circle of length πs under an MMF ∝ s, so H
+        # is uniform and Φ = 2μ0·R·F (R the outer radius; a Roters-style flux-tube
+        # estimate, [roters1941] ch. 5; the end caps' rims ignored).
+        outer_air=1.0 / (2 * MU0 * at["outer"]),
+        band_len=band, band_reluctance=s_band,
+    )  # fmt: skip
+
+
+def _odd(mat: Magnetic, phi: FloatArray, k: FloatArray, w: FloatArray):  # type: ignore[no-untyped-def]
+    """Σ_j w·H(k·Φ) over the last axis and its Φ-derivative, for Φ of any sign (H odd)."""
+    a = np.abs(phi)[..., None]
+    h, dh = mat.h_dh(k * a)
+    f = (w * h).sum(-1)
+    d = (w * k * dh).sum(-1)
+    return np.copysign(f, phi), d
+
+
+def _residual(net: Network, mats, x: FloatArray, ni: FloatArray, rows=None):  # type: ignore[no-untyped-def]
+    """Loop MMF residuals (S, C, m + 2) at the loop fluxes x (films, window, outer air) and
+    the Jacobian: the chain's diagonal (…, m − 1) and off-diagonal (…, m − 1) for loops
+    0 … m − 2, and the dense block (…, 3, 3) of loops m − 1, window, outer air."""
+    steel, fluid = magnetic(net.steel, mats), magnetic(net.fluid, mats)
+    sel = (lambda a: a) if rows is None else (lambda a: a[rows])  # noqa: E731
+    ex = lambda a: sel(a)[:, None]  # noqa: E731  (S, 1, …): broadcast over currents
+    m = net.m
+    xl, xw, xo = x[..., :m], x[..., m], x[..., m + 1]
+    g, dg = _odd(fluid, xl, ex(net.fluid_k), ex(net.fluid_w))
+    s, ds = _odd(steel, xl, ex(net.wall_k), ex(net.wall_w))
+    g, dg = g + s, dg + ds
+    # rung fluxes, A → B: y0 = −x0 (core), y_i = x_{i−1} − x_i, y_m = x_{m−1} + x_w (shell)
+    y = np.concatenate([-xl[..., :1], xl[..., :-1] - xl[..., 1:], (xl[..., -1] + xw)[..., None]],
+                       axis=-1)  # fmt: skip
+    f, df = _odd(steel, y, ex(net.rung_k), ex(net.rung_w))
+    lin = ex(net.rung_lin)
+    f, df = f + lin * y, df + lin
+    c, dc = _odd(steel, y[..., 0], ex(net.core_k), ex(net.core_w))
+    f[..., 0] += c
+    df[..., 0] += dc
+    sh, dsh = _odd(steel, y[..., m], ex(net.shell_k), ex(net.shell_w))  # the poles
+    yb = y[..., m] - xo  # the back iron: the shell's flux less the outer air's
+    bk, dbk = _odd(steel, yb, ex(net.back_k), ex(net.back_w))
+    f[..., m] += sh + bk
+    win, air = sel(net.window)[:, None], sel(net.outer_air)[:, None]
+    res = np.empty_like(x)
+    res[..., :m] = g + f[..., 1:] - f[..., :-1]
+    res[..., m - 1] -= ni
+    res[..., m] = f[..., m] + win * xw - ni
+    res[..., m + 1] = air * xo - bk
+    dm = df[..., m] + dsh + dbk  # dF_shell/dy_m
+    diag = dg[..., : m - 1] + df[..., 1:m] + df[..., : m - 1]
+    off = -df[..., 1:m]
+    tail = np.empty((*x.shape[:-1], 3, 3))
+    tail[..., 0, 0] = dg[..., m - 1] + dm + df[..., m - 1]
+    tail[..., 0, 1] = tail[..., 1, 0] = dm
+    tail[..., 1, 1] = dm + win
+    tail[..., 0, 2] = tail[..., 2, 0] = tail[..., 1, 2] = tail[..., 2, 1] = -dbk
+    tail[..., 2, 2] = air + dbk
+    return res, (diag, off, tail)
+
+
+def _solve(jac, rhs: FloatArray) -> FloatArray:  # type: ignore[no-untyped-def]
+    """Solve J·d = rhs, J symmetric: a tridiagonal chain (loops 0 … m − 2) ending in a
+    dense 3 × 3 block (loop m − 1, window, outer air); Thomas down the chain, batched."""
+    diag, off, tail = jac
+    n = diag.shape[-1]  # m − 1 chain rows before the block
+    c = np.empty_like(off)
+    d = np.empty_like(rhs[..., :n])
+    for i in range(n):
+        b = diag[..., i] - (off[..., i - 1] * c[..., i - 1] if i else 0.0)
+        c[..., i] = off[..., i] / b
+        d[..., i] = (rhs[..., i] - (off[..., i - 1] * d[..., i - 1] if i else 0.0)) / b
+    blk = tail.copy()
+    r = rhs[..., n:].copy()
+    if n:
+        blk[..., 0, 0] -= off[..., n - 1] * c[..., n - 1]
+        r[..., 0] -= off[..., n - 1] * d[..., n - 1]
+    out = np.empty_like(rhs)
+    out[..., n:] = np.linalg.solve(blk, r[..., None])[..., 0]
+    for i in range(n - 1, -1, -1):
+        out[..., i] = d[..., i] - c[..., i] * out[..., i + 1]
+    return out
+
+
+def solve_network(
+    net: Network,
+    ampere_turns: ArrayLike,
+    materials: Mapping[str, Magnetic] | None = None,
+    rtol: float = 1e-10,
+    max_iter: int = 60,
+    start: FloatArray | None = None,
+) -> FloatArray:
+    """Loop fluxes (S, C, m + 2) (films, the window, the outer air) at ampere-turns (S, C).
+
+    Damped Newton: the full step, halved until the residual's norm falls (Armijo,
+    [nocedal-wright] §3.1); the Jacobian is SPD tridiagonal (co-energy Hessian). Started at
+    ``start`` or at the linear network's solution (initial permeabilities)."""
+    mats = MATERIALS if materials is None else materials
+    ni = np.atleast_2d(np.asarray(ampere_turns, dtype=float))
+    ni = np.broadcast_to(ni, (net.turns.size, ni.shape[-1])).copy()
+    if not np.all(np.isfinite(ni)):
+        raise ParameterError("current: must be finite")
+    shape = (*ni.shape, net.m + 2)
+    if start is None:
+        r0, j0 = _residual(net, mats, np.zeros(shape), ni)
+        x = _solve(j0, -r0)
+    else:
+        x = np.broadcast_to(np.asarray(start, dtype=float), shape).copy()
+    out = x.copy()
+    rows = np.arange(shape[0])
+    scale = np.maximum(np.abs(ni), 1e-300)[..., None]
+    res, jac = _residual(net, mats, x, ni)
+    for _ in range(max_iter):
+        err = np.max(np.abs(res) / scale, axis=-1)  # (S', C)
+        done = (err <= rtol).all(axis=1)
+        if done.any():
+            out[rows[done]] = x[done]
+            keep = ~done
+            rows, x, ni, scale = rows[keep], x[keep], ni[keep], scale[keep]
+            res, jac = res[keep], tuple(a[keep] for a in jac)
+            if rows.size == 0:
+                return out
+        step = _solve(jac, -res)
+        norm0 = np.sum((res / scale) ** 2, axis=-1)
+        t = np.ones(ni.shape)
+        for _ls in range(30):
+            xn = x + t[..., None] * step
+            rn, jn = _residual(net, mats, xn, ni, rows)
+            better = np.sum((rn / scale) ** 2, axis=-1) <= (1 - 1e-4 * t) * norm0
+            if better.all():
+                break
+            t = np.where(better, t, 0.5 * t)
+        x, res, jac = xn, rn, jn
+    bad = rows[: min(5, rows.size)]
+    raise NetworkConvergenceError(
+        f"network: no convergence in {max_iter} Newton steps for {rows.size} design(s) "
+        f"(rows {bad.tolist()}…); refusing their torque"
+    )
+
+
+def zone_mmf(net: Network, x: FloatArray, materials: Mapping[str, Magnetic] | None = None):  # type: ignore[no-untyped-def]
+    """Radial MMF (A) across the stack in each zone, (S, C, 2): Σ over the films and drum
+    walls of zone A (…, 0) and B (…, 1) at the loop fluxes ``x``."""
+    mats = MATERIALS if materials is None else materials
+    xl = np.abs(x[..., : net.m])  # (S, C, m)
+    out = []
+    for z in (0, 1):
+        f = sum(
+            _odd(magnetic(name, mats), xl, k[:, None, :, z : z + 1], w[:, None, :, z : z + 1])[0]
+            for name, k, w in ((net.fluid, net.fluid_k, net.fluid_w),
+                               (net.steel, net.wall_k, net.wall_w))
+        )  # fmt: skip
+        out.append(f.sum(-1))
+    return np.stack(out, axis=-1)
