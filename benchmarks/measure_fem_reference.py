@@ -23,7 +23,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from measure_circuit_map import AXES  # noqa: E402
+from measure_circuit_map import AXES
 
 CURRENTS = (2.0, 4.0, 7.0)
 CONVENTIONS = ("mid-line", "weakest-layer")
@@ -96,10 +96,7 @@ def main() -> None:
     print(file=sys.stderr)
 
     def rows(designs, results):  # type: ignore[no-untyped-def]
-        return [
-            {"design": d, "torque": r}
-            for d, r in zip(designs, results, strict=True)
-        ]
+        return [{"design": d, "torque": r} for d, r in zip(designs, results, strict=True)]
 
     data = {
         "about": (

@@ -43,7 +43,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from geometry.materials import MRF, STEEL
-from geometry.regions import ZONES, RegionSpec, Regions
+from geometry.regions import ZONES, Regions, RegionSpec
 from geometry.validation import ParameterError
 from magnetics.materials import MATERIALS, MU0, Magnetic, magnetic
 
@@ -261,7 +261,7 @@ def _residual(net: Network, mats, x: FloatArray, ni: FloatArray, rows=None):  # 
     the Jacobian: the chain's diagonal (…, m − 1) and off-diagonal (…, m − 1) for loops
     0 … m − 2, and the dense block (…, 3, 3) of loops m − 1, window, outer air."""
     steel, fluid = magnetic(net.steel, mats), magnetic(net.fluid, mats)
-    sel = (lambda a: a) if rows is None else (lambda a: a[rows])  # noqa: E731
+    sel = (lambda a: a) if rows is None else (lambda a: a[rows])
     ex = lambda a: sel(a)[:, None]  # noqa: E731  (S, 1, …): broadcast over currents
     m = net.m
     xl, xw, xo = x[..., :m], x[..., m], x[..., m + 1]
@@ -349,15 +349,18 @@ def solve_network(
     out = x.copy()
     rows = np.arange(shape[0])
     scale = np.maximum(np.abs(ni), 1e-300)[..., None]
+    if x.size == 0:  # no design (or no current): nothing to solve
+        return out
     res, jac = _residual(net, mats, x, ni)
+    stalled = np.zeros(ni.shape, bool)  # the last step moved x by ≤ rtol (rounding floor)
     for _ in range(max_iter):
         err = np.max(np.abs(res) / scale, axis=-1)  # (S', C)
-        done = (err <= rtol).all(axis=1)
+        done = ((err <= rtol) | stalled).all(axis=1)
         if done.any():
             out[rows[done]] = x[done]
             keep = ~done
             rows, x, ni, scale = rows[keep], x[keep], ni[keep], scale[keep]
-            res, jac = res[keep], tuple(a[keep] for a in jac)
+            res, jac, stalled = res[keep], tuple(a[keep] for a in jac), stalled[keep]
             if rows.size == 0:
                 return out
         step = _solve(jac, -res)
@@ -370,6 +373,9 @@ def solve_network(
             if better.all():
                 break
             t = np.where(better, t, 0.5 * t)
+        # at the rounding floor the residual is noise: the full Newton correction is then
+        # negligible against x, which is the answer to working precision
+        stalled = np.max(np.abs(step), axis=-1) <= rtol * np.max(np.abs(x), axis=-1)
         x, res, jac = xn, rn, jn
     bad = rows[: min(5, rows.size)]
     raise NetworkConvergenceError(

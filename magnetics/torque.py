@@ -117,7 +117,8 @@ def torque_curve(
     convention: str = DEFAULT_CONVENTION,
 ) -> TorqueCurve:
     """Torque of ``clutch`` (or its already built section) at ``currents`` (A) by the
-    circuit, the network or the FEM (``METHODS``), the drag at ``speed_rpm`` and fluid ``temperature`` (°C) added.
+    circuit, the network or the FEM (``METHODS``), the drag at ``speed_rpm`` and fluid
+    ``temperature`` (°C) added.
     ``fem_mesh``: the FEM's "uniform" grid (the error map's reference) or its "graded" one
     (as accurate at the same ``fem_size`` on the paper preset with ~3× fewer unknowns,
     magnetics.fem.grid; benchmarks/bench_fem_speed.py). ``convention``: how each gap's

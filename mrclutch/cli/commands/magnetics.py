@@ -50,8 +50,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument(
         "--method",
         default="circuit",
-        help="circuit (default), fem, or both (the circuit checked against the FEM: both "
-        "curves, and the largest relative difference)",
+        help="circuit (default), network (the reluctance network built from the section: "
+        "closer to the FEM off the paper preset, docs/magnetics.md), fem, or both (the "
+        "circuit checked against the FEM: both curves, and the largest relative difference)",
     )
     p.add_argument("--speed-rpm", type=float, default=530.0, help="slip speed (rpm)")
     p.add_argument(
@@ -73,7 +74,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def _torque(args: argparse.Namespace) -> int:
-    check_choice("--method", args.method, ("circuit", "fem", "both"))
+    check_choice("--method", args.method, ("circuit", "network", "fem", "both"))
     check_range("--speed-rpm", args.speed_rpm, 0.0, 1e5, " rpm")
     currents = _parse_currents(args.current)
     clutch = load_clutch(args)

@@ -1,0 +1,257 @@
+"""The reluctance network (magnetics.network): closed forms in the linear limit, the
+ladder's solve against an independent nodal solve, limits and robustness, refusal, and its
+measured error against the stored FEM reference (benchmarks/data/fem_reference.json)."""
+
+import json
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from geometry.params import broadcast_fields, preset
+from geometry.regions import evaluate
+from magnetics.circuit import path_from_regions, solve_flux
+from magnetics.materials import MU0, linear_materials
+from magnetics.network import (
+    NetworkConvergenceError,
+    network_from_regions,
+    solve_network,
+)
+from magnetics.torque import network_torque_batch, torque_curve
+
+PAPER = preset("paper")
+BENCH = Path(__file__).resolve().parents[2] / "benchmarks"
+
+
+def _regions(clutch=PAPER, **kw):  # type: ignore[no-untyped-def]
+    c = replace(clutch, **kw)
+    p = broadcast_fields({k: np.array([v], float) for k, v in vars(c).items()})
+    return c, evaluate(p, c.n_drums)
+
+
+def _single_loop(net):  # type: ignore[no-untyped-def]
+    """The ladder with its rungs, window and outer air all but open (1e12 /H, ≥ 10⁴× the
+    elements': they carry < 5e-5 of the flux; truly open paths make the system singular)."""
+    big = lambda a: np.full_like(a, 1e12)  # noqa: E731
+    return replace(net, rung_lin=np.where(np.arange(net.m + 1) % net.m == 0, 0.0, 1e12)[None]
+                   + 0 * net.rung_lin, window=big(net.window), outer_air=big(net.outer_air))  # fmt: skip
+
+
+@settings(max_examples=20, deadline=None)
+@given(
+    n=st.integers(1, 6),
+    gap_mm=st.floats(0.1, 1.0),  # the loop's reluctance ≤ 1e-4 of the nearly open paths'
+    mu_s=st.floats(200, 5000),
+    mu_f=st.floats(2, 10),
+    i=st.floats(1e-3, 100),
+)
+def test_linear_series_loop_closed_form(n, gap_mm, mu_s, mu_f, i):
+    """Linear materials, no leakage: every film carries Φ = N·I/ΣR, R of each element from
+    its geometry — ln(r1/r0)/(2πμL) radially ([roters1941] ch. 5), l/(μA) axially (the core
+    and the drums' flux building up linearly over a zone count half the zone) — to 5e-5
+    (the leakage left through the nearly open paths, ``_single_loop``)."""
+    c, rg = _regions(n_drums=n, gap=gap_mm * 1e-3)
+    mats = linear_materials(mu_s, mu_f)
+    net = _single_loop(network_from_regions(rg, mats, fringing=False))
+    x = solve_network(net, [[c.coil_turns * i]], mats)[0, 0]
+    a = {k: float(np.asarray(v).ravel()[0]) for k, v in rg.at.items()}
+    ms, mf = MU0 * mu_s, MU0 * mu_f
+    za, zb = a["zone_A1"] - a["zone_A0"], a["zone_B1"] - a["zone_B0"]
+    band = a["zone_B0"] - a["zone_A1"]
+    rsum = 0.0
+    for k in range(2 * n):  # films: core|out1|in1|…|outN|shell
+        r0, r1 = a[f"rho{2 * k}"], a[f"rho{2 * k + 1}"]
+        for length in (za + (a["zone_A0"] - a["hub_back"] if k == 2 * n - 1 else 0.0), zb):
+            rsum += np.log(r1 / r0) / (2 * np.pi * mf * length)
+        if k:  # the drum wall inside film k, radially in both zones
+            w0, w1 = a[f"rho{2 * k - 1}"], a[f"rho{2 * k}"]
+            rsum += np.log(w1 / w0) / (2 * np.pi * ms) * (1 / za + 1 / zb)
+    rc = a["rho0"]
+    rsum += (band + za / 2 + zb / 2) / (ms * np.pi * rc**2)  # core
+    back = a["coil_out"]
+    for z0, z1 in ((a["cap_front"], a["zone_A1"]), (a["zone_B0"], a["cap_back"])):  # poles
+        rsum += np.log(back / a[f"rho{4 * n - 1}"]) / (2 * np.pi * ms * (z1 - z0))
+    rsum += (0.5 * (a["zone_B0"] + a["zone_B1"]) - 0.5 * (a["zone_A0"] + a["zone_A1"])) / (
+        ms * np.pi * (a["outer"] ** 2 - back**2)
+    )
+    phi = c.coil_turns * i / rsum
+    np.testing.assert_allclose(x[: net.m], phi, rtol=5e-5)
+
+
+def test_single_loop_limit_equals_the_old_loop():
+    """Rungs, window and air open and no fringing: the ladder is the single loop of
+    magnetics.circuit without its leakage, to 5e-5 (``_single_loop``), with linear
+    materials: with saturating steel the two differ on purpose (the ladder's core and
+    drums carry flux that builds up along each zone, the loop's core the full flux)."""
+    c, rg = _regions()
+    mats = linear_materials(800.0, 4.0)
+    net = _single_loop(network_from_regions(rg, mats, fringing=False))
+    path = path_from_regions(rg, mats)
+    path = replace(path, leak_permeance=np.zeros_like(path.leak_permeance))
+    for i in (0.5, 3.0, 7.0):
+        ni = [[c.coil_turns * i]]
+        x = solve_network(net, ni, mats)[0, 0]
+        phi = solve_flux(path, ni, mats)[0, 0]
+        np.testing.assert_allclose(x[: net.m], phi, rtol=5e-5)
+
+
+def _nodal(net, mats, ni):  # type: ignore[no-untyped-def]
+    """Independent check: the linear ladder by node potentials (dense solve). Nodes: each
+    wall in zone A and B (core … pole), the back-iron end B; the coil's N·I in the poles."""
+    s = 0
+    m = net.m
+    mu = {k: v.mu_initial for k, v in mats.items()}
+    rel = lambda kk, ww, name: float(np.sum(ww * kk)) / mu[name]  # noqa: E731  Σ w k/μ
+    # nodes: A0..Am, B0..Bm, O (the back iron's B end; A-side end is pole A = Am)
+    idx = lambda z, i: z * (m + 1) + i  # noqa: E731
+    nn = 2 * (m + 1) + 1
+    o = nn - 1
+    g = np.zeros((nn, nn))
+    rhs = np.zeros(nn)
+
+    def branch(a, b, r, src=0.0):  # flux a → b = (U_a − U_b + src)/r
+        nonlocal g, rhs
+        y = 1.0 / r
+        g[a, a] += y
+        g[b, b] += y
+        g[a, b] -= y
+        g[b, a] -= y
+        rhs[a] -= src * y
+        rhs[b] += src * y
+
+    for k in range(m):
+        for z in (0, 1):
+            r = rel(net.fluid_k[s, k, z], net.fluid_w[s, k, z], net.fluid)
+            r += rel(net.wall_k[s, k, z], net.wall_w[s, k, z], net.steel)
+            branch(idx(z, k), idx(z, k + 1), r)
+    for i in range(1, m):
+        r = rel(net.rung_k[s, i], net.rung_w[s, i], net.steel) + net.rung_lin[s, i]
+        branch(idx(0, i), idx(1, i), r)
+    branch(idx(0, 0), idx(1, 0), rel(net.core_k[s], net.core_w[s], net.steel))
+    # shell: pole A (Am) → back iron → O, then pole B (O → Bm), the coil's N·I in between
+    poles = rel(net.shell_k[s], net.shell_w[s], net.steel)
+    back = rel(net.back_k[s], net.back_w[s], net.steel)
+    branch(idx(0, m), o, back)
+    branch(o, idx(1, m), poles, src=0.0)
+    branch(o, idx(1, m), 1e300)  # (keeps O connected if poles were open)
+    # window: B pole side → A pole side, with the coil's N·I driving the whole shell loop
+    # loop: Am → (back) → O → (poles) → Bm → (window) → Am encloses N·I: put it on the poles
+    g2, rhs2 = g.copy(), rhs.copy()
+    g, rhs = g2, rhs2
+    branch(idx(1, m), idx(0, m), net.window[s])
+    branch(idx(0, m), o, net.outer_air[s])
+    # the source: N·I on the pole branch, O → Bm
+    y = 1.0 / poles
+    rhs[o] += ni * y
+    rhs[idx(1, m)] -= ni * y
+    g[0, :] = 0
+    g[0, 0] = 1.0
+    rhs[0] = 0.0  # ground core A
+    u = np.linalg.solve(g, rhs)
+    return np.array([
+        (u[idx(0, k)] - u[idx(0, k + 1)]) / (rel(net.fluid_k[s, k, 0], net.fluid_w[s, k, 0],
+                                                  net.fluid)
+                                            + rel(net.wall_k[s, k, 0], net.wall_w[s, k, 0],
+                                                  net.steel))
+        for k in range(m)
+    ])  # fmt: skip
+
+
+@pytest.mark.parametrize("n", [1, 2, 4, 7])
+def test_ladder_solve_against_an_independent_nodal_solve(n):
+    """Linear materials: the loop-flux ladder (Thomas + 3×3 tail) equals a dense node-
+    potential solve of the same elements to 1e-9, with every leakage path present."""
+    c, rg = _regions(n_drums=n)
+    mats = linear_materials(800.0, 4.0)
+    net = network_from_regions(rg, mats)
+    ni = c.coil_turns * 3.0
+    x = solve_network(net, [[ni]], mats, rtol=1e-14)[0, 0]
+    # loop fluxes are the zone-A film fluxes, flowing from core to pole (potential falls)
+    np.testing.assert_allclose(np.abs(x[: net.m]), np.abs(_nodal(net, mats, ni)), rtol=1e-9)
+
+
+def test_linear_in_current_below_the_knee():
+    """Below the first B–H point the network is linear: flux ∝ current (to 1e-9)."""
+    _, rg = _regions()
+    net = network_from_regions(rg)
+    x = solve_network(net, [[1e-6, 2e-6]], rtol=1e-14)[0]
+    np.testing.assert_allclose(x[1], 2 * x[0], rtol=1e-9)
+
+
+@settings(max_examples=15, deadline=None)
+@given(
+    n=st.integers(1, 8),
+    gap_mm=st.floats(0.05, 2.0),
+    thick_mm=st.floats(0.1, 0.8),
+)
+def test_finite_and_monotone_in_current_or_refused(n, gap_mm, thick_mm):
+    """0 A … 1000 A, 1–8 drums, gaps 0.05–2 mm: the torque is finite and never falls with
+    the current, or the design is refused (NaN: it fails validation)."""
+    fields = {**vars(PAPER), "n_drums": n, "gap": gap_mm * 1e-3, "drum_thickness": thick_mm * 1e-3}
+    cur = [0.0, 1e-6, 0.5, 2.0, 7.0, 100.0, 1000.0]
+    t = network_torque_batch({k: np.array([v], float) for k, v in fields.items()}, cur)[0]
+    if np.isnan(t).any():
+        assert np.isnan(t).all()  # refused as a whole design, never a partial answer
+        return
+    assert np.all(np.isfinite(t)) and t[0] == 0.0
+    assert np.all(np.diff(t) >= -1e-12 * t.max())
+
+
+def test_no_convergence_is_refused_with_the_rows_named():
+    _, rg = _regions(n_drums=6, gap=0.1e-3)
+    net = network_from_regions(rg)
+    with pytest.raises(NetworkConvergenceError, match="refusing their torque"):
+        solve_network(net, [[net.turns[0] * 1000.0]], max_iter=1)
+
+
+def test_torque_curve_network_is_a_batch_of_one():
+    c = replace(PAPER, n_drums=4, gap=0.4e-3)
+    one = torque_curve(c, [2.0, 7.0], method="network").yield_torque
+    batch = network_torque_batch({k: np.array([v], float) for k, v in vars(c).items()},
+                                 [2.0, 7.0])[0]  # fmt: skip
+    np.testing.assert_allclose(one, batch, rtol=1e-12)
+
+
+# ---- against the stored FEM reference (measured, not tuned) ------------------------------
+
+
+@pytest.fixture(scope="module")
+def measured():  # type: ignore[no-untyped-def]
+    sys.path.insert(0, str(BENCH))
+    try:
+        import measure_network as mn
+    finally:
+        sys.path.remove(str(BENCH))
+    return {m: mn.errors(m) for m in ("network", "circuit")}
+
+
+def test_network_against_the_fem_reference(measured):
+    """Torque at 2, 4, 7 A against the FEM (0.25 mm, mid-line) on the 648-design grid and
+    200 random designs (benchmarks/measure_network.py). Measured: within ±10 % on 70 % of
+    the grid and 80 % of the random designs, worst −28 … +67 %; the single loop 39 %, 38 %,
+    worst −86 … +77 %. The issue's goal (±5 % on ≥ 90 %, ±10 % on all) is not met."""
+    err, rnd, _ = measured["network"]
+    old, _, _ = measured["circuit"]
+    within = lambda e: float(np.mean(np.abs(e) <= 0.10))  # noqa: E731
+    assert within(err[~rnd]) >= 0.68 and within(err[rnd]) >= 0.78
+    assert np.abs(err).max() <= 0.70
+    for sel in (~rnd, rnd):  # better than the single loop on both sets, by far
+        assert within(err[sel]) >= within(old[sel]) + 0.25
+
+
+def test_network_is_at_least_as_good_as_the_loop_at_five_or_more_drums(measured):
+    """Where the loop fails worst (5–6 drums: it is within ±10 % on 17–24 % of the grid)."""
+    err, rnd, f = measured["network"]
+    old, _, _ = measured["circuit"]
+    many = (f["n_drums"] >= 5) & ~rnd
+    assert np.mean(np.abs(err[many]) <= 0.1) >= 0.75 > np.mean(np.abs(old[many]) <= 0.1)
+
+
+def test_reference_data_is_the_stored_measurement():
+    data = json.loads((BENCH / "data" / "fem_reference.json").read_text())
+    assert data["currents_A"] == [2.0, 4.0, 7.0] and len(data["grid"]) == 648
+    assert len(data["random"]) == 200
