@@ -37,8 +37,8 @@ def _single_loop(net):  # type: ignore[no-untyped-def]
     """The ladder with its rungs, window and outer air all but open (1e12 /H, ≥ 10⁴× the
     elements': they carry < 5e-5 of the flux; truly open paths make the system singular)."""
     big = lambda a: np.full_like(a, 1e12)  # noqa: E731
-    return replace(net, rung_lin=np.where(np.arange(net.m + 1) % net.m == 0, 0.0, 1e12)[None]
-                   + 0 * net.rung_lin, window=big(net.window), outer_air=big(net.outer_air))  # fmt: skip
+    rungs = np.where(np.arange(net.m + 1) % net.m == 0, 0.0, 1e12)[None] + 0 * net.rung_lin
+    return replace(net, rung_lin=rungs, window=big(net.window), outer_air=big(net.outer_air))
 
 
 @settings(max_examples=20, deadline=None)

@@ -1,0 +1,52 @@
+"""Speed of the reluctance network against the single loop: yield torque of 10⁵ random
+designs (the sweep's ranges, 1–6 drums) at 3 currents, designs per second on one core, and
+the ratio, measured in one run (alternating rounds; the best of each).
+
+    OPENBLAS_NUM_THREADS=1 python benchmarks/bench_network.py [--designs 100000] [--rounds 3]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+
+def designs(n: int, seed: int = 1) -> dict[str, np.ndarray]:
+    from mrclutch.design import design_preset
+
+    base = vars(design_preset("paper").clutch)
+    rng = np.random.default_rng(seed)
+    f = {k: np.full(n, float(v)) for k, v in base.items()}
+    f["n_drums"] = rng.integers(1, 7, n).astype(float)
+    f["gap"] = rng.uniform(0.2e-3, 1.0e-3, n)
+    f["zone_length"] = rng.uniform(3e-3, 9e-3, n)
+    f["drum_inner_diameter"] = rng.uniform(6e-3, 18e-3, n)
+    f["drum_thickness"] = rng.uniform(0.1e-3, 0.6e-3, n)
+    return f
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--designs", type=int, default=100_000)
+    ap.add_argument("--rounds", type=int, default=3)
+    a = ap.parse_args()
+    from magnetics.torque import network_torque_batch, torque_grid_batch
+
+    f = designs(a.designs)
+    cur = [2.0, 4.0, 7.0]
+    best = {"network": np.inf, "loop": np.inf}
+    for _ in range(a.rounds):
+        for name, fn in (("network", network_torque_batch), ("loop", torque_grid_batch)):
+            t0 = time.perf_counter()
+            out = fn(f, cur)
+            best[name] = min(best[name], time.perf_counter() - t0)
+            assert np.isfinite(out).mean() > 0.9
+    for name, t in best.items():
+        print(f"{name}: {t:.2f} s, {a.designs / t:,.0f} designs/s (× 3 currents)")
+    print(f"ratio network/loop time: {best['network'] / best['loop']:.2f}")
+
+
+if __name__ == "__main__":
+    main()
