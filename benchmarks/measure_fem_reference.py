@@ -17,7 +17,6 @@ import argparse
 import datetime
 import itertools
 import json
-import math
 import sys
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -120,8 +119,6 @@ def main() -> None:
     tmp.replace(OUT)
     bad = sum(r is None for r in res)
     print(f"wrote {OUT}: {len(work)} designs, {bad} invalid", file=sys.stderr)
-    assert not any(isinstance(x, float) and math.isnan(x) for r in res if r for v in r.values()
-                   for x in v)  # fmt: skip
 
 
 if __name__ == "__main__":

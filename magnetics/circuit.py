@@ -110,6 +110,26 @@ def _leak_permeance(
     return (0.5 * (mu_fluid * fluid_area + MU0 * nonmag_stack) + MU0 * window) / band
 
 
+def band_series_reluctance(
+    rg: Regions, materials: Mapping[str, Magnetic] | None = None
+) -> FloatArray:
+    """S_b = Σ ln(ro/ri)/μ (initial μ) over the regions that span the band axially between
+    the core and the pole radius: the band's radial series reluctance per radian and metre
+    (the band field of the module docstring), shape S."""
+    mats = MATERIALS if materials is None else materials
+    size = np.size(rg.at["outer"])
+    at = {k: np.broadcast_to(np.asarray(v, dtype=float), (size,)) for k, v in rg.at.items()}
+    (_, _, za1), (_, zb0, _) = ZONES
+    rc, rp = rg.core_radius, rg.pole_radius
+    s_band = np.zeros(size)
+    for sp in rg:
+        r0, r1 = at[sp.r0], at[sp.r1]
+        layer = (at[sp.z0] <= at[za1]) & (at[sp.z1] >= at[zb0]) & (r0 >= rc) & (r1 <= rp)
+        mu = magnetic(sp.material, mats).mu_initial
+        s_band = s_band + np.where(layer, np.log(r1 / np.where(layer, r0, r1)) / mu, 0.0)
+    return s_band
+
+
 def path_from_regions(rg: Regions, materials: Mapping[str, Magnetic] | None = None) -> MagneticPath:
     """The loop of the designs of one region table (S designs of one drum count).
 
@@ -165,15 +185,13 @@ def path_from_regions(rg: Regions, materials: Mapping[str, Magnetic] | None = No
     (_, za0, za1), (_, zb0, _) = zones
     band = zb0 - za1
     mu_f = magnetic(FLUID, mats).mu_initial
-    fluid_area = nonmag = window = s_band = np.zeros(size)
+    fluid_area = nonmag = window = np.zeros(size)
     rc, rp = core[1], pole_a[0]
     for sp in rg:
         r0, r1, a0, a1 = box(sp)
         spans = (a0 <= za1) & (a1 >= zb0) & (r0 >= rc)
         area = np.pi * (r1**2 - r0**2)
         layer = spans & (r1 <= rp)
-        mu = mu_f if sp.material == FLUID else magnetic(sp.material, mats).mu_initial
-        s_band = s_band + np.where(layer, np.log(r1 / np.where(layer, r0, r1)) / mu, 0.0)
         if sp.material == FLUID:
             fluid_area = fluid_area + np.where(layer, area, 0.0)
         elif sp.material != STEEL:
@@ -193,7 +211,7 @@ def path_from_regions(rg: Regions, materials: Mapping[str, Magnetic] | None = No
         core_area=np.pi * rc**2, core_len=zc[1] - zc[0],
         back_area=np.pi * (back[1] ** 2 - back[0] ** 2), back_len=zc[1] - zc[0],
         leak_permeance=_leak_permeance(mu_f, band, fluid_area, nonmag, window),
-        band_len=band, band_reluctance=s_band,
+        band_len=band, band_reluctance=band_series_reluctance(rg, mats),
         steel=STEEL, fluid=FLUID,
     )  # fmt: skip
 

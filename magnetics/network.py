@@ -45,6 +45,7 @@ from numpy.typing import ArrayLike, NDArray
 from geometry.materials import MRF, STEEL
 from geometry.regions import ZONES, Regions, RegionSpec
 from geometry.validation import ParameterError
+from magnetics.circuit import band_series_reluctance
 from magnetics.materials import MATERIALS, MU0, Magnetic, magnetic
 
 FloatArray = NDArray[np.float64]
@@ -171,7 +172,7 @@ def network_from_regions(
                 rung_w[:, k, z] = lw
     # Rungs' band: regions spanning the band on a wall's stations, and half of each
     # neighbouring film (linear, initial μ), μA/l.
-    mu_f = magnetic(MRF, mats).mu_initial
+    mu = {sp.material: magnetic(sp.material, mats).mu_initial for sp in rg}  # initial μ
     spans = [sp for sp in rg if sp.material != STEEL]
     for k in range(1, m):
         w = wall(films[k].walls[0], "A")
@@ -179,7 +180,6 @@ def network_from_regions(
         for sp in spans:
             r0, r1, c0, c1 = box(sp)
             across = (c0 <= za1) & (c1 >= zb0)
-            mu = mu_f if sp.material == MRF else magnetic(sp.material, mats).mu_initial
             area = np.pi * (r1**2 - r0**2)
             if sp.r0 == w.r0 and sp.r1 == w.r1:
                 share = 1.0
@@ -187,7 +187,7 @@ def network_from_regions(
                 share = 0.5
             else:
                 continue
-            perm = perm + np.where(across, share * mu * area / band, 0.0)
+            perm = perm + np.where(across, share * mu[sp.material] * area / band, 0.0)
         rung_lin[:, k] = 1.0 / perm
     core = box(steel["core"])
     core_area = np.pi * core[1] ** 2
@@ -206,29 +206,19 @@ def network_from_regions(
     # Coil window: sleeve and coil between the pole radius and the back iron, half the
     # outer film over the band. In the coil the band's MMF falls linearly from the inner to
     # the outer winding radius, so a ring at r carries μ·(ro − r)/d of the sleeve's field.
-    pole_r = at[films[-1].r1]
     perm_w = np.zeros(size)
     for sp in spans:
         r0, r1, c0, c1 = box(sp)
         across = (c0 <= za1) & (c1 >= zb0)
-        mu = mu_f if sp.material == MRF else magnetic(sp.material, mats).mu_initial
         if sp.film == "cylinder" and sp.r1 == films[-1].r1:
-            perm_w = perm_w + np.where(across, 0.5 * mu * np.pi * (r1**2 - r0**2) / band, 0.0)
-        elif sp.part == "coil":
-            d = r1 - r0
-            # ∫ 2πr (r1 − r)/d dr = π(r1 − r0)(r1 + 2 r0)/3·… exactly: π d (r1 + 2 r0)/3
-            perm_w = perm_w + np.where(across, mu * np.pi * d * (r1 + 2 * r0) / 3 / band, 0.0)
-        elif r0 is not None and sp.r0 == films[-1].r1 and sp.part == "housing":
-            perm_w = perm_w + np.where(across & (r1 <= back[0] + 1e-15) & (r0 >= pole_r - 1e-15),
-                                       mu * np.pi * (r1**2 - r0**2) / band, 0.0)  # fmt: skip
-    # Band reluctance S_b for the band field in the torque (magnetics.circuit docstring).
-    s_band = np.zeros(size)
-    rc = core[1]
-    for sp in rg:
-        r0, r1, c0, c1 = box(sp)
-        layer = (c0 <= za1) & (c1 >= zb0) & (r0 >= rc) & (r1 <= pole_r)
-        mu = mu_f if sp.material == MRF else magnetic(sp.material, mats).mu_initial
-        s_band = s_band + np.where(layer, np.log(r1 / np.where(layer, r0, r1)) / mu, 0.0)
+            area = 0.5 * np.pi * (r1**2 - r0**2)
+        elif sp.part == "coil":  # ∫ 2πr·(r1 − r)/d dr over the coil = π·d·(r1 + 2 r0)/3
+            area = np.pi * (r1 - r0) * (r1 + 2 * r0) / 3
+        elif sp.r0 == films[-1].r1:  # the sleeve, on the pole radius over the band
+            area = np.pi * (r1**2 - r0**2)
+        else:
+            continue
+        perm_w = perm_w + np.where(across, mu[sp.material] * area / band, 0.0)
     return Network(
         turns=np.broadcast_to(np.asarray(rg.fields["coil_turns"], dtype=float), (size,)).copy(),
         film_name=tuple(f.name for f in films), gap_eff=gap_eff,
@@ -243,7 +233,7 @@ def network_from_regions(
         # is uniform and Φ = 2μ0·R·F (R the outer radius; a Roters-style flux-tube
         # estimate, [roters1941] ch. 5; the end caps' rims ignored).
         outer_air=1.0 / (2 * MU0 * at["outer"]),
-        band_len=band, band_reluctance=s_band,
+        band_len=band, band_reluctance=band_series_reluctance(rg, mats),
     )  # fmt: skip
 
 

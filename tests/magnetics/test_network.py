@@ -34,10 +34,10 @@ def _regions(clutch=PAPER, **kw):  # type: ignore[no-untyped-def]
 
 
 def _single_loop(net):  # type: ignore[no-untyped-def]
-    """The ladder with its rungs, window and outer air all but open (1e12 /H, ≥ 10⁴× the
+    """The ladder with its rungs, window and outer air all but open (1e13 /H, ≥ 10⁵× the
     elements': they carry < 5e-5 of the flux; truly open paths make the system singular)."""
-    big = lambda a: np.full_like(a, 1e12)  # noqa: E731
-    rungs = np.where(np.arange(net.m + 1) % net.m == 0, 0.0, 1e12)[None] + 0 * net.rung_lin
+    big = lambda a: np.full_like(a, 1e13)  # noqa: E731
+    rungs = np.where(np.arange(net.m + 1) % net.m == 0, 0.0, 1e13)[None] + 0 * net.rung_lin
     return replace(net, rung_lin=rungs, window=big(net.window), outer_air=big(net.outer_air))
 
 
@@ -113,15 +113,12 @@ def _nodal(net, mats, ni):  # type: ignore[no-untyped-def]
     g = np.zeros((nn, nn))
     rhs = np.zeros(nn)
 
-    def branch(a, b, r, src=0.0):  # flux a → b = (U_a − U_b + src)/r
-        nonlocal g, rhs
+    def branch(a, b, r):  # flux a → b = (U_a − U_b)/r
         y = 1.0 / r
         g[a, a] += y
         g[b, b] += y
         g[a, b] -= y
         g[b, a] -= y
-        rhs[a] -= src * y
-        rhs[b] += src * y
 
     for k in range(m):
         for z in (0, 1):
@@ -132,22 +129,15 @@ def _nodal(net, mats, ni):  # type: ignore[no-untyped-def]
         r = rel(net.rung_k[s, i], net.rung_w[s, i], net.steel) + net.rung_lin[s, i]
         branch(idx(0, i), idx(1, i), r)
     branch(idx(0, 0), idx(1, 0), rel(net.core_k[s], net.core_w[s], net.steel))
-    # shell: pole A (Am) → back iron → O, then pole B (O → Bm), the coil's N·I in between
+    # shell: pole A (Am) → back iron → O → poles → Bm; the outer air beside the back iron,
+    # the window from pole B back to pole A; the coil's N·I drives the pole branch O → Bm
     poles = rel(net.shell_k[s], net.shell_w[s], net.steel)
-    back = rel(net.back_k[s], net.back_w[s], net.steel)
-    branch(idx(0, m), o, back)
-    branch(o, idx(1, m), poles, src=0.0)
-    branch(o, idx(1, m), 1e300)  # (keeps O connected if poles were open)
-    # window: B pole side → A pole side, with the coil's N·I driving the whole shell loop
-    # loop: Am → (back) → O → (poles) → Bm → (window) → Am encloses N·I: put it on the poles
-    g2, rhs2 = g.copy(), rhs.copy()
-    g, rhs = g2, rhs2
+    branch(idx(0, m), o, rel(net.back_k[s], net.back_w[s], net.steel))
+    branch(o, idx(1, m), poles)
     branch(idx(1, m), idx(0, m), net.window[s])
     branch(idx(0, m), o, net.outer_air[s])
-    # the source: N·I on the pole branch, O → Bm
-    y = 1.0 / poles
-    rhs[o] += ni * y
-    rhs[idx(1, m)] -= ni * y
+    rhs[o] += ni / poles
+    rhs[idx(1, m)] -= ni / poles
     g[0, :] = 0
     g[0, 0] = 1.0
     rhs[0] = 0.0  # ground core A
