@@ -45,7 +45,6 @@ from numpy.typing import ArrayLike, NDArray
 from geometry.materials import MRF, STEEL
 from geometry.regions import ZONES, Regions, RegionSpec
 from geometry.validation import ParameterError
-from magnetics.circuit import band_series_reluctance
 from magnetics.materials import MATERIALS, MU0, Magnetic, magnetic
 
 FloatArray = NDArray[np.float64]
@@ -70,6 +69,7 @@ class Network:
     gap_r1: FloatArray  # (S, m)
     gap_len: FloatArray  # (S, m, 2) length carrying flux in zone A, B
     gap_eff: FloatArray  # (S, m, 2) the same plus the fringing length at its ends
+    fringe_h: FloatArray  # (S, m, 2, 2) fluid depth past the overlap's two ends, each zone
     fluid_k: FloatArray  # (S, m, 2)
     fluid_w: FloatArray
     wall_k: FloatArray  # (S, m, 2) steel wall inside film k, radially, zones A and B
@@ -85,8 +85,6 @@ class Network:
     back_w: FloatArray
     window: FloatArray  # (S,) reluctance of the coil window, 1/H
     outer_air: FloatArray  # (S,) reluctance of the air outside the shell, 1/H
-    band_len: FloatArray  # (S,)
-    band_reluctance: FloatArray  # (S,) S_b = Σ ln(ro/ri)/μ over the band's layers
     steel: str = STEEL
     fluid: str = MRF
 
@@ -128,6 +126,7 @@ def network_from_regions(
 
     zeros = lambda *shape: np.zeros((size, *shape))  # noqa: E731
     gap_len, gap_eff, fluid_k, fluid_w = zeros(m, 2), zeros(m, 2), zeros(m, 2), zeros(m, 2)
+    fringe_h = zeros(m, 2, 2)
     wall_k, wall_w = zeros(m, 2), zeros(m, 2)
     rung_k, rung_w, rung_lin = zeros(m + 1, 2), zeros(m + 1, 2), zeros(m + 1)
     gap_r0 = np.stack([at[f.r0] for f in films], axis=1)
@@ -152,6 +151,9 @@ def network_from_regions(
             h_hi = np.maximum(np.minimum(g1, mid if not z else g1) - hi, 0.0)
             fringe = (gap / np.pi) * (np.log1p(np.pi * h_lo / gap) + np.log1p(np.pi * h_hi / gap))
             eff = length + (fringe if fringing else 0.0)
+            if fringing:
+                ok = (length > 0)[:, None]
+                fringe_h[:, k, z] = np.where(ok, np.stack([h_lo, h_hi], axis=-1), 0.0)
             gap_eff[:, k, z] = np.where(length > 0, eff, 0.0)
             # 1 Gauss point in ln r: exact for a linear material ([roters1941] ch. 5)
             rg_ = np.sqrt(r0 * r1)
@@ -221,7 +223,7 @@ def network_from_regions(
         perm_w = perm_w + np.where(across, mu[sp.material] * area / band, 0.0)
     return Network(
         turns=np.broadcast_to(np.asarray(rg.fields["coil_turns"], dtype=float), (size,)).copy(),
-        film_name=tuple(f.name for f in films), gap_eff=gap_eff,
+        film_name=tuple(f.name for f in films), gap_eff=gap_eff, fringe_h=fringe_h,
         gap_r0=gap_r0, gap_r1=gap_r1, gap_len=gap_len, fluid_k=fluid_k, fluid_w=fluid_w,
         wall_k=wall_k, wall_w=wall_w, rung_k=rung_k, rung_w=rung_w, rung_lin=rung_lin,
         core_k=core_k, core_w=core_w,
@@ -233,7 +235,6 @@ def network_from_regions(
         # is uniform and Φ = 2μ0·R·F (R the outer radius; a Roters-style flux-tube
         # estimate, [roters1941] ch. 5; the end caps' rims ignored).
         outer_air=1.0 / (2 * MU0 * at["outer"]),
-        band_len=band, band_reluctance=band_series_reluctance(rg, mats),
     )  # fmt: skip
 
 
@@ -413,19 +414,3 @@ def _newton(net, ni, mats, rtol, max_iter, start):  # type: ignore[no-untyped-de
         stalled = settled | small | (~better & (err <= _FLOOR))
         x, res, jac = xn, rn, jn
     return out, rows
-
-
-def zone_mmf(net: Network, x: FloatArray, materials: Mapping[str, Magnetic] | None = None):  # type: ignore[no-untyped-def]
-    """Radial MMF (A) across the stack in each zone, (S, C, 2): Σ over the films and drum
-    walls of zone A (…, 0) and B (…, 1) at the loop fluxes ``x``."""
-    mats = MATERIALS if materials is None else materials
-    xl = np.abs(x[..., : net.m])  # (S, C, m)
-    out = []
-    for z in (0, 1):
-        f = sum(
-            _odd(magnetic(name, mats), xl, k[:, None, :, z : z + 1], w[:, None, :, z : z + 1])[0]
-            for name, k, w in ((net.fluid, net.fluid_k, net.fluid_w),
-                               (net.steel, net.wall_k, net.wall_w))
-        )  # fmt: skip
-        out.append(f.sum(-1))
-    return np.stack(out, axis=-1)

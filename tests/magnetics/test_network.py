@@ -15,13 +15,13 @@ from hypothesis import strategies as st
 from geometry.params import broadcast_fields, preset
 from geometry.regions import evaluate
 from magnetics.circuit import path_from_regions, solve_flux
-from magnetics.materials import MU0, linear_materials
+from magnetics.materials import FLUIDS, MU0, linear_materials, magnetic
 from magnetics.network import (
     NetworkConvergenceError,
     network_from_regions,
     solve_network,
 )
-from magnetics.torque import network_torque_batch, torque_curve
+from magnetics.torque import network_gap_torque, network_torque_batch, torque_curve
 
 PAPER = preset("paper")
 BENCH = Path(__file__).resolve().parents[2] / "benchmarks"
@@ -220,6 +220,32 @@ def test_blocks_are_invisible_and_refusals_name_global_rows(monkeypatch):
         solve_network(net, ni, max_iter=1, start=start)
 
 
+@pytest.mark.parametrize("n", [1, 4])
+def test_fringe_torque_is_the_fringe_permeance_in_the_linear_limit(n):
+    """At a tiny current τy = c·H (tanh linear) and the fringe's field H_e·g/(g + πs)
+    integrates to c·H_e·(g/π)·ln(1 + πh/g): the torque of each film is 2π r²·τy(H_e)·L_eff
+    with L_eff the network's own fringing length (``Network.gap_eff``), to 1e-9; at
+    saturating currents the 6-point rule agrees with 64 points to 1e-5."""
+    c, rg = _regions(n_drums=n, gap=0.4e-3)
+    net = network_from_regions(rg)
+    i = 1e-5  # A: αH ≈ 6e-5, tanh linear to 1e-9
+    x = np.abs(solve_network(net, [[c.coil_turns * i]])[0, 0, : net.m])
+    t = network_gap_torque(net, [[i]])[0, 0].reshape(2, net.m)
+    r = 0.5 * (net.gap_r0[0] + net.gap_r1[0])
+    for z in (0, 1):
+        eff = net.gap_eff[0, :, z]
+        h_e = magnetic(net.fluid).h_of_b(x / (2 * np.pi * r * eff))
+        expect = 2 * np.pi * r**2 * FLUIDS[net.fluid].tau_y(h_e) * eff
+        np.testing.assert_allclose(t[z], expect, rtol=1e-9)
+        assert np.all(eff > net.gap_len[0, :, z])  # there is fringing to integrate
+    import magnetics.torque as torque
+
+    hot = network_gap_torque(net, [[7.0]])
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(torque, "_FRINGE_POINTS", 64)
+        np.testing.assert_allclose(network_gap_torque(net, [[7.0]]), hot, rtol=1e-5)
+
+
 def test_torque_curve_network_is_a_batch_of_one():
     c = replace(PAPER, n_drums=4, gap=0.4e-3)
     one = torque_curve(c, [2.0, 7.0], method="network").yield_torque
@@ -244,23 +270,28 @@ def measured():  # type: ignore[no-untyped-def]
 def test_network_against_the_fem_reference(measured):
     """Torque at 2, 4, 7 A against the FEM (0.25 mm, mid-line) on the 648-design grid and
     200 random designs (benchmarks/measure_network.py). Measured: within ±10 % on 70 % of
-    the grid and 80 % of the random designs, worst −28 … +67 %; the single loop 39 %, 38 %,
-    worst −86 … +77 %. The issue's goal (±5 % on ≥ 90 %, ±10 % on all) is not met."""
+    the grid and 82 % of the random designs, worst −28 … +34 %; the single loop 39 %, 38 %,
+    worst −86 … +77 %. The issue's goal (±5 % on ≥ 90 %, ±10 % on all) is not met. Floors
+    just under the measurement: a regression guard, not a fitted parameter."""
     err, rnd, _ = measured["network"]
     old, _, _ = measured["circuit"]
     within = lambda e: float(np.mean(np.abs(e) <= 0.10))  # noqa: E731
-    assert within(err[~rnd]) >= 0.68 and within(err[rnd]) >= 0.78
-    assert np.abs(err).max() <= 0.70
+    assert within(err[~rnd]) >= 0.68 and within(err[rnd]) >= 0.80
+    assert np.abs(err).max() <= 0.36
     for sel in (~rnd, rnd):  # better than the single loop on both sets, by far
         assert within(err[sel]) >= within(old[sel]) + 0.25
+        assert np.abs(err[sel]).max() < 0.5 * np.abs(old[sel]).max()
 
 
-def test_network_is_at_least_as_good_as_the_loop_at_five_or_more_drums(measured):
-    """Where the loop fails worst (5–6 drums: it is within ±10 % on 17–24 % of the grid)."""
+def test_network_is_better_than_the_loop_at_every_drum_count(measured):
+    """Per drum count on the grid, within ±10 %: the network 67–77 %, the loop 17–64 %
+    (worst at 5–6 drums, 17–24 %)."""
     err, rnd, f = measured["network"]
     old, _, _ = measured["circuit"]
-    many = (f["n_drums"] >= 5) & ~rnd
-    assert np.mean(np.abs(err[many]) <= 0.1) >= 0.75 > np.mean(np.abs(old[many]) <= 0.1)
+    for n in range(1, 7):
+        sel = (f["n_drums"] == n) & ~rnd
+        net, loop = (float(np.mean(np.abs(e[sel]) <= 0.1)) for e in (err, old))
+        assert net >= 0.65 and net >= loop + (0.4 if n >= 5 else 0.0)
 
 
 def test_reference_data_is_the_stored_measurement():
