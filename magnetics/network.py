@@ -15,14 +15,16 @@ steel face each other inside the zone), and each wall's zone-A node is joined to
 node by a rung:
 
 - the core: its steel, axially (the flux builds up linearly along each zone);
-- each drum: its steel in each zone, axially (same build-up), in series with the regions
-  that span the band radially on the drum's own stations (its stainless band) and half of
-  each neighbouring film's band (μA/l, linear);
+- each drum: its steel in each zone, axially (same build-up), in series with its band: the
+  regions that span the band radially on the drum's own stations (its stainless band, μA/l)
+  in parallel with half of each neighbouring film's fluid over the band, on the fluid's
+  own B–H (``_band``);
 - the shell: pole A radially, the back iron axially, pole B — with the coil's ampere-turns
-  N·I; in parallel with it the coil window (sleeve, coil, half the outer film over the
-  band), whose MMF from the distributed winding falls linearly across the coil (the window
-  element's permeance is weighted accordingly, [roters1941] ch. 5, leakage of a uniformly
-  wound coil).
+  N·I; in parallel with it the coil window (sleeve and coil, linear, in parallel with the
+  outer film's half over the band, non-linear), whose MMF from the distributed winding
+  falls linearly across the coil (the window element's permeance is weighted accordingly,
+  [roters1941] ch. 5, leakage of a uniformly wound coil), and, beside the back iron, the
+  air outside the shell (``_outer_air_permeance``).
 
 Every steel and fluid element has its material's non-linear B–H (MMF = Σ w·H(k·Φ) at
 Gauss points, exact for a linear material). Unknowns: the loop fluxes x_k (the flux of
@@ -76,14 +78,17 @@ class Network:
     wall_w: FloatArray
     rung_k: FloatArray  # (S, m + 1, 2) drum steel axially in zone A and B (rungs 1..m-1)
     rung_w: FloatArray
-    rung_lin: FloatArray  # (S, m + 1) linear reluctance of each rung (the band), 1/H
+    rung_perm: FloatArray  # (S, m + 1) each rung's band: linear permeance (stainless), H
+    rung_fluid: FloatArray  # (S, m + 1) and the area of the fluid beside it, m²
     core_k: FloatArray  # (S, 3): band, zone A, zone B
     core_w: FloatArray
     shell_k: FloatArray  # (S, 2·_POLE_POINTS): the poles, radially
     shell_w: FloatArray
     back_k: FloatArray  # (S, 1): the back iron, axially
     back_w: FloatArray
-    window: FloatArray  # (S,) reluctance of the coil window, 1/H
+    window_perm: FloatArray  # (S,) the coil window: linear permeance (sleeve, coil), H
+    window_fluid: FloatArray  # (S,) and the area of the outer film's half over the band, m²
+    band_len: FloatArray  # (S,) the band's length, m
     outer_air: FloatArray  # (S,) reluctance of the air outside the shell, 1/H
     steel: str = STEEL
     fluid: str = MRF
@@ -128,7 +133,8 @@ def network_from_regions(
     gap_len, gap_eff, fluid_k, fluid_w = zeros(m, 2), zeros(m, 2), zeros(m, 2), zeros(m, 2)
     fringe_h = zeros(m, 2, 2)
     wall_k, wall_w = zeros(m, 2), zeros(m, 2)
-    rung_k, rung_w, rung_lin = zeros(m + 1, 2), zeros(m + 1, 2), zeros(m + 1)
+    rung_k, rung_w = zeros(m + 1, 2), zeros(m + 1, 2)
+    rung_perm, rung_fluid = zeros(m + 1), zeros(m + 1)
     gap_r0 = np.stack([at[f.r0] for f in films], axis=1)
     gap_r1 = np.stack([at[f.r1] for f in films], axis=1)
     for k, f in enumerate(films):
@@ -172,13 +178,13 @@ def network_from_regions(
                 area = np.pi * (w1**2 - w0**2)
                 rung_k[:, k, z] = np.where(okw, 0.5 / area, 0.0)
                 rung_w[:, k, z] = lw
-    # Rungs' band: regions spanning the band on a wall's stations, and half of each
-    # neighbouring film (linear, initial μ), μA/l.
+    # Rungs' band: regions spanning the band on a wall's stations (linear, μA/l), in
+    # parallel with half of each neighbouring film's fluid (its own B–H: the band's axial
+    # field reaches ~10⁵ A/m at 7 A, where the fluid's secant μ is 0.7 of its initial μ).
     mu = {sp.material: magnetic(sp.material, mats).mu_initial for sp in rg}  # initial μ
     spans = [sp for sp in rg if sp.material != STEEL]
     for k in range(1, m):
         w = wall(films[k].walls[0], "A")
-        perm = np.zeros(size)
         for sp in spans:
             r0, r1, c0, c1 = box(sp)
             across = (c0 <= za1) & (c1 >= zb0)
@@ -189,8 +195,11 @@ def network_from_regions(
                 share = 0.5
             else:
                 continue
-            perm = perm + np.where(across, share * mu[sp.material] * area / band, 0.0)
-        rung_lin[:, k] = 1.0 / perm
+            part = np.where(across, share * area, 0.0)
+            if sp.material == MRF:
+                rung_fluid[:, k] += part
+            else:
+                rung_perm[:, k] += mu[sp.material] * part / band
     core = box(steel["core"])
     core_area = np.pi * core[1] ** 2
     core_k = np.stack([1 / core_area, 0.5 / core_area, 0.5 / core_area], axis=1)
@@ -208,7 +217,7 @@ def network_from_regions(
     # Coil window: sleeve and coil between the pole radius and the back iron, half the
     # outer film over the band. In the coil the band's MMF falls linearly from the inner to
     # the outer winding radius, so a ring at r carries μ·(ro − r)/d of the sleeve's field.
-    perm_w = np.zeros(size)
+    perm_w, fluid_w_area = np.zeros(size), np.zeros(size)
     for sp in spans:
         r0, r1, c0, c1 = box(sp)
         across = (c0 <= za1) & (c1 >= zb0)
@@ -220,21 +229,22 @@ def network_from_regions(
             area = np.pi * (r1**2 - r0**2)
         else:
             continue
-        perm_w = perm_w + np.where(across, mu[sp.material] * area / band, 0.0)
+        if sp.material == MRF:
+            fluid_w_area += np.where(across, area, 0.0)
+        else:
+            perm_w += np.where(across, mu[sp.material] * area / band, 0.0)
     return Network(
         turns=np.broadcast_to(np.asarray(rg.fields["coil_turns"], dtype=float), (size,)).copy(),
         film_name=tuple(f.name for f in films), gap_eff=gap_eff, fringe_h=fringe_h,
         gap_r0=gap_r0, gap_r1=gap_r1, gap_len=gap_len, fluid_k=fluid_k, fluid_w=fluid_w,
-        wall_k=wall_k, wall_w=wall_w, rung_k=rung_k, rung_w=rung_w, rung_lin=rung_lin,
+        wall_k=wall_k, wall_w=wall_w, rung_k=rung_k, rung_w=rung_w,
+        rung_perm=rung_perm, rung_fluid=rung_fluid, band_len=band,
         core_k=core_k, core_w=core_w,
         shell_k=np.concatenate(sk, axis=1), shell_w=np.concatenate(sw, axis=1),
-        back_k=back_k, back_w=back_w, window=1.0 / perm_w,
-        # Air outside the shell, in parallel with the back iron: with the potential along
-        # the shell's outer face linear over its length, flux from height s above the
-        # centre plane returns at −s on a half circle of length πs under an MMF ∝ s, so H
-        # is uniform and Φ = 2μ0·R·F (R the outer radius; a Roters-style flux-tube
-        # estimate, [roters1941] ch. 5; the end caps' rims ignored).
-        outer_air=1.0 / (2 * MU0 * at["outer"]),
+        back_k=back_k, back_w=back_w, window_perm=perm_w,
+        window_fluid=fluid_w_area,
+        outer_air=1.0 / _outer_air_permeance(at["outer"], band,
+                                             np.minimum(za1 - pa[2], pb[3] - zb0)),
     )  # fmt: skip
 
 
@@ -253,6 +263,51 @@ def _odd(mat: Magnetic, phi: FloatArray, k: FloatArray, w: FloatArray):  # type:
     return np.copysign(f, phi), d
 
 
+def _outer_air_permeance(radius: FloatArray, band: FloatArray, pole: FloatArray) -> FloatArray:
+    """Permeance (H) of the air outside the shell between its two poles, in parallel with
+    the back iron ([roters1941] ch. 5, flux tubes).
+
+    The poles (thick steel) are equipotentials ±F/2 on the outer face; between them, over
+    the back iron's length b (the band), the potential falls linearly. A tube leaves the
+    face at height u above the centre plane and returns at −u on a half circle of length
+    πu, whose mean circumference is 2π(R + 2u/π). Its MMF is F·2u/b for u < b/2 and F
+    beyond, up to U = b/2 + the shorter pole:
+    P = μ0·[2R·(1 + ln(2U/b)) + (4U − b)/π]. The end caps' faces are left out."""
+    u = 0.5 * band + pole
+    return MU0 * (2 * radius * (1 + np.log(2 * u / band)) + (4 * u - band) / np.pi)
+
+
+def _band(fluid: Magnetic, y: FloatArray, perm: FloatArray, area: FloatArray, length: FloatArray
+          ):  # type: ignore[no-untyped-def]  # fmt: skip
+    """MMF F (odd in y) and dF/dy of a band element: a linear permeance ``perm`` (H) in
+    parallel with ``area`` (m²) of ``fluid`` over ``length`` (m), carrying flux y.
+
+    The two share F = l·H: |y| = perm·l·H(B) + A·B for the fluid's B, solved by Newton on
+    B from above the root (the linear start B0 = |y|/(A + perm·l·H'(0)) has r ≥ 0, since
+    H(B) ≥ H'(0)·B on a saturating curve); dF/dy = l·H'/(perm·l·H' + A). Without fluid
+    (A = 0) F = |y|/perm; with neither (the core's and shell's rungs) F = 0."""
+    a = np.abs(y)
+    fl = area > 0
+    lp = perm * length
+    s0 = fluid.h_dh(np.zeros(1))[1][0]
+    b = a / np.where(fl, area + lp * s0, 1.0)
+    safe = np.where(fl, area, 1.0)  # the elements without fluid iterate harmlessly
+    for _ in range(_BAND_ITER):
+        h, dh = fluid.h_dh(b)
+        r = np.where(fl, lp * h + area * b - a, 0.0)
+        b = np.maximum(b - r / (lp * dh + safe), 0.0)
+        if np.all(np.abs(r) <= 1e-13 * a):
+            break
+    h, dh = fluid.h_dh(b)
+    lin = np.where(perm > 0, 1.0 / np.where(perm > 0, perm, 1.0), 0.0)
+    f = np.where(fl, length * h, a * lin)
+    d = np.where(fl, length * dh / (lp * dh + safe), lin)
+    return np.copysign(f, y), d
+
+
+_BAND_ITER = 30
+
+
 def _residual(net: Network, mats, x: FloatArray, ni: FloatArray, rows=None):  # type: ignore[no-untyped-def]
     """Loop MMF residuals (S, C, m + 2) at the loop fluxes x (films, window, outer air) and
     the Jacobian: the chain's diagonal (…, m − 1) and off-diagonal (…, m − 1) for loops
@@ -269,8 +324,9 @@ def _residual(net: Network, mats, x: FloatArray, ni: FloatArray, rows=None):  # 
     y = np.concatenate([-xl[..., :1], xl[..., :-1] - xl[..., 1:], (xl[..., -1] + xw)[..., None]],
                        axis=-1)  # fmt: skip
     f, df = _odd(steel, y, ex(net.rung_k), ex(net.rung_w))
-    lin = ex(net.rung_lin)
-    f, df = f + lin * y, df + lin
+    band = ex(net.band_len)
+    fb, dfb = _band(fluid, y, ex(net.rung_perm), ex(net.rung_fluid), band[..., None])
+    f, df = f + fb, df + dfb
     c, dc = _odd(steel, y[..., 0], ex(net.core_k), ex(net.core_w))
     f[..., 0] += c
     df[..., 0] += dc
@@ -278,11 +334,12 @@ def _residual(net: Network, mats, x: FloatArray, ni: FloatArray, rows=None):  # 
     yb = y[..., m] - xo  # the back iron: the shell's flux less the outer air's
     bk, dbk = _odd(steel, yb, ex(net.back_k), ex(net.back_w))
     f[..., m] += sh + bk
-    win, air = sel(net.window)[:, None], sel(net.outer_air)[:, None]
+    win, dwin = _band(fluid, xw, ex(net.window_perm), ex(net.window_fluid), band)
+    air = sel(net.outer_air)[:, None]
     res = np.empty_like(x)
     res[..., :m] = g + f[..., 1:] - f[..., :-1]
     res[..., m - 1] -= ni
-    res[..., m] = f[..., m] + win * xw - ni
+    res[..., m] = f[..., m] + win - ni
     res[..., m + 1] = air * xo - bk
     dm = df[..., m] + dsh + dbk  # dF_shell/dy_m
     diag = dg[..., : m - 1] + df[..., 1:m] + df[..., : m - 1]
@@ -290,7 +347,7 @@ def _residual(net: Network, mats, x: FloatArray, ni: FloatArray, rows=None):  # 
     tail = np.empty((*x.shape[:-1], 3, 3))
     tail[..., 0, 0] = dg[..., m - 1] + dm + df[..., m - 1]
     tail[..., 0, 1] = tail[..., 1, 0] = dm
-    tail[..., 1, 1] = dm + win
+    tail[..., 1, 1] = dm + dwin
     tail[..., 0, 2] = tail[..., 2, 0] = tail[..., 1, 2] = tail[..., 2, 1] = -dbk
     tail[..., 2, 2] = air + dbk
     return res, (diag, off, tail)

@@ -36,9 +36,11 @@ def _regions(clutch=PAPER, **kw):  # type: ignore[no-untyped-def]
 def _single_loop(net):  # type: ignore[no-untyped-def]
     """The ladder with its rungs, window and outer air all but open (1e13 /H, ≥ 10⁵× the
     elements': they carry < 5e-5 of the flux; truly open paths make the system singular)."""
-    big = lambda a: np.full_like(a, 1e13)  # noqa: E731
-    rungs = np.where(np.arange(net.m + 1) % net.m == 0, 0.0, 1e13)[None] + 0 * net.rung_lin
-    return replace(net, rung_lin=rungs, window=big(net.window), outer_air=big(net.outer_air))
+    small = lambda a: np.full_like(a, 1e-13)  # noqa: E731  permeance, H
+    rungs = np.where(np.arange(net.m + 1) % net.m == 0, 0.0, 1e-13)[None] + 0 * net.rung_perm
+    return replace(net, rung_perm=rungs, rung_fluid=0 * net.rung_fluid,
+                   window_perm=small(net.window_perm), window_fluid=0 * net.window_fluid,
+                   outer_air=np.full_like(net.outer_air, 1e13))  # fmt: skip
 
 
 @settings(max_examples=20, deadline=None)
@@ -129,7 +131,8 @@ def _nodal(net, mats, ni):  # type: ignore[no-untyped-def]
             r += rel(net.wall_k[s, k, z], net.wall_w[s, k, z], net.steel)
             branch(idx(z, k), idx(z, k + 1), r)
     for i in range(1, m):
-        r = rel(net.rung_k[s, i], net.rung_w[s, i], net.steel) + net.rung_lin[s, i]
+        band = net.rung_perm[s, i] + net.rung_fluid[s, i] * mu[net.fluid] / net.band_len[s]
+        r = rel(net.rung_k[s, i], net.rung_w[s, i], net.steel) + 1.0 / band
         branch(idx(0, i), idx(1, i), r)
     branch(idx(0, 0), idx(1, 0), rel(net.core_k[s], net.core_w[s], net.steel))
     # shell: pole A (Am) → back iron → O → poles → Bm; the outer air beside the back iron,
@@ -137,7 +140,8 @@ def _nodal(net, mats, ni):  # type: ignore[no-untyped-def]
     poles = rel(net.shell_k[s], net.shell_w[s], net.steel)
     branch(idx(0, m), o, rel(net.back_k[s], net.back_w[s], net.steel))
     branch(o, idx(1, m), poles)
-    branch(idx(1, m), idx(0, m), net.window[s])
+    window = net.window_perm[s] + net.window_fluid[s] * mu[net.fluid] / net.band_len[s]
+    branch(idx(1, m), idx(0, m), 1.0 / window)
     branch(idx(0, m), o, net.outer_air[s])
     rhs[o] += ni / poles
     rhs[idx(1, m)] -= ni / poles
@@ -165,6 +169,35 @@ def test_ladder_solve_against_an_independent_nodal_solve(n):
     x = solve_network(net, [[ni]], mats, rtol=1e-14)[0, 0]
     # loop fluxes are the zone-A film fluxes, flowing from core to pole (potential falls)
     np.testing.assert_allclose(np.abs(x[: net.m]), np.abs(_nodal(net, mats, ni)), rtol=1e-9)
+
+
+@given(
+    y=st.floats(1e-9, 1e-3),
+    perm=st.sampled_from([0.0, 1e-10, 1e-8]),
+    area=st.sampled_from([0.0, 1e-7, 1e-5]),
+)
+@settings(max_examples=60, deadline=None)
+def test_band_element_shares_its_mmf_between_steel_free_paths(y, perm, area):
+    """A band element (a linear permeance in parallel with fluid over the band's length):
+    its MMF F carries perm·F + A·B_fluid(F/l) = |y| to 1e-10 on the fluid's own B–H, F is
+    odd in y, and dF/dy matches a central difference; no fluid: F = y/perm; neither: 0."""
+    from magnetics.network import _band
+
+    fl = magnetic("mrf_132dg")
+    length = 8e-3
+    arr = lambda v: np.array([v])  # noqa: E731
+    f, d = _band(fl, arr(y), arr(perm), arr(area), arr(length))
+    fn, _ = _band(fl, arr(-y), arr(perm), arr(area), arr(length))
+    assert fn[0] == -f[0]
+    if area == 0.0:
+        np.testing.assert_allclose(f[0], y / perm if perm else 0.0, rtol=1e-15)
+        return
+    carried = perm * f[0] + area * fl.b_of_h(f[0] / length)
+    np.testing.assert_allclose(carried, y, rtol=1e-10)
+    h = 1e-6 * y
+    up, _ = _band(fl, arr(y + h), arr(perm), arr(area), arr(length))
+    lo, _ = _band(fl, arr(y - h), arr(perm), arr(area), arr(length))
+    np.testing.assert_allclose(d[0], (up[0] - lo[0]) / (2 * h), rtol=1e-3)
 
 
 def test_linear_in_current_below_the_knee():
@@ -269,29 +302,29 @@ def measured():  # type: ignore[no-untyped-def]
 
 def test_network_against_the_fem_reference(measured):
     """Torque at 2, 4, 7 A against the FEM (0.25 mm, mid-line) on the 648-design grid and
-    200 random designs (benchmarks/measure_network.py). Measured: within ±10 % on 70 % of
-    the grid and 82 % of the random designs, worst −28 … +34 %; the single loop 39 %, 38 %,
+    200 random designs (benchmarks/measure_network.py). Measured: within ±10 % on 86 % of
+    the grid and 93 % of the random designs, worst −17 … +22 %; the single loop 39 %, 38 %,
     worst −86 … +77 %. The issue's goal (±5 % on ≥ 90 %, ±10 % on all) is not met. Floors
     just under the measurement: a regression guard, not a fitted parameter."""
     err, rnd, _ = measured["network"]
     old, _, _ = measured["circuit"]
     within = lambda e: float(np.mean(np.abs(e) <= 0.10))  # noqa: E731
-    assert within(err[~rnd]) >= 0.68 and within(err[rnd]) >= 0.80
-    assert np.abs(err).max() <= 0.36
+    assert within(err[~rnd]) >= 0.84 and within(err[rnd]) >= 0.91
+    assert np.abs(err).max() <= 0.24
     for sel in (~rnd, rnd):  # better than the single loop on both sets, by far
         assert within(err[sel]) >= within(old[sel]) + 0.25
         assert np.abs(err[sel]).max() < 0.5 * np.abs(old[sel]).max()
 
 
 def test_network_is_better_than_the_loop_at_every_drum_count(measured):
-    """Per drum count on the grid, within ±10 %: the network 67–77 %, the loop 17–64 %
+    """Per drum count on the grid, within ±10 %: the network 83–90 %, the loop 17–64 %
     (worst at 5–6 drums, 17–24 %)."""
     err, rnd, f = measured["network"]
     old, _, _ = measured["circuit"]
     for n in range(1, 7):
         sel = (f["n_drums"] == n) & ~rnd
         net, loop = (float(np.mean(np.abs(e[sel]) <= 0.1)) for e in (err, old))
-        assert net >= 0.65 and net >= loop + (0.4 if n >= 5 else 0.0)
+        assert net >= 0.8 and net >= loop + (0.5 if n >= 5 else 0.2)
 
 
 def test_reference_data_is_the_stored_measurement():
