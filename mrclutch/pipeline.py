@@ -37,9 +37,11 @@ from magnetics.drag import Drag, coupled_fluid_inertia, drag_terms, totals
 from magnetics.dynamics import torque_response
 from magnetics.error_map import error_bound
 from magnetics.materials import FLUIDS
+from magnetics.network import network_from_regions
 from magnetics.torque import (
     coil_properties,
     continuous_torque,
+    network_gap_torque,
     torque_curve,
     yield_torque_and_flux,
 )
@@ -467,7 +469,8 @@ class BatchEvaluator:
         on = set(self.optional)
         return evaluate_batch(fields, self.base, passivity="max_passive_K_N_per_m" in on,
                               stability="max_stable_K_N_per_m" in on,
-                              zwidth="zwidth_area_N2_s_per_m2" in on)  # fmt: skip
+                              zwidth="zwidth_area_N2_s_per_m2" in on,
+                              network="network_max_torque_N_m" in on)  # fmt: skip
 
 
 def evaluate_batch(
@@ -477,11 +480,14 @@ def evaluate_batch(
     passivity: bool = False,
     stability: bool = False,
     zwidth: bool = False,
+    network: bool = False,
 ) -> dict[str, np.ndarray]:
     """The fast path for S designs at once; returns arrays under ``SWEEP_COLUMNS``, and
     opt-in columns after them: ``max_passive_K_N_per_m`` (``passivity``, about ×1.7 the
     cost), ``max_stable_K_N_per_m`` (``stability``: design by design, about ×8),
-    ``zwidth_area_N2_s_per_m2`` (``zwidth``, about ×7) (``outputs.SWEEP_OPTIONAL``).
+    ``zwidth_area_N2_s_per_m2`` (``zwidth``, about ×7), ``network_max_torque_N_m``
+    (``network``: the yield torque by the reluctance network, plus the same drag)
+    (``outputs.SWEEP_OPTIONAL``).
 
     The same physics as ``evaluate(design, "fast")``, on arrays: per drum count, the region
     table gives the analytic mass (``region_mass``), the circuit (``path_from_regions``)
@@ -511,6 +517,9 @@ def evaluate_batch(
             net, path, op.input_speed, out["off_torque"], op.wire_temperature_limit,
             FLUID_LIMIT, hint=(current[rows], flux),
         )[1]  # fmt: skip
+        if network:
+            ladder = network_from_regions(rg)
+            out["network_yield"] = network_gap_torque(ladder, current[rows][:, None]).sum(-1)[:, 0]
         return out
 
     fig = regions.per_topology(p, ok, clutch)
@@ -545,10 +554,13 @@ def evaluate_batch(
         "continuous_torque_N_m": fig["continuous_torque"],
         "torque_delay_s": fig["torque_delay"],
     }
+    if network:
+        out["network_max_torque_N_m"] = fig["network_yield"] + off_torque
     opt_in = {
         "max_passive_K_N_per_m": passivity,
         "max_stable_K_N_per_m": stability,
         "zwidth_area_N2_s_per_m2": zwidth,
+        "network_max_torque_N_m": network,
     }
     extra = tuple(k for k, on in opt_in.items() if on)
     columns = (*SWEEP_COLUMNS, *extra)

@@ -1,7 +1,9 @@
 """FEM re-check of a sweep's best rows (issue 12): the sweep ranks on the fast path (the
 saturating circuit), this re-solves the N best designs by one column with the FEM at the
 error map's reference size, through the same executor as the sweep (one design a task, so
-a Dask cluster runs them in parallel), and tabulates the circuit's error on each.
+a Dask cluster runs them in parallel), and tabulates the circuit's error on each, beside
+the reluctance network's (``method="network"``: a second fast model, solved here one
+design at a time, milliseconds each).
 
 A row's design is rebuilt from the spec and its design id (``SweepSpec.chunk``: the same
 SI fields the sweep evaluated, not the rounded numbers of the file). "max torque" is the
@@ -31,7 +33,8 @@ BOUND = "circuit_error_bound"
 #: the sidecar's columns: each number's fidelity named beside it
 COLUMNS = ("design_id", "objective", "objective_value", "fast_max_torque_N_m",
            "fast_fidelity", "fem_max_torque_N_m", "fem_fidelity", "relative_error",
-           "circuit_error_bound", "within_bound")  # fmt: skip
+           "circuit_error_bound", "within_bound", "network_max_torque_N_m",
+           "network_fidelity", "network_relative_error")  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -41,11 +44,17 @@ class VerifiedRow:
     fast_torque: float  # N·m, the sweep's (circuit)
     fem_torque: float  # N·m, the FEM's at fem_size
     bound: float  # the row's circuit_error_bound (inf: off the map)
+    network_torque: float  # N·m, the reluctance network's (yield + the same drag)
 
     @property
     def error(self) -> float:
         """Relative error of the fast torque against the FEM's."""
         return self.fast_torque / self.fem_torque - 1
+
+    @property
+    def network_error(self) -> float:
+        """Relative error of the network's torque against the FEM's."""
+        return self.network_torque / self.fem_torque - 1
 
     @property
     def within_bound(self) -> bool:
@@ -85,10 +94,15 @@ def fem_max_torque(design: ClutchDesign, fem_size: float) -> float:
     """Max torque (yield + drag, N·m) at the current limit with the FEM's yield torque at
     ``fem_size`` (m) on the uniform grid (the error map's reference mesh); runs in a
     worker."""
+    return _max_torque(design, "fem", fem_size)
+
+
+def _max_torque(design: ClutchDesign, method: str, fem_size: float | None = None) -> float:
+    """Yield torque by ``method`` plus the drag, at the current limit and input speed."""
     op = design.operating
-    curve = torque_curve(design.clutch, [design.current_limit], method="fem", fem_size=fem_size,
-                         speed_rpm=op.input_speed_rpm, temperature=op.fluid_temperature,
-                         support=design.support)  # fmt: skip
+    curve = torque_curve(design.clutch, [design.current_limit], method=method,
+                         fem_size=fem_size, speed_rpm=op.input_speed_rpm,
+                         temperature=op.fluid_temperature, support=design.support)  # fmt: skip
     return float(curve.torque[0])
 
 
@@ -121,7 +135,8 @@ def verify_top(
         fem = [f.result() for f in futures]
     ids = [int(res["design_id"][i]) for i in rows]
     keys, fast, bounds = (res[c][rows].astype(float).tolist() for c in (key, TORQUE, BOUND))
-    return [VerifiedRow(*row) for row in zip(ids, keys, fast, fem, bounds, strict=True)]
+    net = [_max_torque(d, "network") for d in designs]
+    return [VerifiedRow(*row) for row in zip(ids, keys, fast, fem, bounds, net, strict=True)]
 
 
 def write_verified(path: str | Path, rows: Sequence[VerifiedRow], key: str, fem_size: float
@@ -134,5 +149,6 @@ def write_verified(path: str | Path, rows: Sequence[VerifiedRow], key: str, fem_
         for r in rows:
             w.writerow([r.design_id, key, repr(r.objective_value), repr(r.fast_torque),
                         "circuit (sweep fast path)", repr(r.fem_torque), fem, repr(r.error),
-                        repr(r.bound), int(r.within_bound)])  # fmt: skip
+                        repr(r.bound), int(r.within_bound), repr(r.network_torque),
+                        "network (reluctance ladder)", repr(r.network_error)])  # fmt: skip
     return Path(path)

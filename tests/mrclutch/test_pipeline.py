@@ -130,3 +130,25 @@ def test_evaluation_carries_the_zwidth_of_both_sides():
     # the geared motor's larger b1 buys it a far larger passive set [colgate-brown1994]
     area = {side: zw["zwidth_area_N2_s_per_m2"] for side, zw in ev.zwidth.items()}
     assert area["motor"] > area["mr"]
+
+
+def test_network_torque_column_is_the_network_curve_with_the_same_drag():
+    """``network=True`` adds network_max_torque_N_m: each valid row equals
+    ``torque_curve(method="network")`` at the current limit and input speed (one design is
+    a batch of one), invalid rows are NaN, and the column is absent unless asked for."""
+    from magnetics.torque import torque_curve
+    from mrclutch.design import current_limit
+
+    base = design_preset("paper")
+    f = {"gap": np.array([0.3e-3, 0.7e-3, 0.01e-3]), "n_drums": np.array([3.0, 2.0, 2.0])}
+    out = evaluate_batch(f, base, network=True)
+    assert "network_max_torque_N_m" not in evaluate_batch(f, base)
+    op = base.operating
+    for i in (0, 1):
+        c = replace(base.clutch, gap=float(f["gap"][i]), n_drums=int(f["n_drums"][i]))
+        tc = torque_curve(c, [current_limit(op, c.wire_diameter)], method="network",
+                          speed_rpm=op.input_speed_rpm, temperature=op.fluid_temperature,
+                          support=base.support)  # fmt: skip
+        assert out["network_max_torque_N_m"][i] == pytest.approx(tc.torque[0], rel=1e-9)
+        assert out["network_max_torque_N_m"][i] != out["max_torque_N_m"][i]
+    assert np.isnan(out["network_max_torque_N_m"][2])

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from magnetics.torque import torque_curve
 from mrclutch.cli.main import main
 from mrclutch.sweep import load_spec, read_results
 from mrclutch.verify import design_of, fem_max_torque
@@ -60,8 +61,26 @@ def test_the_top_two_rows_are_re_solved_by_the_fem_and_written_beside_the_result
         assert d.clutch.n_drums == int(res["n_drums"][i])
         assert d.clutch.gap * 1e3 == pytest.approx(res["gap_mm"][i], rel=1e-6)
         assert fem == pytest.approx(fem_max_torque(d, 1e-3), rel=1e-9)
+        # the network beside it, with the same drag, named as its own fidelity
+        net = float(r["network_max_torque_N_m"])
+        assert r["network_fidelity"].startswith("network")
+        assert net == pytest.approx(
+            float(
+                torque_curve(
+                    d.clutch,
+                    [d.current_limit],
+                    method="network",
+                    speed_rpm=d.operating.input_speed_rpm,
+                    temperature=d.operating.fluid_temperature,
+                    support=d.support,
+                ).torque[0]
+            ),
+            rel=1e-12,
+        )
+        assert float(r["network_relative_error"]) == pytest.approx(net / fem - 1, rel=1e-12)
         assert r["design_id"] in out
     assert "circuit vs FEM: max |error|" in out and "r.csv.verified.csv" in out
+    assert "network vs FEM: max |error|" in out
 
 
 def _base():
