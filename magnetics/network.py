@@ -71,7 +71,7 @@ class Network:
     gap_r1: FloatArray  # (S, m)
     gap_len: FloatArray  # (S, m, 2) length carrying flux in zone A, B
     gap_eff: FloatArray  # (S, m, 2) the same plus the fringing length at its ends
-    fringe_h: FloatArray  # (S, m, 2, 2) fluid depth past the overlap's two ends, each zone
+    fringe_h: FloatArray  # (S, m, 2, 2) the film's own fluid past the overlap's two ends
     fluid_k: FloatArray  # (S, m, 2)
     fluid_w: FloatArray
     wall_k: FloatArray  # (S, m, 2) steel wall inside film k, radially, zones A and B
@@ -140,22 +140,34 @@ def network_from_regions(
     for k, f in enumerate(films):
         inner, outer = f.walls
         r0, r1, g0, g1 = box(f)
+        # the fluid pockets on the film's radii just past its region (a gap's front and
+        # back pockets, "fluid_gapK_front"): fringing tubes run into them too, though they
+        # are not part of the sheared film (the FEM's torque leaves them out as well)
+        e0, e1 = g0, g1
+        for sp in rg:
+            if sp is not f and sp.material == f.material and (sp.r0, sp.r1) == (f.r0, f.r1):
+                q0, q1 = at[sp.z0], at[sp.z1]
+                e0 = np.where(np.abs(q1 - e0) < 1e-12, np.minimum(e0, q0), e0)
+                e1 = np.where(np.abs(q0 - e1) < 1e-12, np.maximum(e1, q1), e1)
         for z, (zname, z0, z1) in enumerate(zones):
             a, b = wall(inner, zname), wall(outer, zname)
             lo = np.maximum(np.maximum(at[a.z0], at[b.z0]), g0)
             hi = np.minimum(np.minimum(at[a.z1], at[b.z1]), g1)
             length = np.where(_overlap(lo, hi, z0, z1) > 0, np.maximum(hi - lo, 0.0), 0.0)
             gap_len[:, k, z] = length
-            # Fringing past each end of the walls' overlap, into the fluid the film still
-            # holds there (up to the plane midway to the other zone): two flush edges a gap
-            # g apart, a fluid depth h beyond them, add the permeance of the semicircular
-            # tubes μ·(2πr)·ln(1 + πh/g)/π ([roters1941] ch. 5, fringing at flush pole
-            # edges), i.e. a length δ = (g/π)·ln(1 + πh/g) per end.
+            # Fringing past each end of the walls' overlap, into the fluid on the film's
+            # radii there (up to the plane midway to the other zone, pockets included): two
+            # flush edges a gap g apart, a fluid depth h beyond them, add the permeance of
+            # the semicircular tubes μ·(2πr)·ln(1 + πh/g)/π ([roters1941] ch. 5, fringing
+            # at flush pole edges), i.e. a length δ = (g/π)·ln(1 + πh/g) per end. The
+            # torque reads the tubes inside the film's own region only (``fringe_h``).
             gap = r1 - r0
             mid = 0.5 * (zb0 + za1)
             h_lo = np.maximum(lo - np.maximum(g0, mid if z else g0), 0.0)
             h_hi = np.maximum(np.minimum(g1, mid if not z else g1) - hi, 0.0)
-            fringe = (gap / np.pi) * (np.log1p(np.pi * h_lo / gap) + np.log1p(np.pi * h_hi / gap))
+            x_lo = np.maximum(lo - np.maximum(e0, mid if z else e0), 0.0)
+            x_hi = np.maximum(np.minimum(e1, mid if not z else e1) - hi, 0.0)
+            fringe = (gap / np.pi) * (np.log1p(np.pi * x_lo / gap) + np.log1p(np.pi * x_hi / gap))
             eff = length + (fringe if fringing else 0.0)
             if fringing:
                 ok = (length > 0)[:, None]

@@ -256,21 +256,28 @@ def test_blocks_are_invisible_and_refusals_name_global_rows(monkeypatch):
 @pytest.mark.parametrize("n", [1, 4])
 def test_fringe_torque_is_the_fringe_permeance_in_the_linear_limit(n):
     """At a tiny current τy = c·H (tanh linear) and the fringe's field H_e·g/(g + πs)
-    integrates to c·H_e·(g/π)·ln(1 + πh/g): the torque of each film is 2π r²·τy(H_e)·L_eff
-    with L_eff the network's own fringing length (``Network.gap_eff``), to 1e-9; at
-    saturating currents the 6-point rule agrees with 64 points to 1e-5."""
+    integrates to c·H_e·(g/π)·ln(1 + πh/g): each film's torque is 2π r²·τy(H_e)·(L + δ)
+    with δ that fringing length over the film's own fluid (``Network.fringe_h``), to 1e-9;
+    its flux spreads over L_eff ≥ L + δ (the pockets past the film add permeance, not
+    torque); at saturating currents the 6-point rule agrees with 64 points to 1e-5."""
     c, rg = _regions(n_drums=n, gap=0.4e-3)
     net = network_from_regions(rg)
     i = 1e-5  # A: αH ≈ 6e-5, tanh linear to 1e-9
     x = np.abs(solve_network(net, [[c.coil_turns * i]])[0, 0, : net.m])
     t = network_gap_torque(net, [[i]])[0, 0].reshape(2, net.m)
     r = 0.5 * (net.gap_r0[0] + net.gap_r1[0])
+    g = net.gap_r1[0] - net.gap_r0[0]
     for z in (0, 1):
-        eff = net.gap_eff[0, :, z]
+        eff, length = net.gap_eff[0, :, z], net.gap_len[0, :, z]
+        own = length + sum((g / np.pi) * np.log1p(np.pi * net.fringe_h[0, :, z, e] / g)
+                           for e in (0, 1))  # fmt: skip
         h_e = magnetic(net.fluid).h_of_b(x / (2 * np.pi * r * eff))
-        expect = 2 * np.pi * r**2 * FLUIDS[net.fluid].tau_y(h_e) * eff
+        expect = 2 * np.pi * r**2 * FLUIDS[net.fluid].tau_y(h_e) * own
         np.testing.assert_allclose(t[z], expect, rtol=1e-9)
-        assert np.all(eff > net.gap_len[0, :, z])  # there is fringing to integrate
+        assert np.all(own > length) and np.all(eff >= own * (1 - 1e-12))
+    assert net.gap_eff[0, 0, 0] > 1.01 * (
+        net.gap_len[0, 0, 0] + (g[0] / np.pi) * np.log1p(np.pi * net.fringe_h[0, 0, 0, 1] / g[0])
+    )  # gap 0's front pocket, before the core's face
     import magnetics.torque as torque
 
     hot = network_gap_torque(net, [[7.0]])
