@@ -309,29 +309,32 @@ def measured():  # type: ignore[no-untyped-def]
 
 def test_network_against_the_fem_reference(measured):
     """Torque at 2, 4, 7 A against the FEM (0.25 mm, mid-line) on the 648-design grid and
-    200 random designs (benchmarks/measure_network.py). Measured: within ±10 % on 86 % of
-    the grid and 93 % of the random designs, worst −17 … +22 %; the single loop 39 %, 38 %,
+    200 random designs (benchmarks/measure_network.py). Measured: within ±10 % on 94 % of
+    the grid and 100 % of the random designs (±5 %: 68 %, 82 %), worst −20 … +18 %; the
+    single loop 39 %, 38 %,
     worst −86 … +77 %. The issue's goal (±5 % on ≥ 90 %, ±10 % on all) is not met. Floors
     just under the measurement: a regression guard, not a fitted parameter."""
     err, rnd, _ = measured["network"]
     old, _, _ = measured["circuit"]
     within = lambda e: float(np.mean(np.abs(e) <= 0.10))  # noqa: E731
-    assert within(err[~rnd]) >= 0.84 and within(err[rnd]) >= 0.91
-    assert np.abs(err).max() <= 0.24
+    assert within(err[~rnd]) >= 0.92 and within(err[rnd]) >= 0.98
+    assert float(np.mean(np.abs(err[~rnd]) <= 0.05)) >= 0.65
+    assert float(np.mean(np.abs(err[rnd]) <= 0.05)) >= 0.79
+    assert np.abs(err).max() <= 0.22
     for sel in (~rnd, rnd):  # better than the single loop on both sets, by far
         assert within(err[sel]) >= within(old[sel]) + 0.25
         assert np.abs(err[sel]).max() < 0.5 * np.abs(old[sel]).max()
 
 
 def test_network_is_better_than_the_loop_at_every_drum_count(measured):
-    """Per drum count on the grid, within ±10 %: the network 83–90 %, the loop 17–64 %
+    """Per drum count on the grid, within ±10 %: the network 93–95 %, the loop 17–64 %
     (worst at 5–6 drums, 17–24 %)."""
     err, rnd, f = measured["network"]
     old, _, _ = measured["circuit"]
     for n in range(1, 7):
         sel = (f["n_drums"] == n) & ~rnd
         net, loop = (float(np.mean(np.abs(e[sel]) <= 0.1)) for e in (err, old))
-        assert net >= 0.8 and net >= loop + (0.5 if n >= 5 else 0.2)
+        assert net >= 0.9 and net >= loop + (0.6 if n >= 5 else 0.3)
 
 
 def test_reference_data_is_the_stored_measurement():
