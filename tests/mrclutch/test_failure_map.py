@@ -82,8 +82,19 @@ def test_fast_evaluate_notes_an_untrusted_circuit(paper):
     from mrclutch.pipeline import evaluate
 
     four = replace(paper, clutch=replace(paper.clutch, n_drums=4, gap=1.0e-3))
-    assert any("saturating circuit" in n for n in evaluate(four).clutch.notes)
+    notes = evaluate(four).clutch.notes
+    assert any("saturating circuit" in n for n in notes)
     assert not any("saturating circuit" in n for n in evaluate(paper).clutch.notes)
+    # with a second opinion: the network's max torque, the same as torque_curve's
+    from magnetics.torque import torque_curve
+
+    op = four.operating
+    t = torque_curve(four.clutch, [four.current_limit], method="network",
+                     speed_rpm=op.input_speed_rpm, temperature=op.fluid_temperature,
+                     support=four.support).torque[0]  # fmt: skip
+    (net,) = [n for n in notes if n.startswith("reluctance network")]
+    assert f"{t:.4g} N·m" in net and "within ±10 % of the FEM" in net
+    assert not any("reluctance network" in n for n in evaluate(paper).clutch.notes)
 
 
 def test_mesh_below_drum_thickness_is_refined_or_refused(paper):
