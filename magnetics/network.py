@@ -51,6 +51,14 @@ from magnetics.materials import MATERIALS, MU0, Magnetic, magnetic
 
 FloatArray = NDArray[np.float64]
 _POLE_POINTS = 3  # Gauss points in ln r across the thick pole rings
+#: Gauss points along a zone where the axial flux builds up linearly (core, drum walls):
+#: ∫0^L H(u·Φ/A) dz with u = z/L. One point (u = 1/2) is exact only for a linear
+#: material; past the knee H(B) is strongly convex and the midpoint reads a saturated core
+#: far too easy (B = 2 T at the band end is H ≈ 4·10⁴ A/m, 1 T at the midpoint ≈ 10³).
+#: Four points are within 0.21 % of sixteen on the FEM reference's torques (3: 0.75 %).
+_BUILD_POINTS = 4
+_BU, _BW = np.polynomial.legendre.leggauss(_BUILD_POINTS)
+_BU, _BW = 0.5 * (_BU + 1.0), 0.5 * _BW  # on (0, 1), weights summing to 1
 
 
 class NetworkConvergenceError(ParameterError):
@@ -133,7 +141,8 @@ def network_from_regions(
     gap_len, gap_eff, fluid_k, fluid_w = zeros(m, 2), zeros(m, 2), zeros(m, 2), zeros(m, 2)
     fringe_h = zeros(m, 2, 2)
     wall_k, wall_w = zeros(m, 2), zeros(m, 2)
-    rung_k, rung_w = zeros(m + 1, 2), zeros(m + 1, 2)
+    nb = _BUILD_POINTS
+    rung_k, rung_w = zeros(m + 1, 2 * nb), zeros(m + 1, 2 * nb)
     rung_perm, rung_fluid = zeros(m + 1), zeros(m + 1)
     gap_r0 = np.stack([at[f.r0] for f in films], axis=1)
     gap_r1 = np.stack([at[f.r1] for f in films], axis=1)
@@ -186,10 +195,11 @@ def network_from_regions(
                 wall_k[:, k, z] = np.where(okw, 1 / (2 * np.pi * rw * np.where(okw, lw, 1)), 0)
                 wall_w[:, k, z] = np.where(okw, rw * np.log(w1 / w0), 0.0)
                 # the same wall axially: flux builds up linearly over the zone, so
-                # ∫0^L H(Φ z/(L A)) dz ≈ L·H(Φ/(2A)) (one Gauss point, exact if linear)
+                # ∫0^L H(Φ z/(L A)) dz = L·∫0^1 H(u·Φ/A) du (Gauss–Legendre, _BUILD_POINTS)
                 area = np.pi * (w1**2 - w0**2)
-                rung_k[:, k, z] = np.where(okw, 0.5 / area, 0.0)
-                rung_w[:, k, z] = lw
+                pts = slice(z * nb, (z + 1) * nb)
+                rung_k[:, k, pts] = np.where(okw, 1.0 / area, 0.0)[:, None] * _BU
+                rung_w[:, k, pts] = lw[:, None] * _BW
     # Rungs' band: regions spanning the band on a wall's stations (linear, μA/l), in
     # parallel with half of each neighbouring film's fluid (its own B–H: the band's axial
     # field reaches ~10⁵ A/m at 7 A, where the fluid's secant μ is 0.7 of its initial μ).
@@ -214,8 +224,10 @@ def network_from_regions(
                 rung_perm[:, k] += mu[sp.material] * part / band
     core = box(steel["core"])
     core_area = np.pi * core[1] ** 2
-    core_k = np.stack([1 / core_area, 0.5 / core_area, 0.5 / core_area], axis=1)
-    core_w = np.stack([band, za1 - za0, zb1 - zb0], axis=1)
+    inv = (1 / core_area)[:, None]
+    core_k = np.concatenate([inv, inv * _BU, inv * _BU], axis=1)  # band, zone A, zone B
+    core_w = np.concatenate([band[:, None], (za1 - za0)[:, None] * _BW,
+                             (zb1 - zb0)[:, None] * _BW], axis=1)  # fmt: skip
     pa, pb, back = box(steel["shell_A"]), box(steel["shell_B"]), box(steel["shell_back"])
     x, wt = np.polynomial.legendre.leggauss(_POLE_POINTS)
     sk, sw = [], []

@@ -310,7 +310,7 @@ def measured():  # type: ignore[no-untyped-def]
 def test_network_against_the_fem_reference(measured):
     """Torque at 2, 4, 7 A against the FEM (0.25 mm, mid-line) on the 648-design grid and
     200 random designs (benchmarks/measure_network.py). Measured: within ±10 % on 94 % of
-    the grid and 100 % of the random designs (±5 %: 68 %, 82 %), worst −20 … +18 %; the
+    the grid and 100 % of the random designs (±5 %: 70 %, 86 %), worst −27 … +17 %; the
     single loop 39 %, 38 %,
     worst −86 … +77 %. The issue's goal (±5 % on ≥ 90 %, ±10 % on all) is not met. Floors
     just under the measurement: a regression guard, not a fitted parameter."""
@@ -318,23 +318,30 @@ def test_network_against_the_fem_reference(measured):
     old, _, _ = measured["circuit"]
     within = lambda e: float(np.mean(np.abs(e) <= 0.10))  # noqa: E731
     assert within(err[~rnd]) >= 0.92 and within(err[rnd]) >= 0.98
-    assert float(np.mean(np.abs(err[~rnd]) <= 0.05)) >= 0.65
-    assert float(np.mean(np.abs(err[rnd]) <= 0.05)) >= 0.79
-    assert np.abs(err).max() <= 0.22
+    assert float(np.mean(np.abs(err[~rnd]) <= 0.05)) >= 0.68
+    assert float(np.mean(np.abs(err[rnd]) <= 0.05)) >= 0.84
+    assert np.abs(err).max() <= 0.28
     for sel in (~rnd, rnd):  # better than the single loop on both sets, by far
         assert within(err[sel]) >= within(old[sel]) + 0.25
         assert np.abs(err[sel]).max() < 0.5 * np.abs(old[sel]).max()
+    # what evaluate's note states is this measurement
+    from mrclutch.pipeline import NETWORK_AGREEMENT
+
+    stated = (f"{within(err[~rnd]):.0%} of 648 grid and {within(err[rnd]):.0%} of 200 random",
+              f"worst {err.min():+.0%} … {err.max():+.0%}".replace("-", "−"))  # fmt: skip
+    for part in stated:
+        assert part.replace("%", " %") in NETWORK_AGREEMENT, (part, NETWORK_AGREEMENT)
 
 
 def test_network_is_better_than_the_loop_at_every_drum_count(measured):
-    """Per drum count on the grid, within ±10 %: the network 93–95 %, the loop 17–64 %
+    """Per drum count on the grid, within ±10 %: the network 93–94 %, the loop 17–64 %
     (worst at 5–6 drums, 17–24 %)."""
     err, rnd, f = measured["network"]
     old, _, _ = measured["circuit"]
     for n in range(1, 7):
         sel = (f["n_drums"] == n) & ~rnd
         net, loop = (float(np.mean(np.abs(e[sel]) <= 0.1)) for e in (err, old))
-        assert net >= 0.9 and net >= loop + (0.6 if n >= 5 else 0.3)
+        assert net >= 0.9 and net >= loop + (0.6 if n >= 5 else 0.25)
 
 
 def test_reference_data_is_the_stored_measurement():
