@@ -98,6 +98,7 @@ class Network:
     window_fluid: FloatArray  # (S,) and the area of the outer film's half over the band, m²
     band_len: FloatArray  # (S,) the band's length, m
     outer_air: FloatArray  # (S,) reluctance of the air outside the shell, 1/H
+    end_leak: FloatArray  # (S, 2) reluctance from the pole to the core past each zone's end
     steel: str = STEEL
     fluid: str = MRF
 
@@ -269,6 +270,8 @@ def network_from_regions(
         window_fluid=fluid_w_area,
         outer_air=1.0 / _outer_air_permeance(at["outer"], band,
                                              np.minimum(za1 - pa[2], pb[3] - zb0)),
+        end_leak=_end_leak(rg, at, mats, [wall(films[k].walls[0], z) for k in range(m)
+                                          for z in ("A", "B")]),
     )  # fmt: skip
 
 
@@ -299,6 +302,55 @@ def _outer_air_permeance(radius: FloatArray, band: FloatArray, pole: FloatArray)
     P = μ0·[2R·(1 + ln(2U/b)) + (4U − b)/π]. The end caps' faces are left out."""
     u = 0.5 * band + pole
     return MU0 * (2 * radius * (1 + np.log(2 * u / band)) + (4 * u - band) / np.pi)
+
+
+def _end_leak(rg: Regions, at, mats, walls: list[RegionSpec]) -> FloatArray:  # type: ignore[no-untyped-def]
+    """Reluctance (S, 2) of the path from each pole to the core past the far end of its
+    zone, in front of the drums' and the core's ends: the pole's inner face (radius r_p)
+    over its length beyond the walls, radially in to the core's radius r_c through the
+    regions there (hub, fluid films, pockets), each slab of regions between consecutive
+    z-edges a series of exact cylindrical reluctances ln(r1/r0)/(2πμΔz) ([roters1941]
+    ch. 5), the slabs in parallel; air (μ0) where no region lies. The short axial entry
+    into the core's face is left out. Where the walls reach the pole's end the path is
+    absent (reluctance 1e15 /H). The FEM sends 1.4·10⁻⁵ Wb through the paper preset's
+    core face at 7 A this way (docs/magnetics.md)."""
+    mats = MATERIALS if mats is None else mats
+    size = np.size(at["outer"])
+    mu = {sp.material: magnetic(sp.material, mats).mu_initial for sp in rg}
+    steel = {sp.name: sp for sp in rg if sp.material == STEEL}
+    r_c = at[steel["core"].r1]
+    out = np.full((size, 2), 1e15)
+    for z, pole in enumerate((steel["shell_A"], steel["shell_B"])):
+        r_p = at[pole.r0]
+        ends = np.stack([at[w.z0 if z == 0 else w.z1] for w in walls
+                         if (w.name.endswith("_A") if z == 0 else w.name.endswith("_B"))
+                         or w.name == "core"], axis=1)  # fmt: skip
+        lo, hi = (at[pole.z0], ends.min(axis=1)) if z == 0 else (ends.max(axis=1), at[pole.z1])
+        # the regions that reach into the box [lo, hi] × [r_c, r_p] in some design
+        cand = [sp for sp in rg if np.any((at[sp.z1] > lo) & (at[sp.z0] < hi)
+                                          & (at[sp.r1] > r_c) & (at[sp.r0] < r_p))]  # fmt: skip
+        if not cand:
+            continue
+        edges = np.stack([lo, hi, *(at[e] for sp in cand for e in (sp.z0, sp.z1))], axis=1)
+        e = np.sort(np.clip(edges, lo[:, None], hi[:, None]), axis=1)
+        perm = np.zeros(size)
+        for j in range(e.shape[1] - 1):
+            z0, z1 = e[:, j], e[:, j + 1]
+            dz, zm = z1 - z0, 0.5 * (z0 + z1)
+            series = np.zeros(size)  # Σ ln(r1/r0)/μ over the slab's radial path
+            covered = np.zeros(size)
+            for sp in cand:
+                inside = (at[sp.z0] <= zm) & (zm < at[sp.z1]) & (dz > 0)
+                a0 = np.maximum(at[sp.r0], r_c)
+                a1 = np.minimum(at[sp.r1], r_p)
+                ln = np.where(inside & (a1 > a0), np.log(np.maximum(a1, a0) / a0), 0.0)
+                weight = 0.0 if sp.material == STEEL else 1.0 / mu[sp.material]
+                series += ln * weight
+                covered += ln
+            series += np.maximum(np.log(r_p / r_c) - covered, 0.0) / MU0  # air
+            perm += np.where(dz > 0, 2 * np.pi * dz / np.where(series > 0, series, 1.0), 0.0)
+        out[:, z] = np.where(perm > 0, 1.0 / np.where(perm > 0, perm, 1.0), 1e15)
+    return out
 
 
 def _band(fluid: Magnetic, y: FloatArray, perm: FloatArray, area: FloatArray, length: FloatArray
@@ -332,25 +384,39 @@ def _band(fluid: Magnetic, y: FloatArray, perm: FloatArray, area: FloatArray, le
 _BAND_ITER = 30
 
 
-def _residual(net: Network, mats, x: FloatArray, ni: FloatArray, rows=None):  # type: ignore[no-untyped-def]
-    """Loop MMF residuals (S, C, m + 2) at the loop fluxes x (films, window, outer air) and
-    the Jacobian: the chain's diagonal (…, m − 1) and off-diagonal (…, m − 1) for loops
-    0 … m − 2, and the dense block (…, 3, 3) of loops m − 1, window, outer air."""
+def _residual(net: Network, mats, x: FloatArray, ni: FloatArray):  # type: ignore[no-untyped-def]
+    """Loop MMF residuals (S, C, m + 4) at the loop fluxes x (films, window, outer air, the
+    two end leaks) and the Jacobian: the chain's diagonal (…, m − 1) and off-diagonal
+    (…, m − 1) for loops 0 … m − 2, the dense block (…, 3, 3) of loops m − 1, window, outer
+    air, and the end leaks' border (…, m + 2, 2) and block (…, 2, 2).
+
+    End leak z (zone A, B) runs from the pole to the core past the zone's far end, in
+    parallel with the zone's stack of films and drum walls: film k carries x_k − e_z in
+    zone z (``_end_leak``)."""
     steel, fluid = magnetic(net.steel, mats), magnetic(net.fluid, mats)
-    sel = (lambda a: a) if rows is None else (lambda a: a[rows])
-    ex = lambda a: sel(a)[:, None]  # noqa: E731  (S, 1, …): broadcast over currents
+    ex = lambda a: a[:, None]  # noqa: E731  (S, 1, …): broadcast over currents
     m = net.m
-    xl, xw, xo = x[..., :m], x[..., m], x[..., m + 1]
-    g, dg = _odd(fluid, xl, ex(net.fluid_k), ex(net.fluid_w))
-    s, ds = _odd(steel, xl, ex(net.wall_k), ex(net.wall_w))
-    g, dg = g + s, dg + ds
+    xl, xw, xo, xe = x[..., :m], x[..., m], x[..., m + 1], x[..., m + 2 :]
+    g, dg = np.zeros_like(xl), np.zeros_like(xl)
+    gz, dgz = [], []
+    for z in (0, 1):  # each zone's films and drum walls, at the zone's film flux
+        xz = xl - xe[..., z : z + 1]
+        a, da = _odd(fluid, xz, ex(net.fluid_k[..., z : z + 1]), ex(net.fluid_w[..., z : z + 1]))
+        b, db = _odd(steel, xz, ex(net.wall_k[..., z : z + 1]), ex(net.wall_w[..., z : z + 1]))
+        gz.append(a + b)
+        dgz.append(da + db)
+        g, dg = g + a + b, dg + da + db
     # rung fluxes, A → B: y0 = −x0 (core), y_i = x_{i−1} − x_i, y_m = x_{m−1} + x_w (shell)
     y = np.concatenate([-xl[..., :1], xl[..., :-1] - xl[..., 1:], (xl[..., -1] + xw)[..., None]],
                        axis=-1)  # fmt: skip
-    f, df = _odd(steel, y, ex(net.rung_k), ex(net.rung_w))
+    # the drums' rungs 1 … m − 1 (the core's and the shell's are their own elements below)
+    f, df = np.zeros_like(y), np.zeros_like(y)
+    mid = slice(1, m)
     band = ex(net.band_len)
-    fb, dfb = _band(fluid, y, ex(net.rung_perm), ex(net.rung_fluid), band[..., None])
-    f, df = f + fb, df + dfb
+    fs, dfs = _odd(steel, y[..., mid], ex(net.rung_k[:, mid]), ex(net.rung_w[:, mid]))
+    fb, dfb = _band(fluid, y[..., mid], ex(net.rung_perm[:, mid]), ex(net.rung_fluid[:, mid]),
+                    band[..., None])  # fmt: skip
+    f[..., mid], df[..., mid] = fs + fb, dfs + dfb
     c, dc = _odd(steel, y[..., 0], ex(net.core_k), ex(net.core_w))
     f[..., 0] += c
     df[..., 0] += dc
@@ -359,12 +425,14 @@ def _residual(net: Network, mats, x: FloatArray, ni: FloatArray, rows=None):  # 
     bk, dbk = _odd(steel, yb, ex(net.back_k), ex(net.back_w))
     f[..., m] += sh + bk
     win, dwin = _band(fluid, xw, ex(net.window_perm), ex(net.window_fluid), band)
-    air = sel(net.outer_air)[:, None]
+    air = net.outer_air[:, None]
     res = np.empty_like(x)
     res[..., :m] = g + f[..., 1:] - f[..., :-1]
     res[..., m - 1] -= ni
     res[..., m] = f[..., m] + win - ni
     res[..., m + 1] = air * xo - bk
+    leak = ex(net.end_leak)
+    res[..., m + 2 :] = leak * xe - np.stack([gz[0].sum(-1), gz[1].sum(-1)], axis=-1)
     dm = df[..., m] + dsh + dbk  # dF_shell/dy_m
     diag = dg[..., : m - 1] + df[..., 1:m] + df[..., : m - 1]
     off = -df[..., 1:m]
@@ -374,29 +442,56 @@ def _residual(net: Network, mats, x: FloatArray, ni: FloatArray, rows=None):  # 
     tail[..., 1, 1] = dm + dwin
     tail[..., 0, 2] = tail[..., 2, 0] = tail[..., 1, 2] = tail[..., 2, 1] = -dbk
     tail[..., 2, 2] = air + dbk
-    return res, (diag, off, tail)
+    border = np.zeros((*x.shape[:-1], m + 2, 2))
+    border[..., :m, 0], border[..., :m, 1] = -dgz[0], -dgz[1]
+    corner = np.zeros((*x.shape[:-1], 2, 2))
+    corner[..., 0, 0] = leak[..., 0] + dgz[0].sum(-1)
+    corner[..., 1, 1] = leak[..., 1] + dgz[1].sum(-1)
+    return res, (diag, off, tail, border, corner)
 
 
 def _solve(jac, rhs: FloatArray) -> FloatArray:  # type: ignore[no-untyped-def]
-    """Solve J·d = rhs, J symmetric: a tridiagonal chain (loops 0 … m − 2) ending in a
-    dense 3 × 3 block (loop m − 1, window, outer air); Thomas down the chain, batched."""
+    """Solve J·d = rhs, J symmetric: the ladder (``_solve_ladder``) bordered by the two end
+    leaks, by their 2 × 2 Schur complement (J is SPD, so is the complement)."""
+    diag, off, tail, border, corner = jac
+    n = border.shape[-2]
+    # the ladder's solve for the right-hand side and both border columns at once
+    uv = _solve_ladder((diag, off, tail), np.concatenate([rhs[..., :n, None], border], -1))
+    u, v = uv[..., 0], uv[..., 1:]
+    bv = (border[..., :, :, None] * v[..., :, None, :]).sum(-3)  # Bᵀ·A⁻¹·B, (…, 2, 2)
+    schur = corner - bv
+    re = rhs[..., n:] - (border * u[..., None]).sum(-2)
+    det = schur[..., 0, 0] * schur[..., 1, 1] - schur[..., 0, 1] * schur[..., 1, 0]
+    e0 = (schur[..., 1, 1] * re[..., 0] - schur[..., 0, 1] * re[..., 1]) / det
+    e1 = (schur[..., 0, 0] * re[..., 1] - schur[..., 1, 0] * re[..., 0]) / det
+    out = np.empty_like(rhs)
+    out[..., n], out[..., n + 1] = e0, e1
+    out[..., :n] = u - v[..., 0] * e0[..., None] - v[..., 1] * e1[..., None]
+    return out
+
+
+def _solve_ladder(jac, rhs: FloatArray) -> FloatArray:  # type: ignore[no-untyped-def]
+    """Solve the ladder's J·D = rhs (…, n, K), J symmetric: a tridiagonal chain (loops
+    0 … m − 2) ending in a dense 3 × 3 block (loop m − 1, window, outer air); Thomas down
+    the chain, batched over designs, currents and the K right-hand sides."""
     diag, off, tail = jac
     n = diag.shape[-1]  # m − 1 chain rows before the block
     c = np.empty_like(off)
-    d = np.empty_like(rhs[..., :n])
+    d = np.empty_like(rhs[..., :n, :])
     for i in range(n):
         b = diag[..., i] - (off[..., i - 1] * c[..., i - 1] if i else 0.0)
         c[..., i] = off[..., i] / b
-        d[..., i] = (rhs[..., i] - (off[..., i - 1] * d[..., i - 1] if i else 0.0)) / b
+        prev = off[..., i - 1, None] * d[..., i - 1, :] if i else 0.0
+        d[..., i, :] = (rhs[..., i, :] - prev) / b[..., None]
     blk = tail.copy()
-    r = rhs[..., n:].copy()
+    r = rhs[..., n:, :].copy()
     if n:
         blk[..., 0, 0] -= off[..., n - 1] * c[..., n - 1]
-        r[..., 0] -= off[..., n - 1] * d[..., n - 1]
+        r[..., 0, :] -= off[..., n - 1, None] * d[..., n - 1, :]
     out = np.empty_like(rhs)
-    out[..., n:] = np.linalg.solve(blk, r[..., None])[..., 0]
+    out[..., n:, :] = np.linalg.solve(blk, r)
     for i in range(n - 1, -1, -1):
-        out[..., i] = d[..., i] - c[..., i] * out[..., i + 1]
+        out[..., i, :] = d[..., i, :] - c[..., i, None] * out[..., i + 1, :]
     return out
 
 
@@ -408,7 +503,8 @@ def solve_network(
     max_iter: int = 60,
     start: FloatArray | None = None,
 ) -> FloatArray:
-    """Loop fluxes (S, C, m + 2) (films, the window, the outer air) at ampere-turns (S, C).
+    """Loop fluxes (S, C, m + 4) (films, the window, the outer air, the end leaks) at
+    ampere-turns (S, C).
 
     Damped Newton: the full step, halved until the residual's norm falls (Armijo,
     [nocedal-wright] §3.1); the Jacobian is SPD tridiagonal (co-energy Hessian). Started at
@@ -420,7 +516,7 @@ def solve_network(
     ni = np.broadcast_to(ni, (net.turns.size, ni.shape[-1])).copy()
     if not np.all(np.isfinite(ni)):
         raise ParameterError("current: must be finite")
-    shape = (*ni.shape, net.m + 2)
+    shape = (*ni.shape, net.m + 4)
     x0 = None if start is None else np.broadcast_to(np.asarray(start, dtype=float), shape)
     out = np.zeros(shape)
     failed = []
@@ -442,15 +538,15 @@ _BLOCK = 1024  # designs per Newton block
 _FLOOR = 1e-8  # relative residual accepted when the line search finds no decrease
 
 
-def _take(net: Network, rows: slice) -> Network:
-    """The designs ``rows`` of ``net``."""
+def _take(net: Network, rows: slice | NDArray[np.bool_]) -> Network:
+    """The designs ``rows`` of ``net`` (a slice, or a mask)."""
     return replace(net, **{f.name: getattr(net, f.name)[rows] for f in fields(net)
                            if isinstance(getattr(net, f.name), np.ndarray)})  # fmt: skip
 
 
 def _newton(net, ni, mats, rtol, max_iter, start):  # type: ignore[no-untyped-def]
     """``solve_network`` on one block: (loop fluxes, indices of the rows not converged)."""
-    shape = (*ni.shape, net.m + 2)
+    shape = (*ni.shape, net.m + 4)
     if start is None:
         r0, j0 = _residual(net, mats, np.zeros(shape), ni)
         x = _solve(j0, -r0)
@@ -471,6 +567,7 @@ def _newton(net, ni, mats, rtol, max_iter, start):  # type: ignore[no-untyped-de
             out[rows[done]] = x[done]
             keep = ~done
             rows, x, ni, scale = rows[keep], x[keep], ni[keep], scale[keep]
+            net = _take(net, keep)  # the rest iterate on their own designs only
             res, jac, settled = res[keep], tuple(a[keep] for a in jac), settled[keep]
             err = err[keep]
             if rows.size == 0:
@@ -482,7 +579,7 @@ def _newton(net, ni, mats, rtol, max_iter, start):  # type: ignore[no-untyped-de
         t = np.where(settled, 0.0, 1.0)
         for _ls in range(30):
             xn = x + t[..., None] * step
-            rn, jn = _residual(net, mats, xn, ni, rows)
+            rn, jn = _residual(net, mats, xn, ni)
             better = settled | (np.sum((rn / scale) ** 2, axis=-1) <= (1 - 1e-4 * t) * norm0)
             if better.all():
                 break

@@ -488,8 +488,9 @@ def network_gap_torque(
     r0, r1 = np.tile(net.gap_r0, 2), np.tile(net.gap_r1, 2)
     g = (r1 - r0)[:, None, :, None, None]
     ok = length > 0
-    xl = np.abs(x[..., : net.m])
-    phi = np.concatenate([xl, xl], axis=-1) / np.where(ok, eff, 1.0)[:, None, :]  # Φ per m
+    xl, xe = x[..., : net.m], x[..., net.m + 2 :]
+    zones = np.abs(np.concatenate([xl - xe[..., :1], xl - xe[..., 1:]], axis=-1))  # A, B
+    phi = zones / np.where(ok, eff, 1.0)[:, None, :]  # Φ per metre of L_eff
     w_end = np.log1p(np.pi * depth / np.where(ok, r1 - r0, 1.0)[..., None])  # (S, K, 2)
     u, wt = np.polynomial.legendre.leggauss(_FRINGE_POINTS)
     w = 0.5 * w_end[:, None, :, :, None] * (u + 1.0)  # (S, 1, K, 2 ends, points)

@@ -154,8 +154,8 @@ class ClutchFigures:
 
 #: How far the reluctance network was off the FEM where measured (docs/magnetics.md,
 #: benchmarks/measure_network.py; tests/magnetics/test_network.py holds the floors).
-NETWORK_AGREEMENT = ("within ±10 % of the FEM on 94 % of 648 grid and 100 % of 200 random "
-                     "designs, worst −27 % … +17 %")  # fmt: skip
+NETWORK_AGREEMENT = ("within ±10 % of the FEM on 95 % of 648 grid and 100 % of 200 random "
+                     "designs, worst −29 % … +12 %")  # fmt: skip
 
 
 def clutch_figures(

@@ -40,7 +40,8 @@ def _single_loop(net):  # type: ignore[no-untyped-def]
     rungs = np.where(np.arange(net.m + 1) % net.m == 0, 0.0, 1e-13)[None] + 0 * net.rung_perm
     return replace(net, rung_perm=rungs, rung_fluid=0 * net.rung_fluid,
                    window_perm=small(net.window_perm), window_fluid=0 * net.window_fluid,
-                   outer_air=np.full_like(net.outer_air, 1e13))  # fmt: skip
+                   outer_air=np.full_like(net.outer_air, 1e13),
+                   end_leak=np.full_like(net.end_leak, 1e13))  # fmt: skip
 
 
 @settings(max_examples=20, deadline=None)
@@ -143,6 +144,8 @@ def _nodal(net, mats, ni):  # type: ignore[no-untyped-def]
     window = net.window_perm[s] + net.window_fluid[s] * mu[net.fluid] / net.band_len[s]
     branch(idx(1, m), idx(0, m), 1.0 / window)
     branch(idx(0, m), o, net.outer_air[s])
+    for z in (0, 1):  # the end leaks, pole to core past each zone's far end
+        branch(idx(z, m), idx(z, 0), net.end_leak[s, z])
     rhs[o] += ni / poles
     rhs[idx(1, m)] -= ni / poles
     g[0, :] = 0
@@ -160,15 +163,18 @@ def _nodal(net, mats, ni):  # type: ignore[no-untyped-def]
 
 @pytest.mark.parametrize("n", [1, 2, 4, 7])
 def test_ladder_solve_against_an_independent_nodal_solve(n):
-    """Linear materials: the loop-flux ladder (Thomas + 3×3 tail) equals a dense node-
-    potential solve of the same elements to 1e-9, with every leakage path present."""
+    """Linear materials: the loop-flux ladder (Thomas + 3×3 tail, bordered by the end
+    leaks) equals a dense node-potential solve of the same elements to 1e-9, with every
+    leakage path present (the paper preset has a front end leak: it is exercised)."""
     c, rg = _regions(n_drums=n)
     mats = linear_materials(800.0, 4.0)
     net = network_from_regions(rg, mats)
+    assert net.end_leak[0, 0] < 1e9  # the front leak is there
     ni = c.coil_turns * 3.0
     x = solve_network(net, [[ni]], mats, rtol=1e-14)[0, 0]
-    # loop fluxes are the zone-A film fluxes, flowing from core to pole (potential falls)
-    np.testing.assert_allclose(np.abs(x[: net.m]), np.abs(_nodal(net, mats, ni)), rtol=1e-9)
+    # the zone-A film fluxes x_k − e_A, flowing from core to pole (potential falls)
+    zone_a = x[: net.m] - x[net.m + 2]
+    np.testing.assert_allclose(np.abs(zone_a), np.abs(_nodal(net, mats, ni)), rtol=1e-9)
 
 
 @given(
@@ -263,7 +269,7 @@ def test_fringe_torque_is_the_fringe_permeance_in_the_linear_limit(n):
     c, rg = _regions(n_drums=n, gap=0.4e-3)
     net = network_from_regions(rg)
     i = 1e-5  # A: αH ≈ 6e-5, tanh linear to 1e-9
-    x = np.abs(solve_network(net, [[c.coil_turns * i]])[0, 0, : net.m])
+    sol = solve_network(net, [[c.coil_turns * i]])[0, 0]
     t = network_gap_torque(net, [[i]])[0, 0].reshape(2, net.m)
     r = 0.5 * (net.gap_r0[0] + net.gap_r1[0])
     g = net.gap_r1[0] - net.gap_r0[0]
@@ -271,6 +277,7 @@ def test_fringe_torque_is_the_fringe_permeance_in_the_linear_limit(n):
         eff, length = net.gap_eff[0, :, z], net.gap_len[0, :, z]
         own = length + sum((g / np.pi) * np.log1p(np.pi * net.fringe_h[0, :, z, e] / g)
                            for e in (0, 1))  # fmt: skip
+        x = np.abs(sol[: net.m] - sol[net.m + 2 + z])  # the zone's film flux
         h_e = magnetic(net.fluid).h_of_b(x / (2 * np.pi * r * eff))
         expect = 2 * np.pi * r**2 * FLUIDS[net.fluid].tau_y(h_e) * own
         np.testing.assert_allclose(t[z], expect, rtol=1e-9)
@@ -310,17 +317,17 @@ def measured():  # type: ignore[no-untyped-def]
 def test_network_against_the_fem_reference(measured):
     """Torque at 2, 4, 7 A against the FEM (0.25 mm, mid-line) on the 648-design grid and
     200 random designs (benchmarks/measure_network.py). Measured: within ±10 % on 94 % of
-    the grid and 100 % of the random designs (±5 %: 70 %, 86 %), worst −27 … +17 %; the
+    the grid and 99.5 % of the random designs (±5 %: 74 %, 86 %), worst −29 … +12 %; the
     single loop 39 %, 38 %,
     worst −86 … +77 %. The issue's goal (±5 % on ≥ 90 %, ±10 % on all) is not met. Floors
     just under the measurement: a regression guard, not a fitted parameter."""
     err, rnd, _ = measured["network"]
     old, _, _ = measured["circuit"]
     within = lambda e: float(np.mean(np.abs(e) <= 0.10))  # noqa: E731
-    assert within(err[~rnd]) >= 0.92 and within(err[rnd]) >= 0.98
-    assert float(np.mean(np.abs(err[~rnd]) <= 0.05)) >= 0.68
+    assert within(err[~rnd]) >= 0.93 and within(err[rnd]) >= 0.98
+    assert float(np.mean(np.abs(err[~rnd]) <= 0.05)) >= 0.72
     assert float(np.mean(np.abs(err[rnd]) <= 0.05)) >= 0.84
-    assert np.abs(err).max() <= 0.28
+    assert np.abs(err).max() <= 0.30
     for sel in (~rnd, rnd):  # better than the single loop on both sets, by far
         assert within(err[sel]) >= within(old[sel]) + 0.25
         assert np.abs(err[sel]).max() < 0.5 * np.abs(old[sel]).max()
@@ -334,14 +341,14 @@ def test_network_against_the_fem_reference(measured):
 
 
 def test_network_is_better_than_the_loop_at_every_drum_count(measured):
-    """Per drum count on the grid, within ±10 %: the network 93–94 %, the loop 17–64 %
+    """Per drum count on the grid, within ±10 %: the network 86–98 %, the loop 17–64 %
     (worst at 5–6 drums, 17–24 %)."""
     err, rnd, f = measured["network"]
     old, _, _ = measured["circuit"]
     for n in range(1, 7):
         sel = (f["n_drums"] == n) & ~rnd
         net, loop = (float(np.mean(np.abs(e[sel]) <= 0.1)) for e in (err, old))
-        assert net >= 0.9 and net >= loop + (0.6 if n >= 5 else 0.25)
+        assert net >= 0.84 and net >= loop + (0.6 if n >= 5 else 0.25)
 
 
 def test_reference_data_is_the_stored_measurement():
