@@ -206,7 +206,7 @@ SWEEP_OPTIONAL: tuple[str, ...] = (
     "max_passive_K_N_per_m",  # about ×1.7
     "max_stable_K_N_per_m",  # design by design, about ×8
     "zwidth_area_N2_s_per_m2",  # about ×7
-    "network_max_torque_N_m",  # about ×2
+    "network_max_torque_N_m",  # about ×2.7
 )
 
 
