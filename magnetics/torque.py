@@ -299,7 +299,7 @@ def _gap_torque(path, phi, radial, materials, fluid, convention=DEFAULT_CONVENTI
     tab = _yield_table(magnetic(path.fluid, mats), FLUIDS[path.fluid] if fluid is None else fluid)
     length = path.gap_len[:, None, :]
     band = (0.5 * path.band_len)[:, None, None]
-    phi = phi[:, :, None] if phi.ndim == 2 else phi  # one flux for every gap, or one each
+    phi = phi[:, :, None]  # one flux through every gap (the loop)
     c = phi / (2 * np.pi * length)  # B·r in the zone, T·m
     q1 = np.abs(radial[:, :, None] / path.band_reluctance[:, None, None])  # band: B·r at u = 1
     if convention == "mid-line":
