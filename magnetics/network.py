@@ -290,6 +290,16 @@ def _odd(mat: Magnetic, phi: FloatArray, k: FloatArray, w: FloatArray):  # type:
     return np.copysign(f, phi), d
 
 
+def _each(mat: Magnetic, phi: FloatArray, k: FloatArray, w: FloatArray):  # type: ignore[no-untyped-def]
+    """w·H(k·Φ) and its Φ-derivative element by element (one Gauss point each), Φ of any
+    sign (H odd)."""
+    h, dh = mat.h_dh(k * np.abs(phi))
+    h *= w
+    dh *= w
+    dh *= k
+    return np.copysign(h, phi), dh
+
+
 def _outer_air_permeance(radius: FloatArray, band: FloatArray, pole: FloatArray) -> FloatArray:
     """Permeance (H) of the air outside the shell between its two poles, in parallel with
     the back iron ([roters1941] ch. 5, flux tubes).
@@ -397,15 +407,13 @@ def _residual(net: Network, mats, x: FloatArray, ni: FloatArray):  # type: ignor
     ex = lambda a: a[:, None]  # noqa: E731  (S, 1, …): broadcast over currents
     m = net.m
     xl, xw, xo, xe = x[..., :m], x[..., m], x[..., m + 1], x[..., m + 2 :]
-    g, dg = np.zeros_like(xl), np.zeros_like(xl)
-    gz, dgz = [], []
-    for z in (0, 1):  # each zone's films and drum walls, at the zone's film flux
-        xz = xl - xe[..., z : z + 1]
-        a, da = _odd(fluid, xz, ex(net.fluid_k[..., z : z + 1]), ex(net.fluid_w[..., z : z + 1]))
-        b, db = _odd(steel, xz, ex(net.wall_k[..., z : z + 1]), ex(net.wall_w[..., z : z + 1]))
-        gz.append(a + b)
-        dgz.append(da + db)
-        g, dg = g + a + b, dg + da + db
+    # each zone's films and drum walls, at the zone's film flux (…, m, 2)
+    xz = np.stack([xl - xe[..., :1], xl - xe[..., 1:]], axis=-1)
+    a, da = _each(fluid, xz, ex(net.fluid_k), ex(net.fluid_w))
+    b, db = _each(steel, xz, ex(net.wall_k), ex(net.wall_w))
+    gzz, dgzz = a + b, da + db
+    gz, dgz = (gzz[..., 0], gzz[..., 1]), (dgzz[..., 0], dgzz[..., 1])
+    g, dg = gz[0] + gz[1], dgz[0] + dgz[1]
     # rung fluxes, A → B: y0 = −x0 (core), y_i = x_{i−1} − x_i, y_m = x_{m−1} + x_w (shell)
     y = np.concatenate([-xl[..., :1], xl[..., :-1] - xl[..., 1:], (xl[..., -1] + xw)[..., None]],
                        axis=-1)  # fmt: skip
@@ -458,9 +466,9 @@ def _solve(jac, rhs: FloatArray) -> FloatArray:  # type: ignore[no-untyped-def]
     # the ladder's solve for the right-hand side and both border columns at once
     uv = _solve_ladder((diag, off, tail), np.concatenate([rhs[..., :n, None], border], -1))
     u, v = uv[..., 0], uv[..., 1:]
-    bv = (border[..., :, :, None] * v[..., :, None, :]).sum(-3)  # Bᵀ·A⁻¹·B, (…, 2, 2)
-    schur = corner - bv
-    re = rhs[..., n:] - (border * u[..., None]).sum(-2)
+    bt = np.swapaxes(border, -1, -2)
+    schur = corner - bt @ v  # D − Bᵀ·A⁻¹·B, (…, 2, 2)
+    re = rhs[..., n:] - (bt @ u[..., None])[..., 0]
     det = schur[..., 0, 0] * schur[..., 1, 1] - schur[..., 0, 1] * schur[..., 1, 0]
     e0 = (schur[..., 1, 1] * re[..., 0] - schur[..., 0, 1] * re[..., 1]) / det
     e1 = (schur[..., 0, 0] * re[..., 1] - schur[..., 1, 0] * re[..., 0]) / det
