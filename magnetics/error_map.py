@@ -30,8 +30,16 @@ import numpy as np
 
 from geometry.params import preset
 
-#: The measured map (data, not code): written by benchmarks/measure_circuit_map.py.
-DATA_FILE = Path(__file__).parent / "data" / "circuit_error_map.json"
+#: The measured maps (data, not code), one per fast torque model: the circuit's written by
+#: benchmarks/measure_circuit_map.py, the reluctance network's by
+#: benchmarks/measure_network_map.py (from the stored FEM reference).
+DATA_FILES = {
+    "circuit": Path(__file__).parent / "data" / "circuit_error_map.json",
+    "network": Path(__file__).parent / "data" / "network_error_map.json",
+}
+DATA_FILE = DATA_FILES["circuit"]
+#: How each model is named in the notes.
+LABELS = {"circuit": "saturating circuit", "network": "reluctance network"}
 
 
 @dataclass(frozen=True)
@@ -49,10 +57,10 @@ class ErrorMap:
     range_factor: float
 
 
-@functools.lru_cache(maxsize=1)
-def load() -> ErrorMap:
-    """The map from DATA_FILE (read once)."""
-    d = json.loads(DATA_FILE.read_text())
+@functools.lru_cache(maxsize=2)
+def load(model: str = "circuit") -> ErrorMap:
+    """The map of ``model`` ("circuit" | "network") from DATA_FILES (read once)."""
+    d = json.loads(DATA_FILES[model].read_text())
     return ErrorMap(
         base_preset=d["base_preset"],
         reference_fem_size=float(d["reference_fem_size_m"]),
@@ -135,9 +143,9 @@ class CircuitError:
     notes: tuple[str, ...] = ()
 
 
-@functools.lru_cache(maxsize=1)
-def _grid() -> tuple[Mapping[str, tuple[float, ...]], np.ndarray]:
-    m = load()
+@functools.lru_cache(maxsize=2)
+def _grid(model: str = "circuit") -> tuple[Mapping[str, tuple[float, ...]], np.ndarray]:
+    m = load(model)
     grid = np.array(m.errors, dtype=float).reshape([len(v) for v in m.axes.values()])
     grid.flags.writeable = False
     return m.axes, grid
@@ -152,12 +160,12 @@ def _base_off_axes() -> dict[str, Any]:
     return {f.name: getattr(base, f.name) for f in fields(base) if f.name not in skip}
 
 
-def error_bound(p: Mapping[str, Any]) -> tuple[Any, Any, tuple[str, ...]]:
+def error_bound(p: Mapping[str, Any], model: str = "circuit") -> tuple[Any, Any, tuple[str, ...]]:
     """Vectorised core of :func:`circuit_error` over DrumClutch fields ``p`` (scalars or
     arrays, e.g. geometry.params.broadcast_fields): (estimate, bound, names of the fields
-    off the map's axes that differ from the base preset somewhere)."""
-    m = load()
-    axes, grid = _grid()
+    off the map's axes that differ from the base preset somewhere), by ``model``'s map."""
+    m = load(model)
+    axes, grid = _grid(model)
     est, spread, rng = _interp(axes, grid, {k: p[k] for k in axes})
     off = np.zeros(np.shape(est), bool)
     names = []
@@ -177,22 +185,25 @@ def error_bound(p: Mapping[str, Any]) -> tuple[Any, Any, tuple[str, ...]]:
     return est, bound, tuple(names)
 
 
-def circuit_error(clutch: Any) -> CircuitError:
-    """The map's estimate and bound of the saturating circuit's torque error on ``clutch``."""
-    m = load()
-    est, bound, off = error_bound({f.name: getattr(clutch, f.name) for f in fields(clutch)})
+def circuit_error(clutch: Any, model: str = "circuit") -> CircuitError:
+    """The map's estimate and bound of ``model``'s torque error on ``clutch`` (the
+    saturating circuit by default; "network": the reluctance network)."""
+    m = load(model)
+    label = LABELS[model]
+    est, bound, off = error_bound({f.name: getattr(clutch, f.name) for f in fields(clutch)},
+                                  model)  # fmt: skip
     if off and not math.isfinite(est):
         return CircuitError(
             math.nan,
             math.inf,
             (
-                f"saturating circuit: off the measured error map — the map holds "
+                f"{label}: off the measured error map — the map holds "
                 f"{', '.join(off)} at the {m.base_preset} preset's values and this design "
                 f"differs; its error is unknown (check it with --fidelity reference)",
             ),
         )
     if not math.isfinite(est):
-        axes = _grid()[0]
+        axes = _grid(model)[0]
         where = ", ".join(
             f"{k} = {v:g}" if k == "n_drums" else f"{k} = {v * 1e3:g} mm"
             for k, v in ((k, getattr(clutch, k)) for k in axes)
@@ -201,8 +212,8 @@ def circuit_error(clutch: Any) -> CircuitError:
             math.nan,
             math.inf,
             (
-                f"saturating circuit: {where} is outside the measured error map "
-                f"(benchmarks/measure_circuit_map.py); its error is unknown",
+                f"{label}: {where} is outside the measured error map "
+                f"(benchmarks/measure_{model}_map.py); its error is unknown",
             ),
         )
     notes: tuple[str, ...] = ()

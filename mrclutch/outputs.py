@@ -133,6 +133,9 @@ _ALL = (
            "reluctance network (magnetics.network) in place of the circuit's, the same drag; "
            "its error against the FEM on 848 measured designs: docs/magnetics.md",
            "max torque (network)"),
+    Output("network_error_bound", "1", "largest |relative error| of the network's torque "
+           "against the FEM in its measured error map's cell of this design (inf: off the "
+           "map; magnetics/data/network_error_map.json)", "network error bound"),
 )  # fmt: skip
 
 #: Every output, by key.
@@ -207,6 +210,7 @@ SWEEP_OPTIONAL: tuple[str, ...] = (
     "max_stable_K_N_per_m",  # design by design, about ×8
     "zwidth_area_N2_s_per_m2",  # about ×7
     "network_max_torque_N_m",  # about ×2.7
+    "network_error_bound",  # with network_max_torque_N_m
 )
 
 

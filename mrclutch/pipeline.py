@@ -35,7 +35,7 @@ from magnetics import thermal
 from magnetics.circuit import path_from_regions, path_from_section
 from magnetics.drag import Drag, coupled_fluid_inertia, drag_terms, totals
 from magnetics.dynamics import torque_response
-from magnetics.error_map import error_bound
+from magnetics.error_map import circuit_error, error_bound
 from magnetics.materials import FLUIDS
 from magnetics.network import network_from_regions
 from magnetics.torque import (
@@ -152,12 +152,6 @@ class ClutchFigures:
         }
 
 
-#: How far the reluctance network was off the FEM where measured (docs/magnetics.md,
-#: benchmarks/measure_network.py; tests/magnetics/test_network.py holds the floors).
-NETWORK_AGREEMENT = ("within ±10 % of the FEM on 95 % of 648 grid and 100 % of 200 random "
-                     "designs, worst −29 % … +12 %")  # fmt: skip
-
-
 def clutch_figures(
     design: ClutchDesign, fidelity: str = "fast", accuracy: float | None = None
 ) -> ClutchFigures:
@@ -201,9 +195,14 @@ def clutch_figures(
     if torque_method == "circuit" and extra:  # the circuit is not trusted here: a second model
         net = torque_curve(section, [i_max], method="network", speed_rpm=op.input_speed_rpm,
                            temperature=temp, support=design.support)  # fmt: skip
+        err = circuit_error(c, "network")
+        where = (f"its measured error map: {err.estimate:+.1%} against the FEM, bound "
+                 f"{err.bound:.1%}" if math.isfinite(err.bound)
+                 else "off its measured error map, where it is within ±10 % of the FEM on "
+                 "95 % of the grid")  # fmt: skip
         extra = (*extra, f"reluctance network: max torque {float(net.torque[0]):.4g} N·m "
                  f"({float(net.torque[0]) / float(curve.torque[0]) - 1:+.1%} on the circuit's; "
-                 f"{NETWORK_AGREEMENT}; `mrclutch torque --method network`)")  # fmt: skip
+                 f"{where}; `mrclutch torque --method network`)")  # fmt: skip
     d, length = section.envelope
     notes = tuple(mass.notes) + extra + drag.notes + _thermal_notes(design, thermal)
     return ClutchFigures(
@@ -471,6 +470,10 @@ class BatchEvaluator:
     def __post_init__(self) -> None:
         for key in self.optional:
             check_choice("optional column", key, SWEEP_OPTIONAL)
+        net = ("network_max_torque_N_m", "network_error_bound")
+        if any(k in self.optional for k in net):  # the network's torque comes with its bound
+            more = tuple(k for k in net if k not in self.optional)
+            object.__setattr__(self, "optional", (*self.optional, *more))
 
     @property
     def columns(self) -> tuple[str, ...]:
@@ -568,11 +571,13 @@ def evaluate_batch(
     }
     if network:
         out["network_max_torque_N_m"] = fig["network_yield"] + off_torque
+        out["network_error_bound"] = np.where(ok, error_bound(p, "network")[1], np.nan)
     opt_in = {
         "max_passive_K_N_per_m": passivity,
         "max_stable_K_N_per_m": stability,
         "zwidth_area_N2_s_per_m2": zwidth,
         "network_max_torque_N_m": network,
+        "network_error_bound": network,
     }
     extra = tuple(k for k, on in opt_in.items() if on)
     columns = (*SWEEP_COLUMNS, *extra)

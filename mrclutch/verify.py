@@ -24,6 +24,7 @@ import numpy as np
 
 from geometry.atomic import atomic_path
 from geometry.validation import ParameterError
+from magnetics.error_map import circuit_error
 from magnetics.torque import torque_curve
 from mrclutch.design import ClutchDesign
 from mrclutch.sweep import SweepSpec, read_results
@@ -34,7 +35,8 @@ BOUND = "circuit_error_bound"
 COLUMNS = ("design_id", "objective", "objective_value", "fast_max_torque_N_m",
            "fast_fidelity", "fem_max_torque_N_m", "fem_fidelity", "relative_error",
            "circuit_error_bound", "within_bound", "network_max_torque_N_m",
-           "network_fidelity", "network_relative_error")  # fmt: skip
+           "network_fidelity", "network_relative_error", "network_error_bound",
+           "network_within_bound")  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -45,6 +47,7 @@ class VerifiedRow:
     fem_torque: float  # N·m, the FEM's at fem_size
     bound: float  # the row's circuit_error_bound (inf: off the map)
     network_torque: float  # N·m, the reluctance network's (yield + the same drag)
+    network_bound: float  # its measured error map's bound (inf: off the map)
 
     @property
     def error(self) -> float:
@@ -55,6 +58,10 @@ class VerifiedRow:
     def network_error(self) -> float:
         """Relative error of the network's torque against the FEM's."""
         return self.network_torque / self.fem_torque - 1
+
+    @property
+    def network_within_bound(self) -> bool:
+        return abs(self.network_error) <= self.network_bound
 
     @property
     def within_bound(self) -> bool:
@@ -136,7 +143,9 @@ def verify_top(
     ids = [int(res["design_id"][i]) for i in rows]
     keys, fast, bounds = (res[c][rows].astype(float).tolist() for c in (key, TORQUE, BOUND))
     net = [_max_torque(d, "network") for d in designs]
-    return [VerifiedRow(*row) for row in zip(ids, keys, fast, fem, bounds, net, strict=True)]
+    net_bound = [circuit_error(d.clutch, "network").bound for d in designs]
+    return [VerifiedRow(*row)
+            for row in zip(ids, keys, fast, fem, bounds, net, net_bound, strict=True)]  # fmt: skip
 
 
 def write_verified(path: str | Path, rows: Sequence[VerifiedRow], key: str, fem_size: float
@@ -150,5 +159,6 @@ def write_verified(path: str | Path, rows: Sequence[VerifiedRow], key: str, fem_
             w.writerow([r.design_id, key, repr(r.objective_value), repr(r.fast_torque),
                         "circuit (sweep fast path)", repr(r.fem_torque), fem, repr(r.error),
                         repr(r.bound), int(r.within_bound), repr(r.network_torque),
-                        "network (reluctance ladder)", repr(r.network_error)])  # fmt: skip
+                        "network (reluctance ladder)", repr(r.network_error),
+                        repr(r.network_bound), int(r.network_within_bound)])  # fmt: skip
     return Path(path)

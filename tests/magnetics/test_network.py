@@ -331,13 +331,6 @@ def test_network_against_the_fem_reference(measured):
     for sel in (~rnd, rnd):  # better than the single loop on both sets, by far
         assert within(err[sel]) >= within(old[sel]) + 0.25
         assert np.abs(err[sel]).max() < 0.5 * np.abs(old[sel]).max()
-    # what evaluate's note states is this measurement
-    from mrclutch.pipeline import NETWORK_AGREEMENT
-
-    stated = (f"{within(err[~rnd]):.0%} of 648 grid and {within(err[rnd]):.0%} of 200 random",
-              f"worst {err.min():+.0%} … {err.max():+.0%}".replace("-", "−"))  # fmt: skip
-    for part in stated:
-        assert part.replace("%", " %") in NETWORK_AGREEMENT, (part, NETWORK_AGREEMENT)
 
 
 def test_network_is_better_than_the_loop_at_every_drum_count(measured):
@@ -349,6 +342,29 @@ def test_network_is_better_than_the_loop_at_every_drum_count(measured):
         sel = (f["n_drums"] == n) & ~rnd
         net, loop = (float(np.mean(np.abs(e[sel]) <= 0.1)) for e in (err, old))
         assert net >= 0.84 and net >= loop + (0.6 if n >= 5 else 0.25)
+
+
+def test_the_networks_error_map_is_this_measurement_and_bounds_its_checks():
+    """magnetics/data/network_error_map.json is the network against the stored FEM
+    reference at 7 A (re-measured here: the map is a test of the network, and stale data
+    fails), and its bound — interpolation plus the measured margin — covers every one of
+    the 200 off-grid random designs it was checked on."""
+    sys.path.insert(0, str(BENCH))
+    try:
+        import measure_network_map as mm
+    finally:
+        sys.path.remove(str(BENCH))
+    from magnetics.error_map import error_bound, load
+
+    axes, errs, checks = mm.measure()
+    stored = load("network")
+    assert dict(stored.axes) == {k: tuple(v) for k, v in axes.items()}
+    np.testing.assert_allclose(stored.errors, errs, atol=1e-5)  # stored to 5 decimals
+    base = vars(PAPER)
+    for c, e in checks:
+        _, bound, off = error_bound({**base, **c}, "network")
+        assert not off and abs(e) <= bound + 1e-12, (c, e, bound)
+    assert 0.0 < stored.range_factor < 1.0
 
 
 def test_reference_data_is_the_stored_measurement():

@@ -152,3 +152,10 @@ def test_network_torque_column_is_the_network_curve_with_the_same_drag():
         assert out["network_max_torque_N_m"][i] == pytest.approx(tc.torque[0], rel=1e-9)
         assert out["network_max_torque_N_m"][i] != out["max_torque_N_m"][i]
     assert np.isnan(out["network_max_torque_N_m"][2])
+    # with its own measured error bound (the paper preset is a node of the map)
+    from magnetics.error_map import circuit_error
+
+    assert out["network_error_bound"][1] == pytest.approx(
+        circuit_error(replace(base.clutch, n_drums=2), "network").bound, rel=1e-12
+    )
+    assert np.isnan(out["network_error_bound"][2])

@@ -98,8 +98,13 @@ def test_sweep_with_optional_columns_writes_them_after_the_default_ones(tmp_path
         rows = list(csv.DictReader(fh))
     assert len(rows) == 6
     cols = list(rows[0])
-    tail = ["max_passive_K_N_per_m", "zwidth_area_N2_s_per_m2", "network_max_torque_N_m"]
-    assert cols[-3:] == tail and all(c in cols for c in SWEEP_COLUMNS)
+    tail = [
+        "max_passive_K_N_per_m",
+        "zwidth_area_N2_s_per_m2",
+        "network_max_torque_N_m",
+        "network_error_bound",
+    ]  # the network's torque comes with its bound
+    assert cols[-4:] == tail and all(c in cols for c in SWEEP_COLUMNS)
     assert "backdrive_force_N" in SWEEP_COLUMNS
     for r in rows:
         assert float(r["zwidth_area_N2_s_per_m2"]) > 0

@@ -78,6 +78,11 @@ def test_the_top_two_rows_are_re_solved_by_the_fem_and_written_beside_the_result
             rel=1e-12,
         )
         assert float(r["network_relative_error"]) == pytest.approx(net / fem - 1, rel=1e-12)
+        from magnetics.error_map import circuit_error
+
+        nb = circuit_error(d.clutch, "network").bound
+        assert float(r["network_error_bound"]) == pytest.approx(nb, rel=1e-12)
+        assert r["network_within_bound"] == str(int(abs(net / fem - 1) <= nb))
         assert r["design_id"] in out
     assert "circuit vs FEM: max |error|" in out and "r.csv.verified.csv" in out
     assert "network vs FEM: max |error|" in out
