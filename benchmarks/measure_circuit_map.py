@@ -104,27 +104,43 @@ def main() -> None:
     write(errs, fem_bound, len(sliced), measured)
 
 
+def map_data(
+    errs: list[float], checks: list[tuple[dict[str, float], float]], axes: dict | None = None
+) -> tuple[dict, float]:
+    """The map's measured part — axes, errors, checks, range_factor — and the raw factor:
+    the largest interpolation miss at the checks over the local variation of the map there
+    (magnetics.error_map). Shared by the circuit's and the network's maps."""
+    import numpy as np
+
+    sys.path.insert(0, str(OUT.parents[2]))
+    from magnetics.error_map import _interp
+
+    axes = AXES if axes is None else axes
+    grid = np.array(errs).reshape([len(v) for v in axes.values()])
+    ratios = []
+    for c, e in checks:
+        est, _, rng = _interp(axes, grid, c)
+        if math.isfinite(e) and math.isfinite(est) and rng > 0:
+            ratios.append(abs(e - est) / rng)
+    factor = max(ratios)
+    num = lambda e: round(e, 5) if math.isfinite(e) else None  # noqa: E731  (JSON: null = NaN)
+    keys = ("n_drums", "gap", "zone_length", "drum_inner_diameter", "drum_thickness")
+    return {
+        "axes": {k: list(v) for k, v in axes.items()},
+        "errors": [num(e) for e in errs],
+        "checks": [[*(c[k] for k in keys), num(e)] for c, e in checks],
+        "range_factor": math.ceil(factor * 100) / 100,
+    }, factor
+
+
 def write(
     errs: list[float],
     fem_bound: dict[float, float],
     n_sliced: int,
     checks: list[tuple[dict[str, float], float]],
 ) -> None:
-    """Write the data file; range_factor = the largest interpolation miss at the checks
-    over the local variation of the map there (magnetics.error_map)."""
-    import numpy as np
-
-    sys.path.insert(0, str(OUT.parents[2]))
-    from magnetics.error_map import _interp
-
-    grid = np.array(errs).reshape([len(v) for v in AXES.values()])
-    ratios = []
-    for c, e in checks:
-        est, _, rng = _interp(AXES, grid, c)
-        if math.isfinite(e) and math.isfinite(est) and rng > 0:
-            ratios.append(abs(e - est) / rng)
-    factor = max(ratios)
-    num = lambda e: round(e, 5) if math.isfinite(e) else None  # noqa: E731  (JSON: null = NaN)
+    """Write the data file (``map_data`` and the FEM's coarse bounds)."""
+    measured, factor = map_data(errs, checks)
     data = {
         "about": (
             "Measured torque error of the saturating circuit against the FEM (signed, "
@@ -141,21 +157,11 @@ def write(
         "generated_by": "python benchmarks/measure_circuit_map.py",
         "base_preset": "paper",
         "reference_fem_size_m": REFERENCE_SIZE,
-        "axes": {k: list(v) for k, v in AXES.items()},
-        "errors": [num(e) for e in errs],
+        "axes": measured["axes"],
+        "errors": measured["errors"],
         "fem_error_bound": {repr(s): round(v, 5) for s, v in fem_bound.items()},
-        "checks": [
-            [
-                c["n_drums"],
-                c["gap"],
-                c["zone_length"],
-                c["drum_inner_diameter"],
-                c["drum_thickness"],
-                num(e),
-            ]
-            for c, e in checks
-        ],
-        "range_factor": math.ceil(factor * 100) / 100,
+        "checks": measured["checks"],
+        "range_factor": measured["range_factor"],
     }
     OUT.write_text(json.dumps(data, indent=1) + "\n")
     print(f"wrote {OUT}: FEM bounds {fem_bound}, range factor {factor:.3f}")

@@ -59,18 +59,13 @@ def measure() -> tuple[dict, list[float], list[tuple[dict[str, float], float]]]:
 
 
 def main() -> None:
-    from magnetics.error_map import DATA_FILES, _interp
+    from measure_circuit_map import map_data
+
+    from magnetics.error_map import DATA_FILES
 
     axes, errs, checks = measure()
-    grid = np.array(errs).reshape([len(v) for v in axes.values()])
-    ratios = []
-    for c, e in checks:
-        est, _, rng = _interp(axes, grid, c)
-        if math.isfinite(e) and math.isfinite(est) and rng > 0:
-            ratios.append(abs(e - est) / rng)
-    factor = max(ratios)
+    measured, factor = map_data(errs, checks, axes)
     circuit = json.loads(DATA_FILES["circuit"].read_text())
-    num = lambda e: round(e, 5) if math.isfinite(e) else None  # noqa: E731  (JSON: null = NaN)
     data = {
         "about": (
             "Measured torque error of the reluctance network against the FEM (signed, "
@@ -86,21 +81,9 @@ def main() -> None:
         "generated_by": "python benchmarks/measure_network_map.py",
         "base_preset": circuit["base_preset"],
         "reference_fem_size_m": circuit["reference_fem_size_m"],
-        "axes": {k: list(v) for k, v in axes.items()},
-        "errors": [num(e) for e in errs],
+        **{k: measured[k] for k in ("axes", "errors")},
         "fem_error_bound": circuit["fem_error_bound"],
-        "checks": [
-            [
-                c["n_drums"],
-                c["gap"],
-                c["zone_length"],
-                c["drum_inner_diameter"],
-                c["drum_thickness"],
-                num(e),
-            ]
-            for c, e in checks
-        ],
-        "range_factor": math.ceil(factor * 100) / 100,
+        **{k: measured[k] for k in ("checks", "range_factor")},
     }
     OUT.write_text(json.dumps(data, indent=1) + "\n")
     finite = np.abs([e for e in errs if math.isfinite(e)])
