@@ -26,12 +26,17 @@ node by a rung:
   [roters1941] ch. 5, leakage of a uniformly wound coil), and, beside the back iron, the
   air outside the shell (``_outer_air_permeance``).
 
+Past each zone's far end an end leak runs from the pole to the core through the regions
+in front of the walls (``_end_leak``), in parallel with the zone's stack: film k carries
+x_k − e_z in zone z. Each film's fringing reaches into the fluid pockets on its radii.
+
 Every steel and fluid element has its material's non-linear B–H (MMF = Σ w·H(k·Φ) at
-Gauss points, exact for a linear material). Unknowns: the loop fluxes x_k (the flux of
-film k in both zones; the ladder's loops) and the window's flux x_w. The equations are the
-loop MMF balances — the gradient of the network's (convex) magnetic co-energy — so the
-Jacobian is symmetric positive definite and tridiagonal: damped Newton with a backtracking
-line search on the residual, each step one batched Thomas solve, vectorised over designs ×
+Gauss points, exact for a linear material). Unknowns: the loop fluxes x_k (the ladder's
+loops), the window's x_w, the outer air's, and the end leaks' e_A, e_B. The equations are
+the loop MMF balances — the gradient of the network's (convex) magnetic co-energy — so the
+Jacobian is symmetric positive definite: tridiagonal with a 3 × 3 tail, bordered by the
+two end leaks. Damped Newton with a backtracking line search on the residual, each step
+one batched Thomas solve and a 2 × 2 Schur complement, vectorised over designs ×
 currents. A row that does not converge is refused (``NetworkConvergenceError``, the rows
 named), never returned.
 """
