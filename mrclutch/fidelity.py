@@ -97,6 +97,15 @@ def circuit_torque(design: ClutchDesign) -> float:
     return float(curve.torque[0])
 
 
+def network_torque(design: ClutchDesign) -> float:
+    """Torque at the current limit by the reluctance network (magnetics.network); warns
+    outside its trusted region (its own measured error map, circuit_trust)."""
+    warn(circuit_trust(design.clutch, "network"))
+    curve = torque_curve(design.clutch, [design.current_limit], method="network",
+                         speed_rpm=design.operating.input_speed_rpm)  # fmt: skip
+    return float(curve.torque[0])
+
+
 def fem_torque(design: ClutchDesign, size: float) -> float:
     """Torque at the current limit by the axisymmetric FEM at element size [m]."""
     curve = torque_curve(
@@ -176,6 +185,7 @@ def registry() -> tuple[Method, ...]:
     ms.append(Method("inertia", "brep", "OpenCascade", _brep_inertia, 1, True))
     ms.append(Method("torque", "linear circuit", "initial μr", linear_torque))
     ms.append(Method("torque", "saturating circuit", "B-H curves", circuit_torque))
+    ms.append(Method("torque", "reluctance network", "ladder from the section", network_torque))
     for s in FEM_SIZES_MM:
         ms.append(Method("torque", "fem", f"size {s:g} mm",
                          lambda d, s=s: fem_torque(d, s * 1e-3), 1 if s < 0.5 else 2,
@@ -254,7 +264,15 @@ def measure(
     for m in ms:
         if progress is not None:
             progress(f"{m.quantity}: {m.name} ({m.setting})")
-        raw.append((m, *_time(m, design, repeats)))
+        try:
+            raw.append((m, *_time(m, design, repeats)))
+        except ParameterError as e:
+            if m.reference:  # a quantity without its reference has no errors to show
+                raise
+            # a setting this design refuses (a mesh finer than 1e-4 of a larger clutch):
+            # the method is left out of the table, and the progress says why
+            if progress is not None:
+                progress(f"{m.quantity}: {m.name} ({m.setting}) skipped: {e}")
     ref = {m.quantity: v for m, _, v, _ in raw if m.reference}
     return tuple(
         Row(m.quantity, m.name, m.setting, t, v, abs(v / ref[m.quantity] - 1.0), m.reference, w)

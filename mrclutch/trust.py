@@ -24,7 +24,7 @@ from geometry.materials import STEEL
 from geometry.section import build_section
 from geometry.validation import ParameterError
 from magnetics.circuit import solve
-from magnetics.error_map import circuit_error, load
+from magnetics.error_map import LABELS, circuit_error, load
 from magnetics.materials import MATERIALS, MU0
 from mrclutch.design import ClutchDesign
 from mrclutch.haptics.actuator import HapticParams
@@ -79,16 +79,17 @@ def linear_circuit_trust(clutch: Any, current: float) -> tuple[str, ...]:
     return ()
 
 
-def circuit_trust(clutch: Any) -> tuple[str, ...]:
-    """Messages if the saturating circuit's torque may be more than CIRCUIT_TORQUE_TRUST off
-    the FEM on ``clutch``: the measured error map's bound (magnetics.error_map), or the
-    design lies outside the map (error unknown)."""
-    e = circuit_error(clutch)
+def circuit_trust(clutch: Any, model: str = "circuit") -> tuple[str, ...]:
+    """Messages if the saturating circuit's torque (``model`` "network": the reluctance
+    network's) may be more than CIRCUIT_TORQUE_TRUST off the FEM on ``clutch``: the measured
+    error map's bound (magnetics.error_map), or the design lies outside the map (error
+    unknown)."""
+    e = circuit_error(clutch, model)
     if not math.isfinite(e.bound):
         return e.notes
     if e.bound > CIRCUIT_TORQUE_TRUST:
         return (
-            f"saturating circuit: torque {e.estimate:+.1%} off the FEM by the measured error "
+            f"{LABELS[model]}: torque {e.estimate:+.1%} off the FEM by the measured error "
             f"map (bound {e.bound:.1%} > {CIRCUIT_TORQUE_TRUST:.0%}) at {clutch.n_drums} "
             f"drums, gap {clutch.gap * 1e3:g} mm, zone {clutch.zone_length * 1e3:g} mm; "
             f"use the FEM",
@@ -152,6 +153,7 @@ def warn(messages: Iterable[str], stacklevel: int = 2) -> tuple[str, ...]:
 #: Their error bounds come from the measured map (torque_error_bound).
 TORQUE_METHODS: tuple[tuple[str, float | None, float], ...] = (
     ("circuit", None, 0.0024),
+    ("network", None, 0.0054),  # the reluctance network, one design (docs/magnetics.md)
     ("fem", 1.0e-3, 0.11),
     ("fem", 0.5e-3, 0.21),
     ("fem", 0.35e-3, 0.41),
@@ -161,11 +163,11 @@ TORQUE_METHODS: tuple[tuple[str, float | None, float], ...] = (
 
 def torque_error_bound(clutch: Any, method: str, size: float | None) -> float:
     """Bound on the relative torque error of a method against the reference FEM: the
-    circuit's from the measured error map at this design (magnetics.error_map); a coarse
-    FEM's is the largest error measured over the map's slice (FEM_ERROR_BOUND); 0 for the
-    reference mesh size itself."""
-    if method == "circuit":
-        return circuit_error(clutch).bound
+    circuit's and the network's from their measured error maps at this design
+    (magnetics.error_map); a coarse FEM's is the largest error measured over the map's
+    slice (FEM_ERROR_BOUND); 0 for the reference mesh size itself."""
+    if method in ("circuit", "network"):
+        return circuit_error(clutch, method).bound
     m = load()
     if size == m.reference_fem_size:
         return 0.0
@@ -192,7 +194,7 @@ class Choice:
 
     accuracy: float
     inertia: str  # "analytic" | "brep"
-    torque: str  # "circuit" | "fem"
+    torque: str  # "circuit" | "network" | "fem"
     fem_size: float | None
     errors: Mapping[str, float]
     notes: tuple[str, ...]
@@ -218,18 +220,25 @@ def choose(design: ClutchDesign, accuracy: float) -> Choice:
         notes.append("inertia: the analytic method misses the hub holes; B-rep used")
     t_target = min(accuracy, 2 * accuracy - ei)
     circ = circuit_error(design.clutch)
-    bounds = [
-        (n, s, circ.bound if n == "circuit" else torque_error_bound(design.clutch, n, s), t)
-        for n, s, t in TORQUE_METHODS
-    ]
+    bounds = [(n, s, torque_error_bound(design.clutch, n, s), t) for n, s, t in TORQUE_METHODS]
     name, size, et, t = next(b for b in bounds if b[2] <= t_target)  # the reference: 0
+
+    def said(model: str, err: Any) -> str:
+        est = "unknown" if not math.isfinite(err.estimate) else f"{err.estimate:+.1%}"
+        return (f"the {model}'s error on this design is {est} by its measured map "
+                f"(bound {err.bound:.1%})")  # fmt: skip
+
+    if name == "network":
+        notes.append(
+            f"torque within {accuracy:.3g} by the reluctance network (~{t * 1e3:.0f} ms): "
+            f"{said('saturating circuit', circ)}; the network's bound is {et:.1%}"
+        )
     if name == "fem":
-        est = "unknown" if not math.isfinite(circ.estimate) else f"{circ.estimate:+.1%}"
+        net = circuit_error(design.clutch, "network")
         notes.append(
             f"torque within {accuracy:.3g} needs the FEM at {size * 1e3:g} mm (~{t:.2g} s): "
-            f"the saturating circuit's error on this design is {est} by the measured map "
-            f"(bound {circ.bound:.1%}), so this target cannot be had at circuit speed "
-            f"({bounds[0][3] * 1e3:.0f} ms)"
+            f"{said('saturating circuit', circ)} and {said('reluctance network', net)}, so "
+            f"this target cannot be had at their speed ({bounds[1][3] * 1e3:.0f} ms)"
         )
     return Choice(
         accuracy,
