@@ -605,3 +605,31 @@ def _newton(net, ni, mats, rtol, max_iter, start):  # type: ignore[no-untyped-de
         stalled = settled | small | (~better & (err <= _FLOOR))
         x, res, jac = xn, rn, jn
     return out, rows
+
+
+def flux_linkage(
+    net: Network, ampere_turns: ArrayLike, materials: Mapping[str, Magnetic] | None = None
+) -> tuple[FloatArray, FloatArray]:
+    """(λ [Wb], L_inc = dλ/dI [H]) of the coil at ampere-turns (S, C).
+
+    The coil's N·I drives the loops through the shell (loop m − 1 and the window), so the
+    co-energy's derivative is λ = ∂W'/∂I = N·(x_{m−1} + x_w) (the network's loop fluxes at
+    the solution). Its derivative follows from the solution's tangent: J·dx/dI = N·s with
+    s the loops' source pattern, so L_inc = N²·sᵀJ⁻¹s, one more solve with the Jacobian
+    at the solution (SPD, so L_inc > 0)."""
+    mats = MATERIALS if materials is None else materials
+    x = solve_network(net, ampere_turns, mats)
+    ni = np.broadcast_to(np.atleast_2d(np.asarray(ampere_turns, dtype=float)), x.shape[:-1])
+    m = net.m
+    n = net.turns[:, None]
+    source = np.zeros(x.shape)
+    source[..., m - 1] = source[..., m] = 1.0
+    lam, ind = np.zeros(x.shape[:-1]), np.zeros(x.shape[:-1])
+    for lo in range(0, x.shape[0], _BLOCK):  # the blocks solve_network used
+        blk = slice(lo, lo + _BLOCK)
+        part = net if x.shape[0] <= _BLOCK else _take(net, blk)
+        _, jac = _residual(part, mats, x[blk], np.ascontiguousarray(ni[blk]))
+        v = _solve(jac, source[blk])
+        lam[blk] = n[blk] * (x[blk, ..., m - 1] + x[blk, ..., m])
+        ind[blk] = n[blk] ** 2 * (v[..., m - 1] + v[..., m])
+    return lam, ind

@@ -40,6 +40,9 @@ class FEMSolution:
     #: cells along z: (r (I,), dz (J,), B_r (I, J), B_z (I, J)); B_r exact on the line
     #: (the normal component, from ψ at its two nodes), B_z the adjacent gap cells' mean
     gap_lines: tuple[tuple[FloatArray, FloatArray, FloatArray, FloatArray], ...] = ()
+    #: the coil's flux linkage λ = (N/A_coil)·∫_coil 2π ψ dA (Wb): each of its turns,
+    #: spread uniformly over its section as the source is, links the flux 2π ψ inside it
+    flux_linkage: float = float("nan")
 
     @property
     def b(self) -> FloatArray:
@@ -91,7 +94,12 @@ def post_process(grid: Grid, current: float, psi: FloatArray, iterations: int, r
                  ) -> FEMSolution:  # fmt: skip
     """The FEMSolution of the field ψ on ``grid``."""
     mesh, cen, r_qp = grid.mesh, grid.centre, grid.r_qp
-    g = grid.basis.interpolate(psi).grad
+    field = grid.basis.interpolate(psi)
+    g = field.grad
+    # λ = ∂W'/∂I = ∫ (J/I)·2π ψ dA with J = N·I/A_coil on the coil's elements
+    coil = grid.coil_mask
+    linkage = (2 * np.pi * grid.section.clutch.coil_turns / grid.coil_area
+               * float(np.sum((np.asarray(field) * grid.basis.dx)[coil])))  # fmt: skip
     br = (-g[1] / r_qp).mean(axis=1)
     bz = (g[0] / r_qp).mean(axis=1)
     bmag = np.hypot(br, bz)
@@ -130,4 +138,4 @@ def post_process(grid: Grid, current: float, psi: FloatArray, iterations: int, r
         rmid.append(gp.r_mean)
     return FEMSolution(float(current), grid.r_lines, grid.z_lines, cen[0], cen[1], br, bz,
                        grid.names, grid.material_index, iterations, residual, np.array(rmid),
-                       tuple(profiles), psi, tuple(lines))  # fmt: skip
+                       tuple(profiles), psi, tuple(lines), linkage)  # fmt: skip

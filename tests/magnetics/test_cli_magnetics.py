@@ -77,3 +77,24 @@ def test_torque_reports_flux_linkage_and_inductance(capsys):
     assert np.all(np.diff(lam) > 0) and np.all(np.diff(ind) < 0)
     mid = np.gradient(lam, cur)[1:-1]
     assert ind[1:-1] == pytest.approx(mid, rel=0.15)  # a 0.5 A step: a coarse difference
+
+
+def test_torque_by_the_network_reports_the_networks_flux_linkage(capsys):
+    """With --method network, λ(I) and L(I) are the network's (labelled so), not the
+    circuit's: the same numbers as magnetics.network.flux_linkage."""
+    import numpy as np
+
+    from geometry.params import preset
+    from geometry.section import build_section
+    from magnetics.network import flux_linkage, network_from_regions
+
+    assert main(["torque", "--preset", "paper", "--current", "1,4", "--method", "network",
+                 "--json"]) == 0  # fmt: skip
+    d = json.loads(capsys.readouterr().out)
+    assert d["flux_linkage_method"] == "network"
+    net = network_from_regions(build_section(preset("paper")).table)
+    lam, ind = flux_linkage(net, net.turns[:, None] * np.array([1.0, 4.0]))
+    np.testing.assert_allclose(d["flux_linkage_Wb"], lam[0], rtol=1e-12)
+    np.testing.assert_allclose(d["inductance_H"], ind[0], rtol=1e-12)
+    assert main(["torque", "--preset", "paper", "--current", "1", "--method", "network"]) == 0
+    assert "L_inc_mH (network)" in capsys.readouterr().out

@@ -371,3 +371,56 @@ def test_reference_data_is_the_stored_measurement():
     data = json.loads((BENCH / "data" / "fem_reference.json").read_text())
     assert data["currents_A"] == [2.0, 4.0, 7.0] and len(data["grid"]) == 648
     assert len(data["random"]) == 200
+
+
+def test_flux_linkage_is_the_coenergy_derivative_and_matches_the_fem():
+    """λ = N·(x_{m−1} + x_w) is ∂W'/∂I, and L_inc = N²·sᵀJ⁻¹s its derivative: equal to a
+    central difference of λ (1e-4; the B–H is piecewise linear), odd in the current. On the
+    paper preset the FEM's linkage, (N/A_coil)·∫_coil 2πψ dA, is within 1.1 % of the
+    network's at 0.5–7 A (measured −0.8 … −1.1 %), where the loop's is 5–10 % low."""
+    from magnetics.dynamics import flux_linkage as loop_linkage
+    from magnetics.fem import build_grid, solve_fem
+    from magnetics.network import flux_linkage
+
+    c, rg = _regions()
+    net = network_from_regions(rg)
+    cur = np.array([0.5, 2.0, 7.0])
+    lam, ind = flux_linkage(net, net.turns[:, None] * cur)
+    h = 1e-4
+    up, _ = flux_linkage(net, net.turns[:, None] * (cur + h))
+    lo, _ = flux_linkage(net, net.turns[:, None] * (cur - h))
+    np.testing.assert_allclose(ind, (up - lo) / (2 * h), rtol=1e-4)
+    neg, _ = flux_linkage(net, -net.turns[:, None] * cur)
+    np.testing.assert_allclose(neg, -lam, rtol=1e-12)
+    from geometry.section import build_section
+
+    sec = build_section(c)
+    grid = build_grid(sec, None, None)
+    fem = np.array([solve_fem(sec, float(i), grid=grid).flux_linkage for i in cur])
+    assert np.all(np.abs(lam[0] / fem - 1) <= 0.012)
+    loop, _ = loop_linkage(path_from_regions(rg), cur[None, :])
+    assert np.all(np.abs(loop[0] / fem - 1) > np.abs(lam[0] / fem - 1))
+
+
+def test_fem_flux_linkage_is_linear_with_linear_materials():
+    """The FEM's linkage is the coil-weighted mean of 2πψ: with linear materials it is
+    proportional to the current (to 1e-9), and λ·I is the field's energy ∫ ν|B|²·2πr dA
+    (twice the co-energy): read with B at the element centres the two differ by 0.66 % at
+    1 mm and 0.43 % at 0.5 mm — the gap closes as the mesh is refined."""
+    from geometry.section import build_section
+    from magnetics.fem import build_grid, solve_fem
+
+    c, _ = _regions()
+    mats = linear_materials(800.0, 4.0)
+    sec = build_section(c)
+    miss = []
+    for size in (1e-3, 0.5e-3):
+        grid = build_grid(sec, size, mats)
+        a, b = (solve_fem(sec, i, materials=mats, grid=grid) for i in (1.0, 3.0))
+        assert b.flux_linkage == pytest.approx(3.0 * a.flux_linkage, rel=1e-9)
+        nu = np.array([1.0 / mats[name].mu_initial for name in b.material])[b.material_index]
+        p, t = grid.mesh.p, grid.mesh.t
+        area = np.ptp(p[0, t], axis=0) * np.ptp(p[1, t], axis=0)
+        energy = float(np.sum(nu * (b.b_r**2 + b.b_z**2) * 2 * np.pi * b.centre_r * area))
+        miss.append(abs(b.flux_linkage * 3.0 / energy - 1))
+    assert miss[0] < 0.01 and miss[1] < 0.8 * miss[0]
