@@ -72,6 +72,11 @@ def test_html_names_the_findings_and_links_every_figure(report_dir):
     metrics = json.loads((report_dir / "metrics.json").read_text())
     assert f"{metrics['haptic']['bandwidth_hz']:.1f} Hz" in page
     assert ("NOT passive" in page) == (not metrics["haptic"]["passive"])
+    # the torque figure's three models, and how far each fast one is from the FEM
+    tc = metrics["torque_curve"]
+    assert {"circuit", "network", "fem"} <= set(tc)
+    assert f"reluctance network vs FEM by {tc['network_vs_fem_max_error_rel'] * 100:.1f} %" in page
+    assert tc["network_vs_fem_max_error_rel"] < 0.02  # the paper preset: within 1 % at 2/4/7 A
 
 
 def test_bad_design_file_leaves_nothing(tmp_path, capsys):
