@@ -368,20 +368,22 @@ def _end_leak(rg: Regions, at, mats, walls: list[RegionSpec]) -> FloatArray:  # 
     return out
 
 
-def _band(fluid: Magnetic, y: FloatArray, perm: FloatArray, area: FloatArray, length: FloatArray
-          ):  # type: ignore[no-untyped-def]  # fmt: skip
+def _band(fluid: Magnetic, y: FloatArray, perm: FloatArray, area: FloatArray, length: FloatArray,
+          start: FloatArray | None = None):  # type: ignore[no-untyped-def]  # fmt: skip
     """MMF F (odd in y) and dF/dy of a band element: a linear permeance ``perm`` (H) in
     parallel with ``area`` (m²) of ``fluid`` over ``length`` (m), carrying flux y.
 
     The two share F = l·H: |y| = perm·l·H(B) + A·B for the fluid's B, solved by Newton on
     B from above the root (the linear start B0 = |y|/(A + perm·l·H'(0)) has r ≥ 0, since
-    H(B) ≥ H'(0)·B on a saturating curve); dF/dy = l·H'/(perm·l·H' + A). Without fluid
-    (A = 0) F = |y|/perm; with neither (the core's and shell's rungs) F = 0."""
+    H(B) ≥ H'(0)·B on a saturating curve), or from ``start`` (the fluid's B at the last
+    Newton iterate: 1–2 steps instead of 4–6); dF/dy = l·H'/(perm·l·H' + A). Without fluid
+    (A = 0) F = |y|/perm; with neither (the core's and shell's rungs) F = 0. Returns
+    (F, dF/dy, the fluid's B)."""
     a = np.abs(y)
     fl = area > 0
     lp = perm * length
     s0 = fluid.h_dh(np.zeros(1))[1][0]
-    b = a / np.where(fl, area + lp * s0, 1.0)
+    b = a / np.where(fl, area + lp * s0, 1.0) if start is None else start.copy()
     safe = np.where(fl, area, 1.0)  # the elements without fluid iterate harmlessly
     for _ in range(_BAND_ITER):
         h, dh = fluid.h_dh(b)
@@ -393,13 +395,13 @@ def _band(fluid: Magnetic, y: FloatArray, perm: FloatArray, area: FloatArray, le
     lin = np.where(perm > 0, 1.0 / np.where(perm > 0, perm, 1.0), 0.0)
     f = np.where(fl, length * h, a * lin)
     d = np.where(fl, length * dh / (lp * dh + safe), lin)
-    return np.copysign(f, y), d
+    return np.copysign(f, y), d, b
 
 
 _BAND_ITER = 30
 
 
-def _residual(net: Network, mats, x: FloatArray, ni: FloatArray):  # type: ignore[no-untyped-def]
+def _residual(net: Network, mats, x: FloatArray, ni: FloatArray, warm=None):  # type: ignore[no-untyped-def]
     """Loop MMF residuals (S, C, m + 4) at the loop fluxes x (films, window, outer air, the
     two end leaks) and the Jacobian: the chain's diagonal (…, m − 1) and off-diagonal
     (…, m − 1) for loops 0 … m − 2, the dense block (…, 3, 3) of loops m − 1, window, outer
@@ -427,8 +429,9 @@ def _residual(net: Network, mats, x: FloatArray, ni: FloatArray):  # type: ignor
     mid = slice(1, m)
     band = ex(net.band_len)
     fs, dfs = _odd(steel, y[..., mid], ex(net.rung_k[:, mid]), ex(net.rung_w[:, mid]))
-    fb, dfb = _band(fluid, y[..., mid], ex(net.rung_perm[:, mid]), ex(net.rung_fluid[:, mid]),
-                    band[..., None])  # fmt: skip
+    fb, dfb, b_rung = _band(fluid, y[..., mid], ex(net.rung_perm[:, mid]),
+                            ex(net.rung_fluid[:, mid]), band[..., None],
+                            None if warm is None else warm[..., : m - 1])  # fmt: skip
     f[..., mid], df[..., mid] = fs + fb, dfs + dfb
     c, dc = _odd(steel, y[..., 0], ex(net.core_k), ex(net.core_w))
     f[..., 0] += c
@@ -437,7 +440,8 @@ def _residual(net: Network, mats, x: FloatArray, ni: FloatArray):  # type: ignor
     yb = y[..., m] - xo  # the back iron: the shell's flux less the outer air's
     bk, dbk = _odd(steel, yb, ex(net.back_k), ex(net.back_w))
     f[..., m] += sh + bk
-    win, dwin = _band(fluid, xw, ex(net.window_perm), ex(net.window_fluid), band)
+    win, dwin, b_win = _band(fluid, xw, ex(net.window_perm), ex(net.window_fluid), band,
+                             None if warm is None else warm[..., m - 1])  # fmt: skip
     air = net.outer_air[:, None]
     res = np.empty_like(x)
     res[..., :m] = g + f[..., 1:] - f[..., :-1]
@@ -460,13 +464,15 @@ def _residual(net: Network, mats, x: FloatArray, ni: FloatArray):  # type: ignor
     corner = np.zeros((*x.shape[:-1], 2, 2))
     corner[..., 0, 0] = leak[..., 0] + dgz[0].sum(-1)
     corner[..., 1, 1] = leak[..., 1] + dgz[1].sum(-1)
-    return res, (diag, off, tail, border, corner)
+    # the band fluid's B, the next call's start (``_band``), travels with the Jacobian
+    state = np.concatenate([b_rung, b_win[..., None]], axis=-1)
+    return res, (diag, off, tail, border, corner, state)
 
 
 def _solve(jac, rhs: FloatArray) -> FloatArray:  # type: ignore[no-untyped-def]
     """Solve J·d = rhs, J symmetric: the ladder (``_solve_ladder``) bordered by the two end
     leaks, by their 2 × 2 Schur complement (J is SPD, so is the complement)."""
-    diag, off, tail, border, corner = jac
+    diag, off, tail, border, corner = jac[:5]
     n = border.shape[-2]
     # the ladder's solve for the right-hand side and both border columns at once
     uv = _solve_ladder((diag, off, tail), np.concatenate([rhs[..., :n, None], border], -1))
@@ -502,9 +508,25 @@ def _solve_ladder(jac, rhs: FloatArray) -> FloatArray:  # type: ignore[no-untype
         blk[..., 0, 0] -= off[..., n - 1] * c[..., n - 1]
         r[..., 0, :] -= off[..., n - 1, None] * d[..., n - 1, :]
     out = np.empty_like(rhs)
-    out[..., n:, :] = np.linalg.solve(blk, r)
+    out[..., n:, :] = _solve3(blk, r)
     for i in range(n - 1, -1, -1):
         out[..., i, :] = d[..., i, :] - c[..., i, None] * out[..., i + 1, :]
+    return out
+
+
+def _solve3(m: FloatArray, r: FloatArray) -> FloatArray:
+    """Solve the symmetric 3 × 3 systems m (…, 3, 3)·X = r (…, 3, K) by the adjugate
+    (batched LAPACK calls on 3 × 3 blocks cost more than the arithmetic)."""
+    a, b, c = m[..., 0, 0], m[..., 0, 1], m[..., 0, 2]
+    d, e, f = m[..., 1, 1], m[..., 1, 2], m[..., 2, 2]
+    ca, cb, cc = d * f - e * e, c * e - b * f, b * e - c * d
+    cd, ce, cf = a * f - c * c, b * c - a * e, a * d - b * b
+    inv = 1.0 / (a * ca + b * cb + c * cc)
+    r0, r1, r2 = r[..., 0, :], r[..., 1, :], r[..., 2, :]
+    out = np.empty_like(r)
+    out[..., 0, :] = (ca[..., None] * r0 + cb[..., None] * r1 + cc[..., None] * r2) * inv[..., None]
+    out[..., 1, :] = (cb[..., None] * r0 + cd[..., None] * r1 + ce[..., None] * r2) * inv[..., None]
+    out[..., 2, :] = (cc[..., None] * r0 + ce[..., None] * r1 + cf[..., None] * r2) * inv[..., None]
     return out
 
 
@@ -592,7 +614,7 @@ def _newton(net, ni, mats, rtol, max_iter, start):  # type: ignore[no-untyped-de
         t = np.where(settled, 0.0, 1.0)
         for _ls in range(30):
             xn = x + t[..., None] * step
-            rn, jn = _residual(net, mats, xn, ni)
+            rn, jn = _residual(net, mats, xn, ni, jac[5])
             better = settled | (np.sum((rn / scale) ** 2, axis=-1) <= (1 - 1e-4 * t) * norm0)
             if better.all():
                 break

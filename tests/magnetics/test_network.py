@@ -186,14 +186,15 @@ def test_ladder_solve_against_an_independent_nodal_solve(n):
 def test_band_element_shares_its_mmf_between_steel_free_paths(y, perm, area):
     """A band element (a linear permeance in parallel with fluid over the band's length):
     its MMF F carries perm·F + A·B_fluid(F/l) = |y| to 1e-10 on the fluid's own B–H, F is
-    odd in y, and dF/dy matches a central difference; no fluid: F = y/perm; neither: 0."""
+    odd in y, dF/dy matches a central difference, and a warm start from any B (the last
+    Newton iterate's) finds the same F; no fluid: F = y/perm; neither: 0."""
     from magnetics.network import _band
 
     fl = magnetic("mrf_132dg")
     length = 8e-3
     arr = lambda v: np.array([v])  # noqa: E731
-    f, d = _band(fl, arr(y), arr(perm), arr(area), arr(length))
-    fn, _ = _band(fl, arr(-y), arr(perm), arr(area), arr(length))
+    f, d, b = _band(fl, arr(y), arr(perm), arr(area), arr(length))
+    fn, _, _ = _band(fl, arr(-y), arr(perm), arr(area), arr(length))
     assert fn[0] == -f[0]
     if area == 0.0:
         np.testing.assert_allclose(f[0], y / perm if perm else 0.0, rtol=1e-15)
@@ -201,9 +202,13 @@ def test_band_element_shares_its_mmf_between_steel_free_paths(y, perm, area):
     carried = perm * f[0] + area * fl.b_of_h(f[0] / length)
     np.testing.assert_allclose(carried, y, rtol=1e-10)
     h = 1e-6 * y
-    up, _ = _band(fl, arr(y + h), arr(perm), arr(area), arr(length))
-    lo, _ = _band(fl, arr(y - h), arr(perm), arr(area), arr(length))
+    up, _, _ = _band(fl, arr(y + h), arr(perm), arr(area), arr(length))
+    lo, _, _ = _band(fl, arr(y - h), arr(perm), arr(area), arr(length))
     np.testing.assert_allclose(d[0], (up[0] - lo[0]) / (2 * h), rtol=1e-3)
+    # a warm start anywhere (the last iterate's B: below or far above) finds the same F
+    for start in (0.0, 0.5 * b[0], 3.0 * b[0] + 0.5):
+        again, _, _ = _band(fl, arr(y), arr(perm), arr(area), arr(length), arr(start))
+        np.testing.assert_allclose(again, f, rtol=1e-10)
 
 
 def test_linear_in_current_below_the_knee():
