@@ -52,7 +52,7 @@ def accuracy_table(sizes=(1.0e-3, 0.5e-3, 0.35e-3, 0.25e-3), ref=0.12e-3, curren
         t, dt = fem_t(h)
         rows.append((f"fem {h * 1e3:.2f} mm", dt, np.max(np.abs(t / t_ref - 1))))
     t0 = time.perf_counter()
-    tc = torque_curve(PAPER, currents)
+    tc = torque_curve(PAPER, currents, method="circuit")
     dt = time.perf_counter() - t0
     rows.append(("circuit", dt / len(currents), np.max(np.abs(tc.yield_torque / t_ref - 1))))
     return rows

@@ -53,7 +53,7 @@ def _node(args: tuple[dict[str, float], bool]) -> tuple[float, dict[float, float
         return math.nan, {}
     i = [replace(base, clutch=c).current_limit]
     ref = float(torque_curve(c, i, method="fem", fem_size=REFERENCE_SIZE).yield_torque[0])
-    circ = float(torque_curve(c, i).yield_torque[0])
+    circ = float(torque_curve(c, i, method="circuit").yield_torque[0])
     fem = {}
     if coarse:
         for s in COARSE_SIZES:

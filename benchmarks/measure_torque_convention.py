@@ -57,7 +57,10 @@ def _designs():  # type: ignore[no-untyped-def]
 def circuit_map() -> None:
     rows: dict[int, list[float]] = {}
     for kw, c, i in _designs():
-        t = [float(torque_curve(c, [i], convention=cv).yield_torque[0]) for cv in CONV]
+        t = [
+            float(torque_curve(c, [i], method="circuit", convention=cv).yield_torque[0])
+            for cv in CONV
+        ]
         rows.setdefault(kw["n_drums"], []).append(t[0] / t[1] - 1)
     print("circuit, map designs at the current limit: mid-line / weakest-layer - 1 (%)")
     print("drums  n    min   median   max")
@@ -93,7 +96,10 @@ def fem_designs() -> None:
         c = replace(base.clutch, **kw)
         i = replace(base, clutch=c).current_limit
         *_, t = _fem_both(c, i)
-        tc = [float(torque_curve(c, [i], convention=cv).yield_torque[0]) for cv in CONV]
+        tc = [
+            float(torque_curve(c, [i], method="circuit", convention=cv).yield_torque[0])
+            for cv in CONV
+        ]
         print(f"{name:12s} I={i:.2f} A  FEM {t[0]:.4f}/{t[1]:.4f} N·m "
               f"{100 * (t[0] / t[1] - 1):5.2f}  circuit {tc[0]:.4f}/{tc[1]:.4f} "
               f"{100 * (tc[0] / tc[1] - 1):5.2f}")  # fmt: skip

@@ -83,7 +83,8 @@ def linear_torque(design: ClutchDesign) -> float:
     mats = linear_materials(MATERIALS[STEEL].mu_initial / MU0, MATERIALS[MRF].mu_initial / MU0)
     c, i = design.clutch, design.current_limit
     warn(linear_circuit_trust(c, i))
-    curve = torque_curve(c, [i], materials=mats, speed_rpm=design.operating.input_speed_rpm)
+    curve = torque_curve(c, [i], method="circuit", materials=mats,
+                         speed_rpm=design.operating.input_speed_rpm)  # fmt: skip
     return float(curve.torque[0])
 
 
@@ -91,9 +92,8 @@ def circuit_torque(design: ClutchDesign) -> float:
     """Torque at the current limit by the saturating circuit; warns outside its trusted
     region (circuit_trust)."""
     warn(circuit_trust(design.clutch))
-    curve = torque_curve(
-        design.clutch, [design.current_limit], speed_rpm=design.operating.input_speed_rpm
-    )
+    curve = torque_curve(design.clutch, [design.current_limit], method="circuit",
+                         speed_rpm=design.operating.input_speed_rpm)  # fmt: skip
     return float(curve.torque[0])
 
 

@@ -83,13 +83,13 @@ def test_path_read_from_the_table_matches_closed_forms():
 def test_batch_solvers_match_the_design_solve():
     """Arrays of designs: the per-design Newton (rtol 1e-7) and the tabulate-and-invert grid
     (1e-3 by construction) against the one-design solve."""
-    t = torque_curve(PAPER, [0.5, 3.0, 7.0]).yield_torque
+    t = torque_curve(PAPER, [0.5, 3.0, 7.0], method="circuit").yield_torque
     np.testing.assert_allclose(max_torque_batch({}, [0.5, 3.0, 7.0][2]), t[2], rtol=1e-8)
     np.testing.assert_allclose(torque_grid_batch({}, [0.5, 3.0, 7.0])[0], t, rtol=1e-3)
 
 
 def test_robust_extreme_currents_finite_monotone():
-    tc = torque_curve(PAPER, [0.0, 1e-6, 1.0, 7.0, 100.0, 1000.0])
+    tc = torque_curve(PAPER, [0.0, 1e-6, 1.0, 7.0, 100.0, 1000.0], method="circuit")
     assert np.all(np.isfinite(tc.torque))
     assert np.all(np.diff(tc.torque) >= 0)
     assert tc.yield_torque[0] == 0.0
@@ -106,7 +106,7 @@ def test_saturation_is_reported_in_the_back_iron():
 @given(st.lists(st.floats(0, 200), min_size=2, max_size=8))
 def test_torque_monotone_in_current(currents):
     i = np.sort(np.array(currents))
-    t = torque_curve(PAPER, i).yield_torque
+    t = torque_curve(PAPER, i, method="circuit").yield_torque
     assert np.all(np.diff(t) >= -1e-12 * t.max(initial=1.0))
 
 
