@@ -92,9 +92,10 @@ _ALL = (
     Output("coil_resistance_ohm", "Ω", "coil resistance at the coil temperature",
            "coil resistance"),
     Output("coil_power_W", "W", "coil Joule power at the current limit", "coil power"),
-    Output("circuit_error_bound", "1", "largest |relative error| of the circuit's torque "
-           "against the FEM in the measured error map's cell of this design (inf: off the "
-           "map)", "circuit error bound"),
+    Output("torque_error_bound", "1", "largest |relative error| of the max torque (the "
+           "reluctance network's) against the FEM in its measured error map's cell of this "
+           "design (inf: off the map; magnetics/data/network_error_map.json)",
+           "torque error bound"),
     Output("torque_delay_s", "s", "equivalent pure delay of the torque's response to a "
            "current step: Σ of the electrical, eddy-current and fluid lags "
            "(magnetics.dynamics, docs/dynamics.md)", "torque delay", "ms", 1e3),
@@ -129,13 +130,6 @@ _ALL = (
            "backdrive force", "mN", 1e3),
     Output("zwidth_area_N2_s_per_m2", "N²·s/m²", "area of the Z-width: virtual (K, B) "
            "rendered passively (mrclutch.haptics.zwidth)", "Z-width area"),
-    Output("network_max_torque_N_m", "N·m", "max torque with the yield torque of the "
-           "reluctance network (magnetics.network) in place of the circuit's, the same drag; "
-           "its error against the FEM on 848 measured designs: docs/magnetics.md",
-           "max torque (network)"),
-    Output("network_error_bound", "1", "largest |relative error| of the network's torque "
-           "against the FEM in its measured error map's cell of this design (inf: off the "
-           "map; magnetics/data/network_error_map.json)", "network error bound"),
 )  # fmt: skip
 
 #: Every output, by key.
@@ -186,7 +180,7 @@ SWEEP_COLUMNS: tuple[str, ...] = (
     "diameter_m",
     "length_m",
     "max_torque_N_m",
-    "circuit_error_bound",
+    "torque_error_bound",
     "fluid_inertia_kg_m2",
     "drag_damping_N_m_s",
     "off_state_torque_N_m",
@@ -209,8 +203,6 @@ SWEEP_OPTIONAL: tuple[str, ...] = (
     "max_passive_K_N_per_m",  # about ×1.7
     "max_stable_K_N_per_m",  # design by design, about ×8
     "zwidth_area_N2_s_per_m2",  # about ×7
-    "network_max_torque_N_m",  # about ×2.7
-    "network_error_bound",  # with network_max_torque_N_m
 )
 
 

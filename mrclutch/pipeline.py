@@ -35,13 +35,14 @@ from magnetics import thermal
 from magnetics.circuit import path_from_regions, path_from_section
 from magnetics.drag import Drag, coupled_fluid_inertia, drag_terms, totals
 from magnetics.dynamics import torque_response
-from magnetics.error_map import circuit_error, error_bound
+from magnetics.error_map import error_bound
 from magnetics.materials import FLUIDS
 from magnetics.network import network_from_regions
 from magnetics.torque import (
     coil_properties,
     continuous_torque,
     network_gap_torque,
+    network_yield_at,
     torque_curve,
     yield_torque_and_flux,
 )
@@ -72,11 +73,11 @@ FIDELITIES: tuple[str, ...] = ("fast", "reference")
 #: Stated relative error of the fast path's rendering bandwidth against the reference
 #: fidelity. Bandwidth ∝ √(K_max/(m1+m2)) with K_max ∝ torque, so its error is about
 #: half the torque error plus half the reflected-mass error (analytic inertia is exact
-#: for the axisymmetric section). Holds where the circuit is within 10 % of the FEM —
-#: near the paper preset and its 2-drum variants (docs/magnetics.md); elsewhere the
-#: circuit's measured error map bounds the torque error per design (circuit_error_bound in
-#: sweep rows; a note on evaluate). Checked on the paper preset, variants and the
-#: optimiser's optimum in tests/mrclutch/test_pipeline.py.
+#: for the axisymmetric section). Holds where the network is within 10 % of the FEM —
+#: on 95 % of its measured map (docs/magnetics.md); its map bounds the torque error per
+#: design (torque_error_bound in sweep rows; a note on evaluate where it exceeds 10 %).
+#: Checked on the paper preset, variants and the optimiser's optimum in
+#: tests/mrclutch/test_pipeline.py.
 FAST_BANDWIDTH_ERROR = 0.05
 
 #: °C: the fluid's upper temperature limit, the maker's operating range [lord-mrf132dg].
@@ -175,9 +176,9 @@ def clutch_figures(
         )
     else:
         inertia_method = "analytic" if fidelity == "fast" else "brep"
-        torque_method = "circuit" if fidelity == "fast" else "fem"
-        if torque_method == "circuit":  # never a silent wrong number (issue 6)
-            extra = circuit_trust(c)
+        torque_method = "network" if fidelity == "fast" else "fem"
+        if torque_method == "network":  # never a silent wrong number (issue 6)
+            extra = circuit_trust(c, "network")
     if inertia_method == "analytic":
         mass = analytic_mass(section)
     else:
@@ -192,17 +193,6 @@ def clutch_figures(
     coil = coil_properties(c, i_max, op.coil_temperature)
     thermal = thermal_figures(design, section.table, path_from_section(section), drag.torque,
                               float(curve.torque[0]))  # fmt: skip
-    if torque_method == "circuit" and extra:  # the circuit is not trusted here: a second model
-        net = torque_curve(section, [i_max], method="network", speed_rpm=op.input_speed_rpm,
-                           temperature=temp, support=design.support)  # fmt: skip
-        err = circuit_error(c, "network")
-        where = (f"its measured error map: {err.estimate:+.1%} against the FEM, bound "
-                 f"{err.bound:.1%}" if math.isfinite(err.bound)
-                 else "off its measured error map, where it is within ±10 % of the FEM on "
-                 "95 % of the grid")  # fmt: skip
-        extra = (*extra, f"reluctance network: max torque {float(net.torque[0]):.4g} N·m "
-                 f"({float(net.torque[0]) / float(curve.torque[0]) - 1:+.1%} on the circuit's; "
-                 f"{where}; `mrclutch torque --method network`)")  # fmt: skip
     d, length = section.envelope
     notes = tuple(mass.notes) + extra + drag.notes + _thermal_notes(design, thermal)
     return ClutchFigures(
@@ -237,10 +227,11 @@ def thermal_figures(design: ClutchDesign, rg: regions.Regions, path: Any, off_to
     holding the peak torque while slipping at the input speed."""
     op = design.operating
     net = thermal.network(rg, op.ambient_temperature, FLUID_LIMIT)
-    peak = np.atleast_1d(design.current_limit)
-    hint = (peak, yield_torque_and_flux(path, peak)[1])  # as the sweeps: warm start at I_peak
+    # the chords through the default torque model's curve (the network), as the sweeps
+    ladder = network_from_regions(rg)
     i_c, t_c = continuous_torque(net, path, op.input_speed, off_torque,
-                                 op.wire_temperature_limit, FLUID_LIMIT, hint=hint)  # fmt: skip
+                                 op.wire_temperature_limit, FLUID_LIMIT,
+                                 torque_at=network_yield_at(ladder))  # fmt: skip
     t_wire, t_fluid = thermal.time_to_limits(
         net,
         design.current_limit,
@@ -470,10 +461,6 @@ class BatchEvaluator:
     def __post_init__(self) -> None:
         for key in self.optional:
             check_choice("optional column", key, SWEEP_OPTIONAL)
-        net = ("network_max_torque_N_m", "network_error_bound")
-        if any(k in self.optional for k in net):  # the network's torque comes with its bound
-            more = tuple(k for k in net if k not in self.optional)
-            object.__setattr__(self, "optional", (*self.optional, *more))
 
     @property
     def columns(self) -> tuple[str, ...]:
@@ -484,8 +471,7 @@ class BatchEvaluator:
         on = set(self.optional)
         return evaluate_batch(fields, self.base, passivity="max_passive_K_N_per_m" in on,
                               stability="max_stable_K_N_per_m" in on,
-                              zwidth="zwidth_area_N2_s_per_m2" in on,
-                              network="network_max_torque_N_m" in on)  # fmt: skip
+                              zwidth="zwidth_area_N2_s_per_m2" in on)  # fmt: skip
 
 
 def evaluate_batch(
@@ -495,19 +481,18 @@ def evaluate_batch(
     passivity: bool = False,
     stability: bool = False,
     zwidth: bool = False,
-    network: bool = False,
 ) -> dict[str, np.ndarray]:
     """The fast path for S designs at once; returns arrays under ``SWEEP_COLUMNS``, and
     opt-in columns after them: ``max_passive_K_N_per_m`` (``passivity``, about ×1.7 the
     cost), ``max_stable_K_N_per_m`` (``stability``: design by design, about ×8),
-    ``zwidth_area_N2_s_per_m2`` (``zwidth``, about ×7), ``network_max_torque_N_m``
-    (``network``: the yield torque by the reluctance network, plus the same drag)
-    (``outputs.SWEEP_OPTIONAL``).
+    ``zwidth_area_N2_s_per_m2`` (``zwidth``, about ×7) (``outputs.SWEEP_OPTIONAL``).
 
     The same physics as ``evaluate(design, "fast")``, on arrays: per drum count, the region
-    table gives the analytic mass (``region_mass``), the circuit (``path_from_regions``)
-    the drag terms (``drag_terms``), the carried fluid (``coupled_fluid_inertia``) and the
-    continuous rating (``continuous_torque``); the pair at the hand is ``mr_at_hand``.
+    table gives the analytic mass (``region_mass``), the max torque by the reluctance
+    network (``network_from_regions``), the circuit (``path_from_regions``: the flux the
+    torque response and the continuous rating's chord start from), the drag terms
+    (``drag_terms``), the carried fluid (``coupled_fluid_inertia``) and the continuous
+    rating (``continuous_torque``); the pair at the hand is ``mr_at_hand``.
     Designs that fail DrumClutch's validation get ``valid = 0`` and NaN outputs; no invalid
     number reaches a solver."""
     base = base if base is not None else ClutchDesign()
@@ -522,7 +507,9 @@ def evaluate_batch(
         out["off_torque"], out["damping"] = totals(terms)
         out["fluid_inertia"] = coupled_fluid_inertia(rg)
         path = path_from_regions(rg)
-        out["yield_torque"], flux = yield_torque_and_flux(path, current[rows])
+        _, flux = yield_torque_and_flux(path, current[rows])
+        ladder = network_from_regions(rg)
+        out["yield_torque"] = network_gap_torque(ladder, current[rows][:, None]).sum(-1)[:, 0]
         resp = torque_response(rg, current[rows], base.amplifier, base.laminations, path=path,
                                coil_temperature=op.coil_temperature,
                                flux_peak=flux[:, 0])  # fmt: skip
@@ -530,11 +517,8 @@ def evaluate_batch(
         net = thermal.network(rg, op.ambient_temperature, FLUID_LIMIT)
         out["continuous_torque"] = continuous_torque(
             net, path, op.input_speed, out["off_torque"], op.wire_temperature_limit,
-            FLUID_LIMIT, hint=(current[rows], flux),
+            FLUID_LIMIT, torque_at=network_yield_at(ladder),
         )[1]  # fmt: skip
-        if network:
-            ladder = network_from_regions(rg)
-            out["network_yield"] = network_gap_torque(ladder, current[rows][:, None]).sum(-1)[:, 0]
         return out
 
     fig = regions.per_topology(p, ok, clutch)
@@ -561,7 +545,7 @@ def evaluate_batch(
         "diameter_m": fig["diameter"],
         "length_m": fig["length"],
         "max_torque_N_m": torque,
-        "circuit_error_bound": np.where(ok, error_bound(p)[1], np.nan),
+        "torque_error_bound": np.where(ok, error_bound(p, "network")[1], np.nan),
         "fluid_inertia_kg_m2": fig["fluid_inertia"],
         "drag_damping_N_m_s": fig["damping"],
         "off_state_torque_N_m": off_torque,
@@ -569,15 +553,10 @@ def evaluate_batch(
         "continuous_torque_N_m": fig["continuous_torque"],
         "torque_delay_s": fig["torque_delay"],
     }
-    if network:
-        out["network_max_torque_N_m"] = fig["network_yield"] + off_torque
-        out["network_error_bound"] = np.where(ok, error_bound(p, "network")[1], np.nan)
     opt_in = {
         "max_passive_K_N_per_m": passivity,
         "max_stable_K_N_per_m": stability,
         "zwidth_area_N2_s_per_m2": zwidth,
-        "network_max_torque_N_m": network,
-        "network_error_bound": network,
     }
     extra = tuple(k for k, on in opt_in.items() if on)
     columns = (*SWEEP_COLUMNS, *extra)

@@ -1,9 +1,8 @@
 """FEM re-check of a sweep's best rows (issue 12): the sweep ranks on the fast path (the
-saturating circuit), this re-solves the N best designs by one column with the FEM at the
+reluctance network), this re-solves the N best designs by one column with the FEM at the
 error map's reference size, through the same executor as the sweep (one design a task, so
-a Dask cluster runs them in parallel), and tabulates the circuit's error on each, beside
-the reluctance network's (``method="network"``: a second fast model, solved here one
-design at a time, milliseconds each).
+a Dask cluster runs them in parallel), and tabulates the network's error on each, beside
+the single loop's (``method="circuit"``, solved here one design at a time).
 
 A row's design is rebuilt from the spec and its design id (``SweepSpec.chunk``: the same
 SI fields the sweep evaluated, not the rounded numbers of the file). "max torque" is the
@@ -30,24 +29,24 @@ from mrclutch.design import ClutchDesign
 from mrclutch.sweep import SweepSpec, read_results
 
 TORQUE = "max_torque_N_m"
-BOUND = "circuit_error_bound"
+BOUND = "torque_error_bound"
 #: the sidecar's columns: each number's fidelity named beside it
 COLUMNS = ("design_id", "objective", "objective_value", "fast_max_torque_N_m",
            "fast_fidelity", "fem_max_torque_N_m", "fem_fidelity", "relative_error",
-           "circuit_error_bound", "within_bound", "network_max_torque_N_m",
-           "network_fidelity", "network_relative_error", "network_error_bound",
-           "network_within_bound")  # fmt: skip
+           "torque_error_bound", "within_bound", "circuit_max_torque_N_m",
+           "circuit_fidelity", "circuit_relative_error", "circuit_error_bound",
+           "circuit_within_bound")  # fmt: skip
 
 
 @dataclass(frozen=True)
 class VerifiedRow:
     design_id: int
     objective_value: float
-    fast_torque: float  # N·m, the sweep's (circuit)
+    fast_torque: float  # N·m, the sweep's (the reluctance network)
     fem_torque: float  # N·m, the FEM's at fem_size
-    bound: float  # the row's circuit_error_bound (inf: off the map)
-    network_torque: float  # N·m, the reluctance network's (yield + the same drag)
-    network_bound: float  # its measured error map's bound (inf: off the map)
+    bound: float  # the row's torque_error_bound (inf: off the map)
+    circuit_torque: float  # N·m, the single loop's (yield + the same drag)
+    circuit_bound: float  # its measured error map's bound (inf: off the map)
 
     @property
     def error(self) -> float:
@@ -55,13 +54,13 @@ class VerifiedRow:
         return self.fast_torque / self.fem_torque - 1
 
     @property
-    def network_error(self) -> float:
-        """Relative error of the network's torque against the FEM's."""
-        return self.network_torque / self.fem_torque - 1
+    def circuit_error(self) -> float:
+        """Relative error of the circuit's torque against the FEM's."""
+        return self.circuit_torque / self.fem_torque - 1
 
     @property
-    def network_within_bound(self) -> bool:
-        return abs(self.network_error) <= self.network_bound
+    def circuit_within_bound(self) -> bool:
+        return abs(self.circuit_error) <= self.circuit_bound
 
     @property
     def within_bound(self) -> bool:
@@ -142,10 +141,10 @@ def verify_top(
         fem = [f.result() for f in futures]
     ids = [int(res["design_id"][i]) for i in rows]
     keys, fast, bounds = (res[c][rows].astype(float).tolist() for c in (key, TORQUE, BOUND))
-    net = [_max_torque(d, "network") for d in designs]
-    net_bound = [circuit_error(d.clutch, "network").bound for d in designs]
-    return [VerifiedRow(*row)
-            for row in zip(ids, keys, fast, fem, bounds, net, net_bound, strict=True)]  # fmt: skip
+    circ = [_max_torque(d, "circuit") for d in designs]
+    circ_bound = [circuit_error(d.clutch).bound for d in designs]
+    rows_ = zip(ids, keys, fast, fem, bounds, circ, circ_bound, strict=True)
+    return [VerifiedRow(*row) for row in rows_]
 
 
 def write_verified(path: str | Path, rows: Sequence[VerifiedRow], key: str, fem_size: float
@@ -157,8 +156,8 @@ def write_verified(path: str | Path, rows: Sequence[VerifiedRow], key: str, fem_
         w.writerow(COLUMNS)
         for r in rows:
             w.writerow([r.design_id, key, repr(r.objective_value), repr(r.fast_torque),
-                        "circuit (sweep fast path)", repr(r.fem_torque), fem, repr(r.error),
-                        repr(r.bound), int(r.within_bound), repr(r.network_torque),
-                        "network (reluctance ladder)", repr(r.network_error),
-                        repr(r.network_bound), int(r.network_within_bound)])  # fmt: skip
+                        "network (sweep fast path)", repr(r.fem_torque), fem, repr(r.error),
+                        repr(r.bound), int(r.within_bound), repr(r.circuit_torque),
+                        "circuit (single loop)", repr(r.circuit_error),
+                        repr(r.circuit_bound), int(r.circuit_within_bound)])  # fmt: skip
     return Path(path)

@@ -178,3 +178,36 @@ def test_network_inverse_is_the_matrix_inverse():
     assert np.allclose(_inverse3(a) @ a, np.eye(3), atol=1e-10)
     net = network(build_section(PAPER).table)
     assert net.inverse == pytest.approx(np.linalg.inv(net.conductance), rel=1e-12)
+
+
+def test_continuous_torque_chords_through_the_network():
+    """The rating the fast path uses since the network became the default torque model:
+    the same chords through the network's curve (``torque_at``) against bisection with a
+    network solve at every step, on the preset and on random designs of the sweep's
+    ranges. Measured: up to 1.02 % in current and 0.49 % in torque (the circuit's chords:
+    0.75 % and 0.33 %)."""
+    from dataclasses import replace
+
+    from magnetics.network import network_from_regions
+    from magnetics.torque import network_yield_at
+
+    out = []
+    for change in [{}, *_random_designs(8, 3)]:
+        s = build_section(replace(PAPER, **change))
+        rg, path = s.table, path_from_section(s)
+        off = clutch_drag(rg, W).torque
+        at = network_yield_at(network_from_regions(rg))
+        i_fast, t_fast = continuous_torque(network(rg), path, W, off, 155.0, 130.0,
+                                           torque_at=at)  # fmt: skip
+        net, lo, hi = network(rg), 0.0, 20.0
+        for _ in range(50):
+            mid = 0.5 * (lo + hi)
+            t = float(at(np.array([mid]))[0]) + off
+            if mid <= float(continuous_current(net, 155.0, 130.0, t * W)):
+                lo = mid
+            else:
+                hi = mid
+        t_exact = float(at(np.array([lo]))[0]) + off
+        out.append((float(i_fast[0]) / lo - 1, float(t_fast[0]) / t_exact - 1))
+    err = np.abs(out)
+    assert err[:, 0].max() < 0.015 and err[:, 1].max() < 0.01, err.max(0)

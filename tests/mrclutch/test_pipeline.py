@@ -132,30 +132,26 @@ def test_evaluation_carries_the_zwidth_of_both_sides():
     assert area["motor"] > area["mr"]
 
 
-def test_network_torque_column_is_the_network_curve_with_the_same_drag():
-    """``network=True`` adds network_max_torque_N_m: each valid row equals
-    ``torque_curve(method="network")`` at the current limit and input speed (one design is
-    a batch of one), invalid rows are NaN, and the column is absent unless asked for."""
+def test_max_torque_is_the_network_curve_with_its_own_bound():
+    """The sweep's max torque is the reluctance network's at the current limit and input
+    speed (one design is a batch of one: torque_curve's default), with the network's own
+    measured bound beside it; invalid rows are NaN."""
+    from magnetics.error_map import circuit_error
     from magnetics.torque import torque_curve
     from mrclutch.design import current_limit
 
     base = design_preset("paper")
     f = {"gap": np.array([0.3e-3, 0.7e-3, 0.01e-3]), "n_drums": np.array([3.0, 2.0, 2.0])}
-    out = evaluate_batch(f, base, network=True)
-    assert "network_max_torque_N_m" not in evaluate_batch(f, base)
+    out = evaluate_batch(f, base)
     op = base.operating
     for i in (0, 1):
         c = replace(base.clutch, gap=float(f["gap"][i]), n_drums=int(f["n_drums"][i]))
-        tc = torque_curve(c, [current_limit(op, c.wire_diameter)], method="network",
+        tc = torque_curve(c, [current_limit(op, c.wire_diameter)],
                           speed_rpm=op.input_speed_rpm, temperature=op.fluid_temperature,
                           support=base.support)  # fmt: skip
-        assert out["network_max_torque_N_m"][i] == pytest.approx(tc.torque[0], rel=1e-9)
-        assert out["network_max_torque_N_m"][i] != out["max_torque_N_m"][i]
-    assert np.isnan(out["network_max_torque_N_m"][2])
-    # with its own measured error bound (the paper preset is a node of the map)
-    from magnetics.error_map import circuit_error
-
-    assert out["network_error_bound"][1] == pytest.approx(
-        circuit_error(replace(base.clutch, n_drums=2), "network").bound, rel=1e-12
-    )
-    assert np.isnan(out["network_error_bound"][2])
+        assert tc.method == "network"
+        assert out["max_torque_N_m"][i] == pytest.approx(tc.torque[0], rel=1e-9)
+        assert out["torque_error_bound"][i] == pytest.approx(
+            circuit_error(c, "network").bound, rel=1e-12
+        )
+    assert np.isnan(out["max_torque_N_m"][2]) and np.isnan(out["torque_error_bound"][2])

@@ -51,41 +51,42 @@ def test_the_top_two_rows_are_re_solved_by_the_fem_and_written_beside_the_result
     assert [int(r["design_id"]) for r in rows] == [int(res["design_id"][i]) for i in best]
     spec, _ = load_spec("s.toml")
     for r, i in zip(rows, best, strict=True):
-        assert r["fast_fidelity"].startswith("circuit") and r["fem_fidelity"] == "fem@1mm uniform"
+        assert r["fast_fidelity"].startswith("network") and r["fem_fidelity"] == "fem@1mm uniform"
         fast, fem = float(r["fast_max_torque_N_m"]), float(r["fem_max_torque_N_m"])
         assert fast == pytest.approx(res["max_torque_N_m"][i], rel=1e-9)
         assert float(r["relative_error"]) == pytest.approx(fast / fem - 1, rel=1e-12)
-        assert float(r["circuit_error_bound"]) == pytest.approx(res["circuit_error_bound"][i])
+        assert float(r["torque_error_bound"]) == pytest.approx(res["torque_error_bound"][i])
         # the FEM number is the design's own: rebuilt from the spec and its id
         d = design_of(spec, _base(), int(r["design_id"]))
         assert d.clutch.n_drums == int(res["n_drums"][i])
         assert d.clutch.gap * 1e3 == pytest.approx(res["gap_mm"][i], rel=1e-6)
         assert fem == pytest.approx(fem_max_torque(d, 1e-3), rel=1e-9)
-        # the network beside it, with the same drag, named as its own fidelity
-        net = float(r["network_max_torque_N_m"])
-        assert r["network_fidelity"].startswith("network")
-        assert net == pytest.approx(
+        # the single loop beside it, with the same drag, named as its own fidelity
+        circ = float(r["circuit_max_torque_N_m"])
+        assert r["circuit_fidelity"].startswith("circuit")
+        op = d.operating
+        assert circ == pytest.approx(
             float(
                 torque_curve(
                     d.clutch,
                     [d.current_limit],
-                    method="network",
-                    speed_rpm=d.operating.input_speed_rpm,
-                    temperature=d.operating.fluid_temperature,
+                    method="circuit",
+                    speed_rpm=op.input_speed_rpm,
+                    temperature=op.fluid_temperature,
                     support=d.support,
                 ).torque[0]
             ),
             rel=1e-12,
         )
-        assert float(r["network_relative_error"]) == pytest.approx(net / fem - 1, rel=1e-12)
+        assert float(r["circuit_relative_error"]) == pytest.approx(circ / fem - 1, rel=1e-12)
         from magnetics.error_map import circuit_error
 
-        nb = circuit_error(d.clutch, "network").bound
-        assert float(r["network_error_bound"]) == pytest.approx(nb, rel=1e-12)
-        assert r["network_within_bound"] == str(int(abs(net / fem - 1) <= nb))
+        cb = circuit_error(d.clutch).bound
+        assert float(r["circuit_error_bound"]) == pytest.approx(cb, rel=1e-12)
+        assert r["circuit_within_bound"] == str(int(abs(circ / fem - 1) <= cb))
         assert r["design_id"] in out
-    assert "circuit vs FEM: max |error|" in out and "r.csv.verified.csv" in out
-    assert "network vs FEM: max |error|" in out
+    assert "network vs FEM: max |error|" in out and "r.csv.verified.csv" in out
+    assert "circuit vs FEM: max |error|" in out
 
 
 def _base():

@@ -468,27 +468,27 @@ def _bound(bound: float) -> str:
 
 def format_verified(rows: list, key: str, fem_size: float, workers: int, seconds: float
                     ) -> str:  # fmt: skip
-    """The --verify-top table: the circuit's and the network's max torque against the
-    FEM's, row by row."""
-    head = (f"{'design':>8} {key:>24} {'fast (circuit) N·m':>19} "
+    """The --verify-top table: the network's (the sweep's) and the circuit's max torque
+    against the FEM's, row by row."""
+    head = (f"{'design':>8} {key:>24} {'fast (network) N·m':>19} "
             f"{f'FEM {fem_size * 1e3:g} mm N·m':>17} {'error':>8} {'map bound':>10} "
-            f"{'network N·m':>12} {'error':>8} {'map bound':>10}")  # fmt: skip
+            f"{'circuit N·m':>12} {'error':>8} {'map bound':>10}")  # fmt: skip
     lines = [f"FEM check of the {len(rows)} best rows by {key} ({len(rows)} designs on "
              f"{workers} worker{'s' * (workers != 1)}, {seconds:.1f} s):", head]  # fmt: skip
     for r in rows:
         bound = _bound(r.bound)
         lines.append(f"{r.design_id:>8} {r.objective_value:>24.6g} {r.fast_torque:>19.5f} "
                      f"{r.fem_torque:>17.5f} {r.error:>+8.2%} {bound:>10} "
-                     f"{r.network_torque:>12.5f} {r.network_error:>+8.2%} "
-                     f"{_bound(r.network_bound):>10}")  # fmt: skip
+                     f"{r.circuit_torque:>12.5f} {r.circuit_error:>+8.2%} "
+                     f"{_bound(r.circuit_bound):>10}")  # fmt: skip
     if rows:
         err = np.abs([r.error for r in rows])
         inside = sum(r.within_bound for r in rows)
-        lines.append(f"circuit vs FEM: max |error| {err.max():.2%}, median {np.median(err):.2%}; "
+        lines.append(f"network vs FEM: max |error| {err.max():.2%}, median {np.median(err):.2%}; "
                      f"{inside} of {len(rows)} within the map's bound")  # fmt: skip
-        net = np.abs([r.network_error for r in rows])
-        inside = sum(r.network_within_bound for r in rows)
-        lines.append(f"network vs FEM: max |error| {net.max():.2%}, median {np.median(net):.2%}; "
+        circ = np.abs([r.circuit_error for r in rows])
+        inside = sum(r.circuit_within_bound for r in rows)
+        lines.append(f"circuit vs FEM: max |error| {circ.max():.2%}, median {np.median(circ):.2%}; "
                      f"{inside} of {len(rows)} within its map's bound")  # fmt: skip
     return "\n".join(lines)
 

@@ -46,16 +46,17 @@ def _parse_currents(text: str):  # type: ignore[no-untyped-def]
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
-    p = sub.add_parser("torque", help="torque against coil current (circuit or FEM)")
+    p = sub.add_parser("torque", help="torque against coil current (network, circuit or FEM)")
     add_design_args(p)
     p.add_argument("--current", default="0:7:0.5", help="A, A,B,C or START:STOP:STEP (A)")
     p.add_argument(
         "--method",
-        default="circuit",
-        help="circuit (default), network (the reluctance network built from the section: "
-        "within 1 %% of the FEM on the paper preset and 10 %% on 95 %% of the measured "
-        "designs, docs/magnetics.md), fem, or both (the circuit checked against the FEM: "
-        "both curves, and the largest relative difference)",
+        default="network",
+        help="network (default: the reluctance network built from the section, within 1 %% "
+        "of the FEM on the paper preset and 10 %% on 95 %% of the measured designs, "
+        "docs/magnetics.md), circuit (the single loop, tuned at the paper preset), fem, or "
+        "both (the network checked against the FEM: both curves, and the largest relative "
+        "difference)",
     )
     p.add_argument("--speed-rpm", type=float, default=530.0, help="slip speed (rpm)")
     p.add_argument(
@@ -81,7 +82,7 @@ def _torque(args: argparse.Namespace) -> int:
     check_range("--speed-rpm", args.speed_rpm, 0.0, 1e5, " rpm")
     currents = _parse_currents(args.current)
     clutch = load_clutch(args)
-    methods = ("circuit", "fem") if args.method == "both" else (args.method,)
+    methods = ("network", "fem") if args.method == "both" else (args.method,)
     try:
         curves = [torque_curve(clutch, currents, method=m, speed_rpm=args.speed_rpm,
                                temperature=args.fluid_temperature_C) for m in methods]  # fmt: skip
@@ -92,18 +93,18 @@ def _torque(args: argparse.Namespace) -> int:
     if args.plot:
         with atomic_path(args.plot) as tmp:
             plot_torque(curves, tmp)
-    # largest relative circuit-vs-FEM difference where the FEM torque is not ~0 (0 A)
+    # largest relative network-vs-FEM difference where the FEM torque is not ~0 (0 A)
     err = None
     if len(curves) == 2:
         c, f = curves[0].torque, curves[1].torque
         keep = f > 10 * curves[1].off_state_torque
         err = float(np.max(np.abs(c[keep] / f[keep] - 1))) if keep.any() else 0.0
-    model = "network" if args.method == "network" else "circuit"
+    model = "circuit" if args.method == "circuit" else "network"
     lam, ind = _inductance(clutch, curves[0].currents, model)
     if args.json:
         data = {**_curve_json(curves[0])}
         if err is not None:
-            data = {"circuit": _curve_json(curves[0]), "fem": _curve_json(curves[1]),
+            data = {"network": _curve_json(curves[0]), "fem": _curve_json(curves[1]),
                     "max_torque_error_rel": err}  # fmt: skip
         data["flux_linkage_Wb"], data["inductance_H"] = lam, ind
         data["flux_linkage_method"] = model
@@ -120,7 +121,7 @@ def _torque(args: argparse.Namespace) -> int:
         print(f"{i:9.4g}  " + "  ".join(f"{tc.torque[k]:.5g}" for tc in curves)
               + f"  {lam[k] * 1e3:.4g}  {ind[k] * 1e3:.4g}")  # fmt: skip
     if err is not None:
-        print(f"largest circuit-vs-FEM difference: {err * 100:.2f} %")
+        print(f"largest network-vs-FEM difference: {err * 100:.2f} %")
     return 0
 
 
