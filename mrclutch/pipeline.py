@@ -41,7 +41,7 @@ from magnetics.network import network_from_regions
 from magnetics.torque import (
     coil_properties,
     continuous_torque,
-    network_gap_torque,
+    network_torque_and_flux,
     network_yield_at,
     torque_curve,
     yield_torque_and_flux,
@@ -509,7 +509,8 @@ def evaluate_batch(
         path = path_from_regions(rg)
         _, flux = yield_torque_and_flux(path, current[rows])
         ladder = network_from_regions(rg)
-        out["yield_torque"] = network_gap_torque(ladder, current[rows][:, None]).sum(-1)[:, 0]
+        t_peak, x_peak = network_torque_and_flux(ladder, current[rows][:, None])
+        out["yield_torque"] = t_peak.sum(-1)[:, 0]
         resp = torque_response(rg, current[rows], base.amplifier, base.laminations, path=path,
                                coil_temperature=op.coil_temperature,
                                flux_peak=flux[:, 0])  # fmt: skip
@@ -517,7 +518,7 @@ def evaluate_batch(
         net = thermal.network(rg, op.ambient_temperature, FLUID_LIMIT)
         out["continuous_torque"] = continuous_torque(
             net, path, op.input_speed, out["off_torque"], op.wire_temperature_limit,
-            FLUID_LIMIT, torque_at=network_yield_at(ladder),
+            FLUID_LIMIT, torque_at=network_yield_at(ladder, seed=(current[rows], x_peak)),
         )[1]  # fmt: skip
         return out
 
