@@ -37,7 +37,6 @@ DATA_FILES = {
     "circuit": Path(__file__).parent / "data" / "circuit_error_map.json",
     "network": Path(__file__).parent / "data" / "network_error_map.json",
 }
-DATA_FILE = DATA_FILES["circuit"]
 #: How each model is named in the notes.
 LABELS = {"circuit": "saturating circuit", "network": "reluctance network"}
 

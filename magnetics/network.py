@@ -280,13 +280,18 @@ def network_from_regions(
     )  # fmt: skip
 
 
-def _odd(mat: Magnetic, phi: FloatArray, k: FloatArray, w: FloatArray):  # type: ignore[no-untyped-def]
-    """Σ_j w·H(k·Φ) over the last axis and its Φ-derivative, for Φ of any sign (H odd)."""
-    b = k * np.abs(phi)[..., None]
-    h, dh = mat.h_dh(b)
+def _terms(mat: Magnetic, a: FloatArray, k: FloatArray, w: FloatArray):  # type: ignore[no-untyped-def]
+    """w·H(k·a) and its a-derivative w·k·H'(k·a) at fluxes a ≥ 0, element by element."""
+    h, dh = mat.h_dh(k * a)
     h *= w
     dh *= w
     dh *= k
+    return h, dh
+
+
+def _odd(mat: Magnetic, phi: FloatArray, k: FloatArray, w: FloatArray):  # type: ignore[no-untyped-def]
+    """Σ_j w·H(k·Φ) over the last axis and its Φ-derivative, for Φ of any sign (H odd)."""
+    h, dh = _terms(mat, np.abs(phi)[..., None], k, w)
     # the last axis is short (1–6 points): a sum of slices beats a strided reduce
     f, d = h[..., 0], dh[..., 0]
     for j in range(1, h.shape[-1]):
@@ -298,10 +303,7 @@ def _odd(mat: Magnetic, phi: FloatArray, k: FloatArray, w: FloatArray):  # type:
 def _each(mat: Magnetic, phi: FloatArray, k: FloatArray, w: FloatArray):  # type: ignore[no-untyped-def]
     """w·H(k·Φ) and its Φ-derivative element by element (one Gauss point each), Φ of any
     sign (H odd)."""
-    h, dh = mat.h_dh(k * np.abs(phi))
-    h *= w
-    dh *= w
-    dh *= k
+    h, dh = _terms(mat, np.abs(phi), k, w)
     return np.copysign(h, phi), dh
 
 

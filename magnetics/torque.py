@@ -433,24 +433,26 @@ def continuous_torque(
     # Warm starts: Φ(I) is concave (F(Φ) convex), so its tangent at a solved point and the
     # linear circuit's flux both lie above the root: Newton from their minimum converges
     # monotonically ([numerical-recipes] §9.4).
-    kern = _kernels(path)
-    turns = path.turns[:, None]
-    lin = turns / _mmf(path, mats, np.zeros((turns.shape[0], 1)), kern)["dtotal"]  # Φ/I
     i_old = phi = dfdphi = None
-    if hint is not None:
-        i_old, phi = np.asarray(hint[0], dtype=float)[:, None], np.asarray(hint[1], dtype=float)
-        dfdphi = _mmf(path, mats, np.abs(phi), kern)["dtotal"]
+    if torque_at is None:  # the circuit's chords: its warm starts (the network keeps its own)
+        kern = _kernels(path)
+        turns = path.turns[:, None]
+        lin = turns / _mmf(path, mats, np.zeros((turns.shape[0], 1)), kern)["dtotal"]  # Φ/I
+        if hint is not None:
+            i_old = np.asarray(hint[0], dtype=float)[:, None]
+            phi = np.asarray(hint[1], dtype=float)
+            dfdphi = _mmf(path, mats, np.abs(phi), kern)["dtotal"]
     i, c1 = i_a, np.zeros_like(i_a)
     for k in range(passes):
-        start = None
-        if phi is not None:
-            tangent = np.abs(phi) + turns * (i[:, None] - i_old) / dfdphi
-            start = np.maximum(np.minimum(tangent, lin * i[:, None]), 1e-30)
         if torque_at is not None:
             t = torque_at(i)
         else:
+            start = None
+            if phi is not None:
+                tangent = np.abs(phi) + turns * (i[:, None] - i_old) / dfdphi
+                start = np.maximum(np.minimum(tangent, lin * i[:, None]), 1e-30)
             t, phi, dfdphi = _solved_point(path, i, mats, fluid, 1e-3, start, convention)
-        i_old = i[:, None]
+            i_old = i[:, None]
         c1 = np.where(i > 0, t / np.where(i > 0, i, 1.0), 0.0)
         i = fixed_point(c1, 1e-9 if k == passes - 1 else 1e-4)  # intermediate: a chord's point
     return i, np.where(i_a > 0, off + c1 * i, 0.0)

@@ -32,7 +32,7 @@ from geometry.params import broadcast_fields, preset, valid
 from geometry.section import build_section
 from geometry.validation import check_choice
 from magnetics import thermal
-from magnetics.circuit import path_from_regions, path_from_section
+from magnetics.circuit import path_from_regions, path_from_section, solve_flux
 from magnetics.drag import Drag, coupled_fluid_inertia, drag_terms, totals
 from magnetics.dynamics import torque_response
 from magnetics.error_map import error_bound
@@ -44,7 +44,6 @@ from magnetics.torque import (
     network_torque_and_flux,
     network_yield_at,
     torque_curve,
-    yield_torque_and_flux,
 )
 from mrclutch.design import ClutchDesign, current_limit
 from mrclutch.haptics.actuator import (
@@ -507,7 +506,8 @@ def evaluate_batch(
         out["off_torque"], out["damping"] = totals(terms)
         out["fluid_inertia"] = coupled_fluid_inertia(rg)
         path = path_from_regions(rg)
-        _, flux = yield_torque_and_flux(path, current[rows])
+        # the loop's flux at the peak: the torque response's start (its torque is not used)
+        flux = np.abs(solve_flux(path, (path.turns * current[rows])[:, None], rtol=1e-7))
         ladder = network_from_regions(rg)
         t_peak, x_peak = network_torque_and_flux(ladder, current[rows][:, None])
         out["yield_torque"] = t_peak.sum(-1)[:, 0]
