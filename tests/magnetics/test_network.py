@@ -35,10 +35,12 @@ def _regions(clutch=PAPER, **kw):  # type: ignore[no-untyped-def]
 
 def _single_loop(net):  # type: ignore[no-untyped-def]
     """The ladder with its rungs, window and outer air all but open (1e13 /H, ≥ 10⁵× the
-    elements': they carry < 5e-5 of the flux; truly open paths make the system singular)."""
+    elements': they carry < 5e-5 of the flux; truly open paths make the system singular)
+    and without the walls' fluid sheaths."""
     small = lambda a: np.full_like(a, 1e-13)  # noqa: E731  permeance, H
     rungs = np.where(np.arange(net.m + 1) % net.m == 0, 0.0, 1e-13)[None] + 0 * net.rung_perm
     return replace(net, rung_perm=rungs, rung_fluid=0 * net.rung_fluid,
+                   sheath_w=0 * net.sheath_w, core_sheath_w=0 * net.core_sheath_w,
                    window_perm=small(net.window_perm), window_fluid=0 * net.window_fluid,
                    outer_air=np.full_like(net.outer_air, 1e13),
                    end_leak=np.full_like(net.end_leak, 1e13))  # fmt: skip
@@ -131,11 +133,30 @@ def _nodal(net, mats, ni):  # type: ignore[no-untyped-def]
             r = rel(net.fluid_k[s, k, z], net.fluid_w[s, k, z], net.fluid)
             r += rel(net.wall_k[s, k, z], net.wall_w[s, k, z], net.steel)
             branch(idx(z, k), idx(z, k + 1), r)
-    for i in range(1, m):
-        band = net.rung_perm[s, i] + net.rung_fluid[s, i] * mu[net.fluid] / net.band_len[s]
-        r = rel(net.rung_k[s, i], net.rung_w[s, i], net.steel) + 1.0 / band
+    nb = net.rung_k.shape[-1] // 2
+
+    def beside(steel, fluid):  # type: ignore[no-untyped-def]  # a wall ∥ its fluid sheath
+        return steel if fluid == np.inf else 1.0 / (1.0 / steel + 1.0 / fluid)
+
+    for i in range(m):  # every wall: its zone sections (steel ∥ sheath), then its band
+        r = 0.0
+        for z in (0, 1):
+            pts = slice(z * nb, (z + 1) * nb)
+            wf = net.sheath_w[s, i, z]
+            r += beside(
+                rel(net.rung_k[s, i, pts], net.rung_w[s, i, pts], net.steel),
+                rel(net.sheath_k[s, i, z], wf, net.fluid) if wf.sum() else np.inf,
+            )
+        if i:
+            band = net.rung_perm[s, i] + net.rung_fluid[s, i] * mu[net.fluid] / net.band_len[s]
+            r += 1.0 / band
+        else:
+            wf = net.core_sheath_w[s]
+            r += beside(
+                rel(net.core_k[s], net.core_w[s], net.steel),
+                rel(net.core_sheath_k[s], wf, net.fluid) if wf.sum() else np.inf,
+            )
         branch(idx(0, i), idx(1, i), r)
-    branch(idx(0, 0), idx(1, 0), rel(net.core_k[s], net.core_w[s], net.steel))
     # shell: pole A (Am) → back iron → O → poles → Bm; the outer air beside the back iron,
     # the window from pole B back to pole A; the coil's N·I drives the pole branch O → Bm
     poles = rel(net.shell_k[s], net.shell_w[s], net.steel)
@@ -175,6 +196,48 @@ def test_ladder_solve_against_an_independent_nodal_solve(n):
     # the zone-A film fluxes x_k − e_A, flowing from core to pole (potential falls)
     zone_a = x[: net.m] - x[net.m + 2]
     np.testing.assert_allclose(np.abs(zone_a), np.abs(_nodal(net, mats, ni)), rtol=1e-9)
+
+
+def test_a_saturated_wall_hands_its_flux_to_the_fluid_beside_it():
+    """The sheaths (``_pair``): at the solution each wall section and its fluid sheath have
+    one MMF (F_steel(y − q) = F_fluid(q) to 1e-9 of N·I); with linear materials they share
+    the rung's flux as their permeances (q/(y − q) = P_fluid/P_steel); on 0.1 mm walls
+    with a 6 mm bore at 7 A the drum's steel saturates and its sheaths carry more of its
+    rung's flux than the steel in both zones (in the FEM's band plane of that design the
+    fluid beside the walls carries 22 µWb, the drum 0.25: docs/magnetics.md)."""
+    from magnetics.network import _odd
+
+    def split(c, rg, mats, cur):  # type: ignore[no-untyped-def]
+        net = network_from_regions(rg, mats)
+        x = solve_network(net, [[c.coil_turns * cur]], mats, rtol=1e-13)[0, 0]
+        m, nb = net.m, net.rung_k.shape[-1] // 2
+        y = np.concatenate([[-x[0]], x[: m - 1] - x[1:m]])  # rungs 0 … m − 1
+        q = x[m + 4 : 3 * m + 4].reshape(m, 2)
+        steel, fluid = magnetic(net.steel, mats), magnetic(net.fluid, mats)
+        fs = np.array([[_odd(steel, np.array(y[j] - q[j, z]), net.rung_k[0, j, z * nb:(z + 1) * nb],
+                             net.rung_w[0, j, z * nb:(z + 1) * nb])[0] for z in (0, 1)]
+                       for j in range(m)])  # fmt: skip
+        ff = np.array([[_odd(fluid, np.array(q[j, z]), net.sheath_k[0, j, z],
+                             net.sheath_w[0, j, z])[0] for z in (0, 1)]
+                       for j in range(m)])  # fmt: skip
+        np.testing.assert_allclose(fs, ff, rtol=0, atol=1e-9 * c.coil_turns * cur)
+        return net, y, q
+
+    c, rg = _regions()
+    mats = linear_materials(800.0, 4.0)
+    net, y, q = split(c, rg, mats, 3.0)
+    p_fluid = 1.0 / (net.sheath_k[0, :, :, 0] * net.sheath_w[0, :, :, 0] / (MU0 * 4.0))
+    # the steel's reluctance of a build-up element is Σ w·k/μ (Gauss points, linear)
+    nb = net.rung_k.shape[-1] // 2
+    r_steel = np.stack([(net.rung_k[0, : net.m, z * nb:(z + 1) * nb]
+                         * net.rung_w[0, : net.m, z * nb:(z + 1) * nb]).sum(-1)
+                        for z in (0, 1)], axis=-1) / (MU0 * 800.0)  # fmt: skip
+    np.testing.assert_allclose(q / (y[:, None] - q), p_fluid * r_steel, rtol=1e-8)
+    thin = dict(n_drums=1, drum_thickness=0.1e-3, gap=1.0e-3, drum_inner_diameter=6e-3,
+                zone_length=9e-3)  # fmt: skip
+    c, rg = _regions(**thin)
+    net, y, q = split(c, rg, None, 7.0)
+    assert np.all(np.abs(q[1]) > np.abs(y[1] - q[1]))  # the drum: more in its fluid
 
 
 @given(
@@ -321,18 +384,18 @@ def measured():  # type: ignore[no-untyped-def]
 
 def test_network_against_the_fem_reference(measured):
     """Torque at 2, 4, 7 A against the FEM (0.25 mm, mid-line) on the 648-design grid and
-    200 random designs (benchmarks/measure_network.py). Measured: within ±10 % on 94 % of
-    the grid and 99.5 % of the random designs (±5 %: 74 %, 86 %), worst −29 … +12 %; the
-    single loop 39 %, 38 %,
-    worst −86 … +77 %. The issue's goal (±5 % on ≥ 90 %, ±10 % on all) is not met. Floors
-    just under the measurement: a regression guard, not a fitted parameter."""
+    200 random designs (benchmarks/measure_network.py). Measured: within ±10 % on 97.0 % of
+    the grid and 99.8 % of the random designs (±5 %: 75 %, 87.5 %), worst −16.6 … +12.2 %;
+    the single loop 39 %, 38 %, worst −86 … +77 %. The issue's goal (±5 % on ≥ 90 %, ±10 %
+    on all) is not met. Floors just under the measurement: a regression guard, not a
+    fitted parameter."""
     err, rnd, _ = measured["network"]
     old, _, _ = measured["circuit"]
     within = lambda e: float(np.mean(np.abs(e) <= 0.10))  # noqa: E731
-    assert within(err[~rnd]) >= 0.93 and within(err[rnd]) >= 0.98
-    assert float(np.mean(np.abs(err[~rnd]) <= 0.05)) >= 0.72
-    assert float(np.mean(np.abs(err[rnd]) <= 0.05)) >= 0.84
-    assert np.abs(err).max() <= 0.30
+    assert within(err[~rnd]) >= 0.96 and within(err[rnd]) >= 0.99
+    assert float(np.mean(np.abs(err[~rnd]) <= 0.05)) >= 0.73
+    assert float(np.mean(np.abs(err[rnd]) <= 0.05)) >= 0.86
+    assert np.abs(err).max() <= 0.18
     for sel in (~rnd, rnd):  # better than the single loop on both sets, by far
         assert within(err[sel]) >= within(old[sel]) + 0.25
         assert np.abs(err[sel]).max() < 0.5 * np.abs(old[sel]).max()

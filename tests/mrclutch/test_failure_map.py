@@ -79,11 +79,12 @@ def test_circuit_off_the_fem_warns(paper):
 
 def test_fast_evaluate_notes_an_untrusted_network(paper):
     """The fast fidelity's torque is the reluctance network's; off its trusted region (its
-    own measured map: a 6 mm bore with 0.1 mm drums and 1 mm gaps, −29 % at 7 A; or a
-    shell the map does not hold) it is still used, and says so."""
+    own measured map: one drum with a 6 mm bore, 0.1 mm walls and 1 mm gaps, −12 % at 7 A;
+    or a shell the map does not hold) it is still used, and says so."""
     from mrclutch.pipeline import evaluate
 
-    thin = dict(gap=1.0e-3, zone_length=9e-3, drum_inner_diameter=6e-3, drum_thickness=0.1e-3)
+    thin = dict(n_drums=1, gap=1.0e-3, zone_length=9e-3, drum_inner_diameter=6e-3,
+                drum_thickness=0.1e-3)  # fmt: skip
     corner = replace(paper, clutch=replace(paper.clutch, **thin))
     notes = evaluate(corner).clutch.notes
     assert evaluate(corner).clutch.methods["torque"] == "network"

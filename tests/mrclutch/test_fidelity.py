@@ -83,7 +83,8 @@ def test_choose_picks_cheapest_meeting_target(paper):
             chosen = [(n, s) for n, s, _ in TORQUE_METHODS].index((pick.torque, pick.fem_size))
             assert all(b > target for b in bounds[:chosen])  # nothing cheaper meets it
     assert choose(paper, 0.01).torque == "circuit"
-    assert choose(paper, 0.003).torque == "network"  # its map: 0.27 % on the preset
+    assert choose(paper, 0.003).torque == "fem"  # the network's map: 0.93 % on the preset
+    assert choose(three, 0.003).torque == "network"  # and 0.13 % on 3 drums
     pick = choose(three, 0.01)  # the circuit is > 10 % off on 3 drums: it says so
     assert pick.torque == "network" and any("circuit" in n and "-12.1%" in n for n in pick.notes)
     six = replace(paper, clutch=replace(paper.clutch, n_drums=6))

@@ -1,4 +1,4 @@
-"""Lebel et al. [lebel], Fig. 2b and Table 2, against the `paper` preset (circuit model)."""
+"""Lebel et al. [lebel], Fig. 2b and Table 2, against the `paper` preset."""
 
 import numpy as np
 import pytest
@@ -19,10 +19,11 @@ def _fig_2b_figures(currents, torque):
     return t7, r2, (t7 - t4) / t4
 
 
-@pytest.mark.parametrize("method", ["circuit", "fem"])
+@pytest.mark.parametrize("method", ["network", "circuit", "fem"])
 def test_fig_2b_torque_current_curve(method):
     """Fig. 2b: 0.40 N·m ± 10 % at 7 A, quasi-linear 1–4 A (R² ≥ 0.98), saturating above
-    4 A (T(7) − T(4) < 25 % of T(4)); by the circuit and by the FEM reference."""
+    4 A (T(7) − T(4) < 25 % of T(4)); by the network (the default), the circuit and the FEM
+    reference."""
     i = np.array([0.0, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 7.0])
     tc = torque_curve(PAPER, i, method=method, speed_rpm=530)
     t7, r2, rise = _fig_2b_figures(i, tc.torque)
