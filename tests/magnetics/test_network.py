@@ -90,6 +90,81 @@ def test_linear_series_loop_closed_form(n, gap_mm, mu_s, mu_f, i):
     np.testing.assert_allclose(x[: net.m], phi, rtol=5e-5)
 
 
+@settings(max_examples=20, deadline=None)
+@given(
+    n=st.integers(1, 6),
+    gap_mm=st.floats(0.1, 1.0),
+    mu_s=st.floats(200, 5000),
+    mu_f=st.floats(2, 10),
+    i=st.floats(1e-3, 100),
+)
+def test_linear_ladder_series_parallel_closed_form(n, gap_mm, mu_s, mu_f, i):
+    """Linear materials, every parallel path present but the end leaks (opened: 1e30 /H):
+    the network is a series/parallel ladder, and every film's flux equals its reduction to
+    1e-9. From the geometry, as in the series test: the films and walls radially, the
+    core's and drums' steel axially, each beside its fluid sheath (half of each
+    neighbouring film, l/(2μA) over a zone with the flux building up, l/(μA) beside the
+    core over the band); from the network as built: the drums' bands, the coil window and
+    the outside air. Reduced from the core out: Z₀ = the core's rung,
+    Z_k = rung_k ∥ (film_{k−1,A} + Z_{k−1} + film_{k−1,B}); the coil drives the shell
+    (poles + back iron ∥ air) into (film_{m−1} chain) ∥ window; the flux then divides down
+    the ladder in inverse proportion to each branch's reluctance."""
+    c, rg = _regions(n_drums=n, gap=gap_mm * 1e-3)
+    mats = linear_materials(mu_s, mu_f)
+    net = network_from_regions(rg, mats, fringing=False)
+    net = replace(net, end_leak=np.full_like(net.end_leak, 1e30))
+    x = solve_network(net, [[c.coil_turns * i]], mats, rtol=1e-13)[0, 0]
+    a = {k: float(np.asarray(v).ravel()[0]) for k, v in rg.at.items()}
+    ms, mf = MU0 * mu_s, MU0 * mu_f
+    za, zb = a["zone_A1"] - a["zone_A0"], a["zone_B1"] - a["zone_B0"]
+    band = a["zone_B0"] - a["zone_A1"]
+    m = 2 * n
+    par = lambda p, q: p * q / (p + q)  # noqa: E731
+    area = lambda r0, r1: np.pi * (r1**2 - r0**2)  # noqa: E731
+    film = np.zeros((m, 2))  # films core|out1|in1|…|outN|shell, zone A and B
+    sheath = np.zeros(m)  # the fluid beside wall k: half of films k − 1 and k
+    for k in range(m):
+        r0, r1 = a[f"rho{2 * k}"], a[f"rho{2 * k + 1}"]
+        lens = (za + (a["zone_A0"] - a["hub_back"] if k == m - 1 else 0.0), zb)
+        film[k] = [np.log(r1 / r0) / (2 * np.pi * mf * length) for length in lens]
+        if k:  # the drum wall inside film k, radially
+            w0, w1 = a[f"rho{2 * k - 1}"], a[f"rho{2 * k}"]
+            film[k] += [np.log(w1 / w0) / (2 * np.pi * ms * length) for length in (za, zb)]
+        sheath[k] += 0.5 * area(r0, r1)
+        if k + 1 < m:
+            sheath[k + 1] += 0.5 * area(r0, r1)
+    rung = np.zeros(m)
+    for k in range(m):
+        steel = np.pi * a["rho0"] ** 2 if k == 0 else area(a[f"rho{2 * k - 1}"], a[f"rho{2 * k}"])
+        rung[k] = sum(par(length / (2 * ms * steel), length / (2 * mf * sheath[k]))
+                      for length in (za, zb))  # fmt: skip
+        if k == 0:  # the core over the band, beside half of film 0
+            rung[k] += par(band / (ms * steel), band / (mf * 0.5 * area(a["rho0"], a["rho1"])))
+        else:
+            rung[k] += 1.0 / (net.rung_perm[0, k] + mf * net.rung_fluid[0, k] / band)
+    z = rung[0]
+    chain = np.zeros(m)
+    for k in range(1, m):
+        chain[k] = film[k - 1].sum() + z
+        z = par(rung[k], chain[k])
+    load = film[m - 1].sum() + z
+    window = 1.0 / (net.window_perm[0] + mf * net.window_fluid[0] / band)
+    back = a["coil_out"]
+    poles = ((a["cap_front"], a["zone_A1"]), (a["zone_B0"], a["cap_back"]))
+    shell = sum(np.log(back / a[f"rho{4 * n - 1}"]) / (2 * np.pi * ms * (z1 - z0))
+                for z0, z1 in poles)  # fmt: skip
+    back_iron = (0.5 * (a["zone_B0"] + a["zone_B1"]) - 0.5 * (a["zone_A0"] + a["zone_A1"])) / (
+        ms * area(back, a["outer"])
+    )
+    shell += par(back_iron, net.outer_air[0])
+    phi = np.zeros(m)
+    source = c.coil_turns * i / (shell + par(load, window))
+    phi[m - 1] = source * window / (window + load)
+    for k in range(m - 1, 0, -1):
+        phi[k - 1] = phi[k] * rung[k] / (rung[k] + chain[k])
+    np.testing.assert_allclose(np.abs(x[:m]), phi, rtol=1e-9)
+
+
 def test_single_loop_limit_equals_the_old_loop():
     """Rungs, window and air open and no fringing: the ladder is the single loop of
     magnetics.circuit without its leakage, to 5e-5 (``_single_loop``), with linear
