@@ -46,83 +46,21 @@ def _single_loop(net):  # type: ignore[no-untyped-def]
                    end_leak=np.full_like(net.end_leak, 1e13))  # fmt: skip
 
 
-@settings(max_examples=20, deadline=None)
-@given(
-    n=st.integers(1, 6),
-    gap_mm=st.floats(0.1, 1.0),  # the loop's reluctance ≤ 1e-4 of the nearly open paths'
-    mu_s=st.floats(200, 5000),
-    mu_f=st.floats(2, 10),
-    i=st.floats(1e-3, 100),
-)
-# ill-conditioned by the nearly open paths: the residual's rounding floor (2.8e-10) sits
-# above rtol and no step lowers it (the Newton's line-search floor, network._FLOOR)
-@example(n=4, gap_mm=0.5, mu_s=200.0, mu_f=7.484375, i=1.0)
-def test_linear_series_loop_closed_form(n, gap_mm, mu_s, mu_f, i):
-    """Linear materials, no leakage: every film carries Φ = N·I/ΣR, R of each element from
-    its geometry — ln(r1/r0)/(2πμL) radially ([roters1941] ch. 5), l/(μA) axially (the core
-    and the drums' flux building up linearly over a zone count half the zone) — to 5e-5
-    (the leakage left through the nearly open paths, ``_single_loop``)."""
-    c, rg = _regions(n_drums=n, gap=gap_mm * 1e-3)
-    mats = linear_materials(mu_s, mu_f)
-    net = _single_loop(network_from_regions(rg, mats, fringing=False))
-    x = solve_network(net, [[c.coil_turns * i]], mats)[0, 0]
-    a = {k: float(np.asarray(v).ravel()[0]) for k, v in rg.at.items()}
-    ms, mf = MU0 * mu_s, MU0 * mu_f
-    za, zb = a["zone_A1"] - a["zone_A0"], a["zone_B1"] - a["zone_B0"]
-    band = a["zone_B0"] - a["zone_A1"]
-    rsum = 0.0
-    for k in range(2 * n):  # films: core|out1|in1|…|outN|shell
-        r0, r1 = a[f"rho{2 * k}"], a[f"rho{2 * k + 1}"]
-        for length in (za + (a["zone_A0"] - a["hub_back"] if k == 2 * n - 1 else 0.0), zb):
-            rsum += np.log(r1 / r0) / (2 * np.pi * mf * length)
-        if k:  # the drum wall inside film k, radially in both zones
-            w0, w1 = a[f"rho{2 * k - 1}"], a[f"rho{2 * k}"]
-            rsum += np.log(w1 / w0) / (2 * np.pi * ms) * (1 / za + 1 / zb)
-    rc = a["rho0"]
-    rsum += (band + za / 2 + zb / 2) / (ms * np.pi * rc**2)  # core
-    back = a["coil_out"]
-    for z0, z1 in ((a["cap_front"], a["zone_A1"]), (a["zone_B0"], a["cap_back"])):  # poles
-        rsum += np.log(back / a[f"rho{4 * n - 1}"]) / (2 * np.pi * ms * (z1 - z0))
-    rsum += (0.5 * (a["zone_B0"] + a["zone_B1"]) - 0.5 * (a["zone_A0"] + a["zone_A1"])) / (
-        ms * np.pi * (a["outer"] ** 2 - back**2)
-    )
-    phi = c.coil_turns * i / rsum
-    np.testing.assert_allclose(x[: net.m], phi, rtol=5e-5)
-
-
-@settings(max_examples=20, deadline=None)
-@given(
-    n=st.integers(1, 6),
-    gap_mm=st.floats(0.1, 1.0),
-    mu_s=st.floats(200, 5000),
-    mu_f=st.floats(2, 10),
-    i=st.floats(1e-3, 100),
-)
-def test_linear_ladder_series_parallel_closed_form(n, gap_mm, mu_s, mu_f, i):
-    """Linear materials, every parallel path present but the end leaks (opened: 1e30 /H):
-    the network is a series/parallel ladder, and every film's flux equals its reduction to
-    1e-9. From the geometry, as in the series test: the films and walls radially, the
-    core's and drums' steel axially, each beside its fluid sheath (half of each
-    neighbouring film, l/(2μA) over a zone with the flux building up, l/(μA) beside the
-    core over the band); from the network as built: the drums' bands, the coil window and
-    the outside air. Reduced from the core out: Z₀ = the core's rung,
-    Z_k = rung_k ∥ (film_{k−1,A} + Z_{k−1} + film_{k−1,B}); the coil drives the shell
-    (poles + back iron ∥ air) into (film_{m−1} chain) ∥ window; the flux then divides down
-    the ladder in inverse proportion to each branch's reluctance."""
-    c, rg = _regions(n_drums=n, gap=gap_mm * 1e-3)
-    mats = linear_materials(mu_s, mu_f)
-    net = network_from_regions(rg, mats, fringing=False)
-    net = replace(net, end_leak=np.full_like(net.end_leak, 1e30))
-    x = solve_network(net, [[c.coil_turns * i]], mats, rtol=1e-13)[0, 0]
+def _elements(rg, n, mu_s, mu_f):  # type: ignore[no-untyped-def]
+    """The closed-form tests' elements from the geometry (linear materials): each film's
+    series element per zone (its fluid radially, ln(r1/r0)/(2πμL) [roters1941] ch. 5, plus
+    the drum wall inside it), each wall's axial steel in a zone (l/(2μA): the flux builds
+    up linearly) and its fluid sheath beside it (half of each neighbouring film), the core
+    over the band (steel, and half of film 0 beside it), and the shell (poles radially,
+    back iron axially). Films: core|out1|in1|…|outN|shell; reluctances in 1/H."""
     a = {k: float(np.asarray(v).ravel()[0]) for k, v in rg.at.items()}
     ms, mf = MU0 * mu_s, MU0 * mu_f
     za, zb = a["zone_A1"] - a["zone_A0"], a["zone_B1"] - a["zone_B0"]
     band = a["zone_B0"] - a["zone_A1"]
     m = 2 * n
-    par = lambda p, q: p * q / (p + q)  # noqa: E731
     area = lambda r0, r1: np.pi * (r1**2 - r0**2)  # noqa: E731
-    film = np.zeros((m, 2))  # films core|out1|in1|…|outN|shell, zone A and B
-    sheath = np.zeros(m)  # the fluid beside wall k: half of films k − 1 and k
+    film, wall, sheath = np.zeros((m, 2)), np.zeros((m, 2)), np.zeros((m, 2))
+    half = np.zeros(m + 1)  # half of film k − 1 and k beside wall k
     for k in range(m):
         r0, r1 = a[f"rho{2 * k}"], a[f"rho{2 * k + 1}"]
         lens = (za + (a["zone_A0"] - a["hub_back"] if k == m - 1 else 0.0), zb)
@@ -130,18 +68,76 @@ def test_linear_ladder_series_parallel_closed_form(n, gap_mm, mu_s, mu_f, i):
         if k:  # the drum wall inside film k, radially
             w0, w1 = a[f"rho{2 * k - 1}"], a[f"rho{2 * k}"]
             film[k] += [np.log(w1 / w0) / (2 * np.pi * ms * length) for length in (za, zb)]
-        sheath[k] += 0.5 * area(r0, r1)
-        if k + 1 < m:
-            sheath[k + 1] += 0.5 * area(r0, r1)
-    rung = np.zeros(m)
+        half[k] += 0.5 * area(r0, r1)
+        half[k + 1] += 0.5 * area(r0, r1)
+    core = np.pi * a["rho0"] ** 2
     for k in range(m):
-        steel = np.pi * a["rho0"] ** 2 if k == 0 else area(a[f"rho{2 * k - 1}"], a[f"rho{2 * k}"])
-        rung[k] = sum(par(length / (2 * ms * steel), length / (2 * mf * sheath[k]))
-                      for length in (za, zb))  # fmt: skip
-        if k == 0:  # the core over the band, beside half of film 0
-            rung[k] += par(band / (ms * steel), band / (mf * 0.5 * area(a["rho0"], a["rho1"])))
-        else:
-            rung[k] += 1.0 / (net.rung_perm[0, k] + mf * net.rung_fluid[0, k] / band)
+        steel = core if k == 0 else area(a[f"rho{2 * k - 1}"], a[f"rho{2 * k}"])
+        wall[k] = [length / (2 * ms * steel) for length in (za, zb)]
+        sheath[k] = [length / (2 * mf * half[k]) for length in (za, zb)]
+    back = a["coil_out"]
+    poles = ((a["cap_front"], a["zone_A1"]), (a["zone_B0"], a["cap_back"]))
+    return {
+        "film": film, "wall": wall, "sheath": sheath, "band": band,
+        "core_band": band / (ms * core), "core_band_sheath": band / (mf * half[0]),
+        "poles": sum(np.log(back / a[f"rho{4 * n - 1}"]) / (2 * np.pi * ms * (z1 - z0))
+                     for z0, z1 in poles),
+        "back_iron": (0.5 * (a["zone_B0"] + a["zone_B1"]) - 0.5 * (a["zone_A0"] + a["zone_A1"]))
+        / (ms * area(back, a["outer"])),
+    }  # fmt: skip
+
+
+#: Linear materials over the sweep's drum counts and gaps, the steel's and the fluid's μ_r
+#: and the current (the closed-form tests).
+_LINEAR_CASES = given(
+    n=st.integers(1, 6),
+    gap_mm=st.floats(0.1, 1.0),  # the loop's reluctance ≤ 1e-4 of the nearly open paths'
+    mu_s=st.floats(200, 5000),
+    mu_f=st.floats(2, 10),
+    i=st.floats(1e-3, 100),
+)
+
+
+@settings(max_examples=20, deadline=None)
+@_LINEAR_CASES
+# ill-conditioned by the nearly open paths: the residual's rounding floor (2.8e-10) sits
+# above rtol and no step lowers it (the Newton's line-search floor, network._FLOOR)
+@example(n=4, gap_mm=0.5, mu_s=200.0, mu_f=7.484375, i=1.0)
+def test_linear_series_loop_closed_form(n, gap_mm, mu_s, mu_f, i):
+    """Linear materials, no leakage: every film carries Φ = N·I/ΣR, R of each element from
+    its geometry (``_elements``: the films, the core along both zones and the band, the
+    shell) to 5e-5 (the leakage left through the nearly open paths, ``_single_loop``)."""
+    c, rg = _regions(n_drums=n, gap=gap_mm * 1e-3)
+    mats = linear_materials(mu_s, mu_f)
+    net = _single_loop(network_from_regions(rg, mats, fringing=False))
+    x = solve_network(net, [[c.coil_turns * i]], mats)[0, 0]
+    e = _elements(rg, n, mu_s, mu_f)
+    rsum = e["film"].sum() + e["wall"][0].sum() + e["core_band"] + e["poles"] + e["back_iron"]
+    np.testing.assert_allclose(x[: net.m], c.coil_turns * i / rsum, rtol=5e-5)
+
+
+@settings(max_examples=20, deadline=None)
+@_LINEAR_CASES
+def test_linear_ladder_series_parallel_closed_form(n, gap_mm, mu_s, mu_f, i):
+    """Linear materials, every parallel path present but the end leaks (opened: 1e30 /H):
+    the network is a series/parallel ladder, and every film's flux equals its reduction to
+    1e-9. From the geometry (``_elements``): the films, each wall's steel beside its fluid
+    sheath, the core over the band beside half of film 0, the shell; from the network as
+    built: the drums' bands, the coil window and the outside air. Reduced from the core
+    out: Z₀ = the core's rung, Z_k = rung_k ∥ (film_{k−1,A} + Z_{k−1} + film_{k−1,B}); the
+    coil drives the shell (poles + back iron ∥ air) into (film_{m−1} chain) ∥ window; the
+    flux then divides down the ladder in inverse proportion to each branch's reluctance."""
+    c, rg = _regions(n_drums=n, gap=gap_mm * 1e-3)
+    mats = linear_materials(mu_s, mu_f)
+    net = network_from_regions(rg, mats, fringing=False)
+    net = replace(net, end_leak=np.full_like(net.end_leak, 1e30))
+    x = solve_network(net, [[c.coil_turns * i]], mats, rtol=1e-13)[0, 0]
+    e = _elements(rg, n, mu_s, mu_f)
+    mf, band, film, m = MU0 * mu_f, e["band"], e["film"], 2 * n
+    par = lambda p, q: p * q / (p + q)  # noqa: E731
+    rung = par(e["wall"], e["sheath"]).sum(axis=1)
+    rung[0] += par(e["core_band"], e["core_band_sheath"])
+    rung[1:] += 1.0 / (net.rung_perm[0, 1:m] + mf * net.rung_fluid[0, 1:m] / band)
     z = rung[0]
     chain = np.zeros(m)
     for k in range(1, m):
@@ -149,14 +145,7 @@ def test_linear_ladder_series_parallel_closed_form(n, gap_mm, mu_s, mu_f, i):
         z = par(rung[k], chain[k])
     load = film[m - 1].sum() + z
     window = 1.0 / (net.window_perm[0] + mf * net.window_fluid[0] / band)
-    back = a["coil_out"]
-    poles = ((a["cap_front"], a["zone_A1"]), (a["zone_B0"], a["cap_back"]))
-    shell = sum(np.log(back / a[f"rho{4 * n - 1}"]) / (2 * np.pi * ms * (z1 - z0))
-                for z0, z1 in poles)  # fmt: skip
-    back_iron = (0.5 * (a["zone_B0"] + a["zone_B1"]) - 0.5 * (a["zone_A0"] + a["zone_A1"])) / (
-        ms * area(back, a["outer"])
-    )
-    shell += par(back_iron, net.outer_air[0])
+    shell = e["poles"] + par(e["back_iron"], net.outer_air[0])
     phi = np.zeros(m)
     source = c.coil_turns * i / (shell + par(load, window))
     phi[m - 1] = source * window / (window + load)
