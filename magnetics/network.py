@@ -95,9 +95,9 @@ class Network:
     fluid_w: FloatArray
     wall_k: FloatArray  # (S, m, 2) steel wall inside film k, radially, zones A and B
     wall_w: FloatArray
-    rung_k: FloatArray  # (S, m + 1, 2·nb) wall steel axially in zone A and B (rungs 0..m-1)
+    rung_k: FloatArray  # (S, m, 2, nb) wall j's steel axially in zone A and B (rungs 0..m-1)
     rung_w: FloatArray
-    sheath_k: FloatArray  # (S, m, 2, nb) the fluid beside wall j axially in zone A and B
+    sheath_k: FloatArray  # (S, m, 2, 1) the fluid beside wall j axially in zone A and B
     sheath_w: FloatArray
     rung_perm: FloatArray  # (S, m + 1) each rung's band: linear permeance (stainless), H
     rung_fluid: FloatArray  # (S, m + 1) and the area of the fluid beside it, m²
@@ -120,6 +120,20 @@ class Network:
     @property
     def m(self) -> int:
         return len(self.film_name)
+
+    @property
+    def unknowns(self) -> int:
+        """The loop fluxes per design and current: m films, the window, the outer air, the
+        two end leaks (``leaks``) and the 2m + 1 sheaths (``sheaths``)."""
+        return 3 * self.m + 5
+
+    @property
+    def leaks(self) -> slice:
+        return slice(self.m + 2, self.m + 4)
+
+    @property
+    def sheaths(self) -> slice:
+        return slice(self.m + 4, None)
 
 
 def _overlap(a0, a1, b0, b1):  # type: ignore[no-untyped-def]
@@ -157,8 +171,7 @@ def network_from_regions(
     gap_len, gap_eff, fluid_k, fluid_w = zeros(m, 2), zeros(m, 2), zeros(m, 2), zeros(m, 2)
     fringe_h = zeros(m, 2, 2)
     wall_k, wall_w = zeros(m, 2), zeros(m, 2)
-    nb = _BUILD_POINTS
-    rung_k, rung_w = zeros(m + 1, 2 * nb), zeros(m + 1, 2 * nb)
+    rung_k, rung_w = zeros(m, 2, _BUILD_POINTS), zeros(m, 2, _BUILD_POINTS)
     rung_perm, rung_fluid = zeros(m + 1), zeros(m + 1)
     gap_r0 = np.stack([at[f.r0] for f in films], axis=1)
     gap_r1 = np.stack([at[f.r1] for f in films], axis=1)
@@ -213,9 +226,8 @@ def network_from_regions(
                 # the same wall axially: flux builds up linearly over the zone, so
                 # ∫0^L H(Φ z/(L A)) dz = L·∫0^1 H(u·Φ/A) du (Gauss–Legendre, _BUILD_POINTS)
                 area = np.pi * (w1**2 - w0**2)
-                pts = slice(z * nb, (z + 1) * nb)
-                rung_k[:, k, pts] = np.where(okw, 1.0 / area, 0.0)[:, None] * _BU
-                rung_w[:, k, pts] = lw[:, None] * _BW
+                rung_k[:, k, z] = np.where(okw, 1.0 / area, 0.0)[:, None] * _BU
+                rung_w[:, k, z] = lw[:, None] * _BW
     # Rungs' band: regions spanning the band on a wall's stations (linear, μA/l), in
     # parallel with half of each neighbouring film's fluid (its own B–H: the band's axial
     # field reaches ~10⁵ A/m at 7 A, where the fluid's secant μ is 0.7 of its initial μ).
@@ -242,8 +254,8 @@ def network_from_regions(
     core_area = np.pi * core[1] ** 2
     core_k, core_w = (1 / core_area)[:, None], band[:, None]  # the core over the band
     for z, length in enumerate((za1 - za0, zb1 - zb0)):  # and in each zone (rung 0)
-        rung_k[:, 0, z * nb : (z + 1) * nb] = (1 / core_area)[:, None] * _BU
-        rung_w[:, 0, z * nb : (z + 1) * nb] = length[:, None] * _BW
+        rung_k[:, 0, z] = (1 / core_area)[:, None] * _BU
+        rung_w[:, 0, z] = length[:, None] * _BW
     # Fluid sheaths: the films carry axial flux too (the FEM's band plane on 1 drum at 0.1
     # mm and 7 A: 22 µWb in the two films' fluid against 26 in the core, 0.25 in the drum).
     # Each wall's steel in a zone is in parallel with half of each neighbouring film's
@@ -255,13 +267,13 @@ def network_from_regions(
     half = 0.5 * np.pi * (gap_r1**2 - gap_r0**2)  # (S, m)
     sheath = half.copy()
     sheath[:, 1:] += half[:, :-1]  # wall j: films j − 1 and j
-    steel_w = rung_w[:, :m].reshape(size, m, 2, nb)
-    has = steel_w.sum(-1) > 0
+    steel_w = rung_w.sum(-1)  # (S, m, 2): each wall's length in each zone
+    has = steel_w > 0
     # one point, the midpoint (exact for a linear material): the fluid is nearly linear up
     # to its ~0.6 T there, and four points move no torque of the FEM reference's designs
     # by more than 0.2 %
     sheath_k = np.where(has, 0.5 / sheath[..., None], 0.0)[..., None]  # B at u = 1/2
-    sheath_w = np.where(has, steel_w.sum(-1), 0.0)[..., None]
+    sheath_w = np.where(has, steel_w, 0.0)[..., None]
     f0 = box(films[0])
     across0 = (f0[2] <= za1) & (f0[3] >= zb0)
     core_sheath_k = np.where(across0, 1.0 / half[:, 0], 0.0)[:, None]
@@ -451,8 +463,8 @@ def _pair(steel: Magnetic, fluid: Magnetic, y, q, ks, ws, kf, wf):  # type: igno
 
 
 def _residual(net: Network, mats, x: FloatArray, ni: FloatArray, warm=None):  # type: ignore[no-untyped-def]
-    """Loop MMF residuals (S, C, m + 4 + 2m + 1) at the loop fluxes x (films, window, outer
-    air, the two end leaks, the sheaths') and the Jacobian: the chain's diagonal (…, m − 1)
+    """Loop MMF residuals (S, C, ``Network.unknowns``) at the loop fluxes x (films, window,
+    outer air, the two end leaks, the sheaths') and the Jacobian: the chain's diagonal (…, m − 1)
     and off-diagonal (…, m − 1) for loops 0 … m − 2, the dense block (…, 3, 3) of loops
     m − 1, window, outer air, the end leaks' border (…, m + 2, 2) and block (…, 2, 2), the
     band fluid's state, and the sheaths' slopes (a, a + b) (…, 2m + 1) each.
@@ -466,8 +478,8 @@ def _residual(net: Network, mats, x: FloatArray, ni: FloatArray, warm=None):  # 
     steel, fluid = magnetic(net.steel, mats), magnetic(net.fluid, mats)
     ex = lambda a: a[:, None]  # noqa: E731  (S, 1, …): broadcast over currents
     m = net.m
-    xl, xw, xo, xe = x[..., :m], x[..., m], x[..., m + 1], x[..., m + 2 : m + 4]
-    q = x[..., m + 4 :]
+    xl, xw, xo, xe = x[..., :m], x[..., m], x[..., m + 1], x[..., net.leaks]
+    q = x[..., net.sheaths]
     # each zone's films and drum walls, at the zone's film flux (…, m, 2)
     xz = np.stack([xl - xe[..., :1], xl - xe[..., 1:]], axis=-1)
     a, da = _each(fluid, xz, ex(net.fluid_k), ex(net.fluid_w))
@@ -480,12 +492,10 @@ def _residual(net: Network, mats, x: FloatArray, ni: FloatArray, warm=None):  # 
                        axis=-1)  # fmt: skip
     f, df = np.zeros_like(y), np.zeros_like(y)
     # every wall's steel in both zones beside its fluid sheaths (rungs 0 … m − 1)
-    nb = _BUILD_POINTS
     shape = (*q.shape[:-1], m, 2)
-    ks = ex(net.rung_k[:, :m].reshape(-1, m, 2, nb))
-    ws = ex(net.rung_w[:, :m].reshape(-1, m, 2, nb))
     fs, rq, pa, pk, cond = _pair(steel, fluid, y[..., :m, None], q[..., : 2 * m].reshape(shape),
-                                ks, ws, ex(net.sheath_k), ex(net.sheath_w))  # fmt: skip
+                                 ex(net.rung_k), ex(net.rung_w),
+                                 ex(net.sheath_k), ex(net.sheath_w))  # fmt: skip
     f[..., :m] = fs.sum(-1)
     df[..., :m] = cond.sum(-1)
     # the core over the band beside half of film 0
@@ -515,9 +525,8 @@ def _residual(net: Network, mats, x: FloatArray, ni: FloatArray, warm=None):  # 
     res[..., m] = f[..., m] + win - ni
     res[..., m + 1] = air * xo - bk
     leak = ex(net.end_leak)
-    res[..., m + 2 : m + 4] = leak * xe - np.stack([gz[0].sum(-1), gz[1].sum(-1)], axis=-1)
-    res[..., m + 4 : 3 * m + 4] = rq.reshape(*q.shape[:-1], 2 * m)
-    res[..., 3 * m + 4] = rc
+    res[..., net.leaks] = leak * xe - np.stack([gz[0].sum(-1), gz[1].sum(-1)], axis=-1)
+    res[..., net.sheaths] = np.concatenate([rq.reshape(*q.shape[:-1], 2 * m), rc[..., None]], -1)
     dm = df[..., m] + dsh + dbk  # dF_shell/dy_m
     diag = dg[..., : m - 1] + df[..., 1:m] + df[..., : m - 1]
     off = -df[..., 1:m]
@@ -624,9 +633,8 @@ def solve_network(
     max_iter: int = 60,
     start: FloatArray | None = None,
 ) -> FloatArray:
-    """Loop fluxes (S, C, 3m + 5) (films, the window, the outer air, the end leaks, the
-    sheaths) at
-    ampere-turns (S, C).
+    """Loop fluxes (S, C, ``Network.unknowns``) (films, the window, the outer air, the end
+    leaks, the sheaths) at ampere-turns (S, C).
 
     Damped Newton: the full step, halved until the residual's norm falls (Armijo,
     [nocedal-wright] §3.1); the Jacobian is SPD tridiagonal (co-energy Hessian). Started at
@@ -638,7 +646,7 @@ def solve_network(
     ni = np.broadcast_to(ni, (net.turns.size, ni.shape[-1])).copy()
     if not np.all(np.isfinite(ni)):
         raise ParameterError("current: must be finite")
-    shape = (*ni.shape, 3 * net.m + 5)
+    shape = (*ni.shape, net.unknowns)
     x0 = None if start is None else np.broadcast_to(np.asarray(start, dtype=float), shape)
     out = np.zeros(shape)
     failed = []
@@ -668,7 +676,7 @@ def _take(net: Network, rows: slice | NDArray[np.bool_]) -> Network:
 
 def _newton(net, ni, mats, rtol, max_iter, start):  # type: ignore[no-untyped-def]
     """``solve_network`` on one block: (loop fluxes, indices of the rows not converged)."""
-    shape = (*ni.shape, 3 * net.m + 5)
+    shape = (*ni.shape, net.unknowns)
     if start is None:
         r0, j0 = _residual(net, mats, np.zeros(shape), ni)
         x = _solve(j0, -r0)

@@ -509,7 +509,7 @@ def network_torque_and_flux(
     start: FloatArray | None = None,
 ) -> tuple[FloatArray, FloatArray]:
     """(yield torque (S, C, 2m) of every film in zone A then B, the loop fluxes
-    (S, C, 3m + 5)) at currents (S, C) A, the Newton started at ``start`` if given.
+    (S, C, ``Network.unknowns``)) at currents (S, C) A, the Newton started at ``start`` if given.
 
     The film's flux x_k spreads over its walls' overlap L plus the fringing length
     (``Network.gap_eff``): over the overlap B = x_k·(L/L_eff)/(2π r L), and past each end,
@@ -535,7 +535,7 @@ def network_torque_and_flux(
     r0, r1 = np.tile(net.gap_r0, 2), np.tile(net.gap_r1, 2)
     g = (r1 - r0)[:, None, :, None, None]
     ok = length > 0
-    xl, xe = x[..., : net.m], x[..., net.m + 2 : net.m + 4]
+    xl, xe = x[..., : net.m], x[..., net.leaks]
     zones = np.abs(np.concatenate([xl - xe[..., :1], xl - xe[..., 1:]], axis=-1))  # A, B
     phi = zones / np.where(ok, eff, 1.0)[:, None, :]  # Φ per metre of L_eff
     w_end = np.log1p(np.pi * depth / np.where(ok, r1 - r0, 1.0)[..., None])  # (S, K, 2)

@@ -197,7 +197,6 @@ def _nodal(net, mats, ni):  # type: ignore[no-untyped-def]
             r = rel(net.fluid_k[s, k, z], net.fluid_w[s, k, z], net.fluid)
             r += rel(net.wall_k[s, k, z], net.wall_w[s, k, z], net.steel)
             branch(idx(z, k), idx(z, k + 1), r)
-    nb = net.rung_k.shape[-1] // 2
 
     def beside(steel, fluid):  # type: ignore[no-untyped-def]  # a wall ∥ its fluid sheath
         return steel if fluid == np.inf else 1.0 / (1.0 / steel + 1.0 / fluid)
@@ -205,10 +204,9 @@ def _nodal(net, mats, ni):  # type: ignore[no-untyped-def]
     for i in range(m):  # every wall: its zone sections (steel ∥ sheath), then its band
         r = 0.0
         for z in (0, 1):
-            pts = slice(z * nb, (z + 1) * nb)
             wf = net.sheath_w[s, i, z]
             r += beside(
-                rel(net.rung_k[s, i, pts], net.rung_w[s, i, pts], net.steel),
+                rel(net.rung_k[s, i, z], net.rung_w[s, i, z], net.steel),
                 rel(net.sheath_k[s, i, z], wf, net.fluid) if wf.sum() else np.inf,
             )
         if i:
@@ -258,7 +256,7 @@ def test_ladder_solve_against_an_independent_nodal_solve(n):
     ni = c.coil_turns * 3.0
     x = solve_network(net, [[ni]], mats, rtol=1e-14)[0, 0]
     # the zone-A film fluxes x_k − e_A, flowing from core to pole (potential falls)
-    zone_a = x[: net.m] - x[net.m + 2]
+    zone_a = x[: net.m] - x[net.leaks][0]
     np.testing.assert_allclose(np.abs(zone_a), np.abs(_nodal(net, mats, ni)), rtol=1e-9)
 
 
@@ -274,16 +272,12 @@ def test_a_saturated_wall_hands_its_flux_to_the_fluid_beside_it():
     def split(c, rg, mats, cur):  # type: ignore[no-untyped-def]
         net = network_from_regions(rg, mats)
         x = solve_network(net, [[c.coil_turns * cur]], mats, rtol=1e-13)[0, 0]
-        m, nb = net.m, net.rung_k.shape[-1] // 2
+        m = net.m
         y = np.concatenate([[-x[0]], x[: m - 1] - x[1:m]])  # rungs 0 … m − 1
-        q = x[m + 4 : 3 * m + 4].reshape(m, 2)
+        q = x[net.sheaths][: 2 * m].reshape(m, 2)  # each wall's sheath in zone A, B
         steel, fluid = magnetic(net.steel, mats), magnetic(net.fluid, mats)
-        fs = np.array([[_odd(steel, np.array(y[j] - q[j, z]), net.rung_k[0, j, z * nb:(z + 1) * nb],
-                             net.rung_w[0, j, z * nb:(z + 1) * nb])[0] for z in (0, 1)]
-                       for j in range(m)])  # fmt: skip
-        ff = np.array([[_odd(fluid, np.array(q[j, z]), net.sheath_k[0, j, z],
-                             net.sheath_w[0, j, z])[0] for z in (0, 1)]
-                       for j in range(m)])  # fmt: skip
+        fs = _odd(steel, y[:, None] - q, net.rung_k[0], net.rung_w[0])[0]
+        ff = _odd(fluid, q, net.sheath_k[0], net.sheath_w[0])[0]
         np.testing.assert_allclose(fs, ff, rtol=0, atol=1e-9 * c.coil_turns * cur)
         return net, y, q
 
@@ -292,10 +286,7 @@ def test_a_saturated_wall_hands_its_flux_to_the_fluid_beside_it():
     net, y, q = split(c, rg, mats, 3.0)
     p_fluid = 1.0 / (net.sheath_k[0, :, :, 0] * net.sheath_w[0, :, :, 0] / (MU0 * 4.0))
     # the steel's reluctance of a build-up element is Σ w·k/μ (Gauss points, linear)
-    nb = net.rung_k.shape[-1] // 2
-    r_steel = np.stack([(net.rung_k[0, : net.m, z * nb:(z + 1) * nb]
-                         * net.rung_w[0, : net.m, z * nb:(z + 1) * nb]).sum(-1)
-                        for z in (0, 1)], axis=-1) / (MU0 * 800.0)  # fmt: skip
+    r_steel = (net.rung_k[0] * net.rung_w[0]).sum(-1) / (MU0 * 800.0)
     np.testing.assert_allclose(q / (y[:, None] - q), p_fluid * r_steel, rtol=1e-8)
     thin = dict(n_drums=1, drum_thickness=0.1e-3, gap=1.0e-3, drum_inner_diameter=6e-3,
                 zone_length=9e-3)  # fmt: skip
@@ -409,7 +400,7 @@ def test_fringe_torque_is_the_fringe_permeance_in_the_linear_limit(n):
         eff, length = net.gap_eff[0, :, z], net.gap_len[0, :, z]
         own = length + sum((g / np.pi) * np.log1p(np.pi * net.fringe_h[0, :, z, e] / g)
                            for e in (0, 1))  # fmt: skip
-        x = np.abs(sol[: net.m] - sol[net.m + 2 + z])  # the zone's film flux
+        x = np.abs(sol[: net.m] - sol[net.leaks][z])  # the zone's film flux
         h_e = magnetic(net.fluid).h_of_b(x / (2 * np.pi * r * eff))
         expect = 2 * np.pi * r**2 * FLUIDS[net.fluid].tau_y(h_e) * own
         np.testing.assert_allclose(t[z], expect, rtol=1e-9)
