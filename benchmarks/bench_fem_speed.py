@@ -28,11 +28,13 @@ from pathlib import Path
 
 import numpy as np
 
-from benchmarks.bench_against import base_tree
 from geometry.params import preset
 from geometry.section import build_section
 from magnetics.fem import build_grid
 from magnetics.torque import torque_curve
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # run as a script from anywhere
+from bench_against import base_tree
 
 CURRENTS = (2.0, 4.0, 7.0)
 
