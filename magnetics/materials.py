@@ -88,6 +88,11 @@ class LinearMaterial:
         nu = 1.0 / (MU0 * self.mu_r)
         return b * nu, np.full_like(b, nu)
 
+    def h_mean_dh(self, b: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """(H̄, dH̄/dB) at B ≥ 0, H̄ = (1/B)·∫0^B H = B/(2μ) (``BHCurve.h_mean_dh``)."""
+        nu = 0.5 / (MU0 * self.mu_r)
+        return b * nu, np.full_like(b, nu)
+
     @property
     def mu_initial(self) -> float:
         return MU0 * self.mu_r
@@ -113,6 +118,7 @@ class BHCurve:
     _hu: FloatArray = field(init=False, repr=False, compare=False)
     _slope: FloatArray = field(init=False, repr=False, compare=False)
     _icpt: FloatArray = field(init=False, repr=False, compare=False)
+    _gcpt: FloatArray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         b = np.asarray(self.b_table, dtype=float)
@@ -143,7 +149,12 @@ class BHCurve:
         object.__setattr__(self, "_hu", hu)
         slope = np.diff(hu) / step
         object.__setattr__(self, "_slope", slope)
-        object.__setattr__(self, "_icpt", hu[:-1] - slope * grid)  # H = icpt + slope·B
+        icpt = hu[:-1] - slope * grid
+        object.__setattr__(self, "_icpt", icpt)  # H = icpt + slope·B
+        # ∫0^B H db on the same segments: G(B) = gcpt + icpt·B + slope·B²/2, gcpt chosen
+        # so G is continuous from G(0) = 0 (trapezoids are exact on linear segments)
+        g = np.concatenate([[0.0], np.cumsum(0.5 * step * (hu[:-2] + hu[1:-1]))])
+        object.__setattr__(self, "_gcpt", g - icpt * grid - 0.5 * slope * grid**2)
 
     def h_of_b(self, b: ArrayLike) -> FloatArray:
         """H(|B|)·sign(B), A/m; slope 1/μ0 beyond the table."""
@@ -168,6 +179,25 @@ class BHCurve:
         h = np.take(self._icpt, i)
         h += s * b
         return h, s
+
+    def h_mean_dh(self, b: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """(H̄, dH̄/dB) at B ≥ 0, H̄(B) = (1/B)·∫0^B H: the mean H of a section whose flux
+        density rises linearly from 0 to B along it (∫0^L H(z·B/L) dz = L·H̄(B)). Exact for
+        the same piecewise-linear H(B) as ``h_dh``: H̄ = gcpt/B + icpt + slope·B/2, and
+        dH̄/dB = slope/2 − gcpt/B² (gcpt = 0 on the first segment, so B = 0 is regular).
+        """
+        t = b * self._inv_step
+        np.minimum(t, self._slope.size - 1, out=t)
+        i = t.astype(np.intp)
+        s = np.take(self._slope, i)
+        g = np.take(self._gcpt, i)
+        g /= np.maximum(b, 1e-300)
+        h = np.take(self._icpt, i)
+        h += g
+        s *= 0.5
+        h += s * b
+        g /= np.maximum(b, 1e-300)
+        return h, s - g
 
     def b_of_h(self, h: ArrayLike) -> FloatArray:
         """Inverse of ``h_of_b`` (same dense table, so the pair is consistent)."""

@@ -35,16 +35,17 @@ Past each zone's far end an end leak runs from the pole to the core through the 
 in front of the walls (``_end_leak``), in parallel with the zone's stack: film k carries
 x_k − e_z in zone z. Each film's fringing reaches into the fluid pockets on its radii.
 
-Every steel and fluid element has its material's non-linear B–H (MMF = Σ w·H(k·Φ) at
-Gauss points, exact for a linear material). Unknowns: the loop fluxes x_k (the ladder's
-loops), the window's x_w, the outer air's, the end leaks' e_A, e_B, and the sheaths' q
-(2m + 1). The equations are the loop MMF balances — the gradient of the network's
+Every steel and fluid element has its material's non-linear B–H (MMF = Σ w·H(k·Φ) at Gauss
+points, exact for a linear material; along a zone, where the axial flux builds up linearly,
+the exact mean of H over the build-up, ``BHCurve.h_mean_dh``). Unknowns: the loop fluxes x_k
+(the ladder's loops), the window's x_w, the outer air's, the end leaks' e_A, e_B, and the
+sheaths' q (2m + 1). The equations are the loop MMF balances — the gradient of the network's
 (convex) magnetic co-energy — so the Jacobian is symmetric positive definite: each sheath
-couples to its own rung only and is condensed out element by element, leaving a
-tridiagonal chain with a 3 × 3 tail, bordered by the two end leaks. Damped Newton with a
-backtracking line search on the residual, each step one batched Thomas solve and a 2 × 2
-Schur complement, vectorised over designs × currents. A row that does not converge is
-refused (``NetworkConvergenceError``, the rows named), never returned.
+couples to its own rung only and is condensed out element by element, leaving a tridiagonal
+chain with a 3 × 3 tail, bordered by the two end leaks. Damped Newton with a backtracking
+line search on the residual, each step one batched Thomas solve and a 2 × 2 Schur
+complement, vectorised over designs × currents. A row that does not converge is refused
+(``NetworkConvergenceError``, the rows named), never returned.
 """
 
 from __future__ import annotations
@@ -62,14 +63,6 @@ from magnetics.materials import MATERIALS, MU0, Magnetic, magnetic
 
 FloatArray = NDArray[np.float64]
 _POLE_POINTS = 3  # Gauss points in ln r across the thick pole rings
-#: Gauss points along a zone where the axial flux builds up linearly (core, drum walls):
-#: ∫0^L H(u·Φ/A) dz with u = z/L. One point (u = 1/2) is exact only for a linear
-#: material; past the knee H(B) is strongly convex and the midpoint reads a saturated core
-#: far too easy (B = 2 T at the band end is H ≈ 4·10⁴ A/m, 1 T at the midpoint ≈ 10³).
-#: Four points are within 0.21 % of sixteen on the FEM reference's torques (3: 0.75 %).
-_BUILD_POINTS = 4
-_BU, _BW = np.polynomial.legendre.leggauss(_BUILD_POINTS)
-_BU, _BW = 0.5 * (_BU + 1.0), 0.5 * _BW  # on (0, 1), weights summing to 1
 
 
 class NetworkConvergenceError(ParameterError):
@@ -81,7 +74,11 @@ class Network:
     """The ladder of S designs of one drum count; m films (loops), arrays with leading S.
 
     Kernels: an element's MMF is Σ_j w_j·H(k_j·Φ) over its Gauss points (k = B/Φ, 1/m²;
-    w in m), a zero weight pads unused points.
+    w in m), a zero weight pads unused points. Build-up kernels (``rung_*``, ``sheath_*``:
+    the core and the drum walls along a zone, and their fluid sheaths, where the axial flux
+    grows linearly from 0 at the zone's far end to Φ at the band) read w·H̄(k·Φ), the exact
+    mean H̄(B) = (1/B)·∫0^B H of the material's piecewise-linear H(B)
+    (``BHCurve.h_mean_dh``), k the full section's 1/A and w the zone's length.
     """
 
     turns: FloatArray  # (S,)
@@ -95,7 +92,7 @@ class Network:
     fluid_w: FloatArray
     wall_k: FloatArray  # (S, m, 2) steel wall inside film k, radially, zones A and B
     wall_w: FloatArray
-    rung_k: FloatArray  # (S, m, 2, nb) wall j's steel axially in zone A and B (rungs 0..m-1)
+    rung_k: FloatArray  # (S, m, 2, 1) wall j's steel axially in zone A and B (rungs 0..m-1)
     rung_w: FloatArray
     sheath_k: FloatArray  # (S, m, 2, 1) the fluid beside wall j axially in zone A and B
     sheath_w: FloatArray
@@ -171,7 +168,7 @@ def network_from_regions(
     gap_len, gap_eff, fluid_k, fluid_w = zeros(m, 2), zeros(m, 2), zeros(m, 2), zeros(m, 2)
     fringe_h = zeros(m, 2, 2)
     wall_k, wall_w = zeros(m, 2), zeros(m, 2)
-    rung_k, rung_w = zeros(m, 2, _BUILD_POINTS), zeros(m, 2, _BUILD_POINTS)
+    rung_k, rung_w = zeros(m, 2, 1), zeros(m, 2, 1)
     rung_perm, rung_fluid = zeros(m + 1), zeros(m + 1)
     gap_r0 = np.stack([at[f.r0] for f in films], axis=1)
     gap_r1 = np.stack([at[f.r1] for f in films], axis=1)
@@ -224,10 +221,10 @@ def network_from_regions(
                 wall_k[:, k, z] = np.where(okw, 1 / (2 * np.pi * rw * np.where(okw, lw, 1)), 0)
                 wall_w[:, k, z] = np.where(okw, rw * np.log(w1 / w0), 0.0)
                 # the same wall axially: flux builds up linearly over the zone, so
-                # ∫0^L H(Φ z/(L A)) dz = L·∫0^1 H(u·Φ/A) du (Gauss–Legendre, _BUILD_POINTS)
+                # ∫0^L H(Φ z/(L A)) dz = L·H̄(Φ/A), the exact mean (a build-up kernel)
                 area = np.pi * (w1**2 - w0**2)
-                rung_k[:, k, z] = np.where(okw, 1.0 / area, 0.0)[:, None] * _BU
-                rung_w[:, k, z] = lw[:, None] * _BW
+                rung_k[:, k, z, 0] = np.where(okw, 1.0 / area, 0.0)
+                rung_w[:, k, z, 0] = lw
     # Rungs' band: regions spanning the band on a wall's stations (linear, μA/l), in
     # parallel with half of each neighbouring film's fluid (its own B–H: the band's axial
     # field reaches ~10⁵ A/m at 7 A, where the fluid's secant μ is 0.7 of its initial μ).
@@ -254,8 +251,8 @@ def network_from_regions(
     core_area = np.pi * core[1] ** 2
     core_k, core_w = (1 / core_area)[:, None], band[:, None]  # the core over the band
     for z, length in enumerate((za1 - za0, zb1 - zb0)):  # and in each zone (rung 0)
-        rung_k[:, 0, z] = (1 / core_area)[:, None] * _BU
-        rung_w[:, 0, z] = length[:, None] * _BW
+        rung_k[:, 0, z, 0] = 1 / core_area
+        rung_w[:, 0, z, 0] = length
     # Fluid sheaths: the films carry axial flux too (the FEM's band plane on 1 drum at 0.1
     # mm and 7 A: 22 µWb in the two films' fluid against 26 in the core, 0.25 in the drum).
     # Each wall's steel in a zone is in parallel with half of each neighbouring film's
@@ -269,10 +266,7 @@ def network_from_regions(
     sheath[:, 1:] += half[:, :-1]  # wall j: films j − 1 and j
     steel_w = rung_w.sum(-1)  # (S, m, 2): each wall's length in each zone
     has = steel_w > 0
-    # one point, the midpoint (exact for a linear material): the fluid is nearly linear up
-    # to its ~0.6 T there, and four points move no torque of the FEM reference's designs
-    # by more than 0.2 %
-    sheath_k = np.where(has, 0.5 / sheath[..., None], 0.0)[..., None]  # B at u = 1/2
+    sheath_k = np.where(has, 1.0 / sheath[..., None], 0.0)[..., None]  # a build-up kernel
     sheath_w = np.where(has, steel_w, 0.0)[..., None]
     f0 = box(films[0])
     across0 = (f0[2] <= za1) & (f0[3] >= zb0)
@@ -325,18 +319,20 @@ def network_from_regions(
     )  # fmt: skip
 
 
-def _terms(mat: Magnetic, a: FloatArray, k: FloatArray, w: FloatArray):  # type: ignore[no-untyped-def]
-    """w·H(k·a) and its a-derivative w·k·H'(k·a) at fluxes a ≥ 0, element by element."""
-    h, dh = mat.h_dh(k * a)
+def _terms(mat: Magnetic, a: FloatArray, k: FloatArray, w: FloatArray, mean: bool = False):  # type: ignore[no-untyped-def]  # fmt: skip
+    """w·H(k·a) and its a-derivative w·k·H'(k·a) at fluxes a ≥ 0, element by element
+    (``mean``: w·H̄(k·a), a build-up kernel, ``Network``)."""
+    h, dh = (mat.h_mean_dh if mean else mat.h_dh)(k * a)
     h *= w
     dh *= w
     dh *= k
     return h, dh
 
 
-def _odd(mat: Magnetic, phi: FloatArray, k: FloatArray, w: FloatArray):  # type: ignore[no-untyped-def]
-    """Σ_j w·H(k·Φ) over the last axis and its Φ-derivative, for Φ of any sign (H odd)."""
-    h, dh = _terms(mat, np.abs(phi)[..., None], k, w)
+def _odd(mat: Magnetic, phi: FloatArray, k: FloatArray, w: FloatArray, mean: bool = False):  # type: ignore[no-untyped-def]  # fmt: skip
+    """Σ_j w·H(k·Φ) over the last axis and its Φ-derivative, for Φ of any sign (H odd;
+    ``mean``: build-up kernels, ``_terms``)."""
+    h, dh = _terms(mat, np.abs(phi)[..., None], k, w, mean)
     # the last axis is short (1–6 points): a sum of slices beats a strided reduce
     f, d = h[..., 0], dh[..., 0]
     for j in range(1, h.shape[-1]):
@@ -448,14 +444,14 @@ def _band(fluid: Magnetic, y: FloatArray, perm: FloatArray, area: FloatArray, le
 _BAND_ITER = 30
 
 
-def _pair(steel: Magnetic, fluid: Magnetic, y, q, ks, ws, kf, wf):  # type: ignore[no-untyped-def]
+def _pair(steel: Magnetic, fluid: Magnetic, y, q, ks, ws, kf, wf, mean):  # type: ignore[no-untyped-def]
     """A wall's steel section (kernel ks, ws) in parallel with its fluid sheath (kf, wf)
-    carrying y − q and q: (the steel's MMF, the residual F_fluid(q) − F_steel(y − q), the
-    steel's slope a, a + the sheath's slope b, the pair's slope a·b/(a + b)). Without a
-    sheath (wf = 0) the residual is q and the slopes (0, 1, a): q stays 0 and the section
-    is the steel alone."""
-    fs, a = _odd(steel, y - q, ks, ws)
-    ff, b = _odd(fluid, q, kf, wf)
+    carrying y − q and q, both build-up kernels if ``mean``: (the steel's MMF, the residual
+    F_fluid(q) − F_steel(y − q), the steel's slope a, a + the sheath's slope b, the pair's
+    slope a·b/(a + b)). Without a sheath (wf = 0) the residual is q and the slopes (0, 1, a):
+    q stays 0 and the section is the steel alone."""
+    fs, a = _odd(steel, y - q, ks, ws, mean)
+    ff, b = _odd(fluid, q, kf, wf, mean)
     has = wf.sum(-1) > 0
     ab = np.where(has, a + b, 1.0)
     return (fs, np.where(has, ff - fs, q), np.where(has, a, 0.0), ab,
@@ -495,13 +491,13 @@ def _residual(net: Network, mats, x: FloatArray, ni: FloatArray, warm=None):  # 
     shape = (*q.shape[:-1], m, 2)
     fs, rq, pa, pk, cond = _pair(steel, fluid, y[..., :m, None], q[..., : 2 * m].reshape(shape),
                                  ex(net.rung_k), ex(net.rung_w),
-                                 ex(net.sheath_k), ex(net.sheath_w))  # fmt: skip
+                                 ex(net.sheath_k), ex(net.sheath_w), True)  # fmt: skip
     f[..., :m] = fs.sum(-1)
     df[..., :m] = cond.sum(-1)
     # the core over the band beside half of film 0
     fc, rc, pac, pkc, dc = _pair(steel, fluid, y[..., 0], q[..., 2 * m],
                                  ex(net.core_k), ex(net.core_w),
-                                 ex(net.core_sheath_k), ex(net.core_sheath_w))  # fmt: skip
+                                 ex(net.core_sheath_k), ex(net.core_sheath_w), False)  # fmt: skip
     f[..., 0] += fc
     df[..., 0] += dc
     # the drums' bands (rungs 1 … m − 1; the shell's is its own element below)

@@ -178,6 +178,8 @@ def _nodal(net, mats, ni):  # type: ignore[no-untyped-def]
     m = net.m
     mu = {k: v.mu_initial for k, v in mats.items()}
     rel = lambda kk, ww, name: float(np.sum(ww * kk)) / mu[name]  # noqa: E731  Σ w k/μ
+    # a build-up kernel (zone sections, Network): the mean H over a linear rise, w·k/(2μ)
+    built = lambda kk, ww, name: 0.5 * rel(kk, ww, name)  # noqa: E731
     # nodes: A0..Am, B0..Bm, O (the back iron's B end; A-side end is pole A = Am)
     idx = lambda z, i: z * (m + 1) + i  # noqa: E731
     nn = 2 * (m + 1) + 1
@@ -206,8 +208,8 @@ def _nodal(net, mats, ni):  # type: ignore[no-untyped-def]
         for z in (0, 1):
             wf = net.sheath_w[s, i, z]
             r += beside(
-                rel(net.rung_k[s, i, z], net.rung_w[s, i, z], net.steel),
-                rel(net.sheath_k[s, i, z], wf, net.fluid) if wf.sum() else np.inf,
+                built(net.rung_k[s, i, z], net.rung_w[s, i, z], net.steel),
+                built(net.sheath_k[s, i, z], wf, net.fluid) if wf.sum() else np.inf,
             )
         if i:
             band = net.rung_perm[s, i] + net.rung_fluid[s, i] * mu[net.fluid] / net.band_len[s]
@@ -276,17 +278,17 @@ def test_a_saturated_wall_hands_its_flux_to_the_fluid_beside_it():
         y = np.concatenate([[-x[0]], x[: m - 1] - x[1:m]])  # rungs 0 … m − 1
         q = x[net.sheaths][: 2 * m].reshape(m, 2)  # each wall's sheath in zone A, B
         steel, fluid = magnetic(net.steel, mats), magnetic(net.fluid, mats)
-        fs = _odd(steel, y[:, None] - q, net.rung_k[0], net.rung_w[0])[0]
-        ff = _odd(fluid, q, net.sheath_k[0], net.sheath_w[0])[0]
+        fs = _odd(steel, y[:, None] - q, net.rung_k[0], net.rung_w[0], mean=True)[0]
+        ff = _odd(fluid, q, net.sheath_k[0], net.sheath_w[0], mean=True)[0]
         np.testing.assert_allclose(fs, ff, rtol=0, atol=1e-9 * c.coil_turns * cur)
         return net, y, q
 
     c, rg = _regions()
     mats = linear_materials(800.0, 4.0)
     net, y, q = split(c, rg, mats, 3.0)
-    p_fluid = 1.0 / (net.sheath_k[0, :, :, 0] * net.sheath_w[0, :, :, 0] / (MU0 * 4.0))
-    # the steel's reluctance of a build-up element is Σ w·k/μ (Gauss points, linear)
-    r_steel = (net.rung_k[0] * net.rung_w[0]).sum(-1) / (MU0 * 800.0)
+    # a build-up element's reluctance is w·k/(2μ) (the mean H over a linear rise, linear)
+    p_fluid = 1.0 / (net.sheath_k[0, :, :, 0] * net.sheath_w[0, :, :, 0] / (2 * MU0 * 4.0))
+    r_steel = (net.rung_k[0] * net.rung_w[0]).sum(-1) / (2 * MU0 * 800.0)
     np.testing.assert_allclose(q / (y[:, None] - q), p_fluid * r_steel, rtol=1e-8)
     thin = dict(n_drums=1, drum_thickness=0.1e-3, gap=1.0e-3, drum_inner_diameter=6e-3,
                 zone_length=9e-3)  # fmt: skip
