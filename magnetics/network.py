@@ -634,9 +634,14 @@ def solve_network(
 
     Damped Newton: the full step, halved until the residual's norm falls (Armijo,
     [nocedal-wright] §3.1); the Jacobian is SPD tridiagonal (co-energy Hessian). Started at
-    ``start`` or at the linear network's solution (initial permeabilities). Solved in
-    blocks of ``_BLOCK`` designs (cache-sized temporaries: 2× faster at 10⁴ designs,
-    benchmarks/bench_network.py); designs that do not converge are refused together."""
+    ``start`` or by continuation in the current: the currents one after another, the
+    weakest (on the block's median) from the linear network's solution (initial
+    permeabilities), each next one from the last one's solution, so each (design, current)
+    iterates only as long as it needs (a joint solve of all currents iterates every current
+    until the design's slowest settles: 1.5× the work, benchmarks/bench_network.py); a row
+    that does not converge from the continuation start is retried from the linear one.
+    Solved in blocks of ``_BLOCK`` designs (cache-sized temporaries: 2× faster at 10⁴
+    designs); designs that do not converge are refused together."""
     mats = MATERIALS if materials is None else materials
     ni = np.atleast_2d(np.asarray(ampere_turns, dtype=float))
     ni = np.broadcast_to(ni, (net.turns.size, ni.shape[-1])).copy()
@@ -645,27 +650,37 @@ def solve_network(
     shape = (*ni.shape, net.unknowns)
     x0 = None if start is None else np.broadcast_to(np.asarray(start, dtype=float), shape)
     out = np.zeros(shape)
-    failed = []
+    failed: set[int] = set()
     for lo in range(0, shape[0], _BLOCK):
         blk = slice(lo, lo + _BLOCK)
         part = net if shape[0] <= _BLOCK else _take(net, blk)
-        out[blk], bad = _newton(part, ni[blk], mats, rtol, max_iter,
-                                None if x0 is None else x0[blk])  # fmt: skip
-        failed.extend((lo + bad).tolist())
+        nb = ni[blk]
+        prev = None
+        for c in np.argsort(np.median(np.abs(nb), axis=0), kind="stable"):
+            col = slice(c, c + 1)
+            first = prev if x0 is None else x0[blk, col]
+            x, bad = _newton(part, nb[:, col], mats, rtol, max_iter, first)
+            if bad.size and x0 is None and prev is not None:  # again from the linear start
+                x[bad], bad2 = _newton(_take(part, bad), nb[bad, col], mats, rtol, max_iter,
+                                       None)  # fmt: skip
+                bad = bad[bad2]
+            out[blk, col] = prev = x
+            failed.update((lo + bad).tolist())
     if failed:
+        rows = sorted(failed)
         raise NetworkConvergenceError(
-            f"network: no convergence in {max_iter} Newton steps for {len(failed)} design(s) "
-            f"(rows {failed[:5]}…); refusing their torque"
+            f"network: no convergence in {max_iter} Newton steps for {len(rows)} design(s) "
+            f"(rows {rows[:5]}…); refusing their torque"
         )
     return out
 
 
-_BLOCK = 1024  # designs per Newton block
+_BLOCK = 2048  # designs per Newton block (one current at a time)
 _FLOOR = 1e-8  # relative residual accepted when the line search finds no decrease
 
 
 def _take(net: Network, rows: slice | NDArray[np.bool_]) -> Network:
-    """The designs ``rows`` of ``net`` (a slice, or a mask)."""
+    """The designs ``rows`` of ``net`` (a slice, a mask or indices)."""
     return replace(net, **{f.name: getattr(net, f.name)[rows] for f in fields(net)
                            if isinstance(getattr(net, f.name), np.ndarray)})  # fmt: skip
 

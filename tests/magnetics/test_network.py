@@ -384,6 +384,37 @@ def test_blocks_are_invisible_and_refusals_name_global_rows(monkeypatch):
         solve_network(net, ni, max_iter=1, start=start)
 
 
+def test_continuation_in_current_is_invisible_and_falls_back_to_the_linear_start(monkeypatch):
+    """solve_network takes the currents one after another, each started from the last
+    one's solution: in any column order the answer is each current solved alone from the
+    linear start (to the Newton's tolerance); a row the continuation start does not bring
+    to convergence is solved again from the linear start, not refused."""
+    import magnetics.network as network
+
+    f = {k: np.full(5, float(v)) for k, v in vars(replace(PAPER, n_drums=4)).items()}
+    f["drum_thickness"] = np.linspace(0.1e-3, 0.6e-3, 5)
+    net = network_from_regions(evaluate(broadcast_fields(f), 4))
+    cur = np.array([7.0, 0.0, 2.0, 100.0, 4.0])
+    joint = solve_network(net, net.turns[:, None] * cur[None])
+    alone = np.stack([solve_network(net, net.turns[:, None] * c)[:, 0] for c in cur], axis=1)
+    scale = np.abs(alone).max(axis=-1, keepdims=True)
+    np.testing.assert_allclose(joint, alone, rtol=0, atol=1e-8 * scale.max())
+    newton = network._newton
+    cold = []
+
+    def warm_fails(net_, ni, mats, rtol, max_iter, start):  # type: ignore[no-untyped-def]
+        x, bad = newton(net_, ni, mats, rtol, max_iter, start)
+        if start is not None:  # pretend no continuation start converges
+            return x * 0.0, np.arange(ni.shape[0])
+        cold.append(ni.shape[0])
+        return x, bad
+
+    monkeypatch.setattr(network, "_newton", warm_fails)
+    again = solve_network(net, net.turns[:, None] * cur[None])
+    assert cold == [5] * 5  # the first current cold, the four others retried cold
+    np.testing.assert_allclose(again, alone, rtol=0, atol=1e-8 * scale.max())
+
+
 @pytest.mark.parametrize("n", [1, 4])
 def test_fringe_torque_is_the_fringe_permeance_in_the_linear_limit(n):
     """At a tiny current τy = c·H (tanh linear) and the fringe's field H_e·g/(g + πs)
