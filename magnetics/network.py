@@ -638,7 +638,7 @@ def solve_network(
     weakest (on the block's median) from the linear network's solution (initial
     permeabilities), each next one from the last one's solution, so each (design, current)
     iterates only as long as it needs (a joint solve of all currents iterates every current
-    until the design's slowest settles: 1.5× the work, benchmarks/bench_network.py); a row
+    until the design's slowest settles: 1.6× the Newton work, docs/magnetics.md); a row
     that does not converge from the continuation start is retried from the linear one.
     Solved in blocks of ``_BLOCK`` designs (cache-sized temporaries: 2× faster at 10⁴
     designs); designs that do not converge are refused together."""
@@ -679,7 +679,7 @@ _BLOCK = 2048  # designs per Newton block (one current at a time)
 _FLOOR = 1e-8  # relative residual accepted when the line search finds no decrease
 
 
-def _take(net: Network, rows: slice | NDArray[np.bool_]) -> Network:
+def _take(net: Network, rows: slice | NDArray[np.bool_] | NDArray[np.intp]) -> Network:
     """The designs ``rows`` of ``net`` (a slice, a mask or indices)."""
     return replace(net, **{f.name: getattr(net, f.name)[rows] for f in fields(net)
                            if isinstance(getattr(net, f.name), np.ndarray)})  # fmt: skip
