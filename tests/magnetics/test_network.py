@@ -386,9 +386,9 @@ def test_blocks_are_invisible_and_refusals_name_global_rows(monkeypatch):
 
 def test_continuation_in_current_is_invisible_and_falls_back_to_the_linear_start(monkeypatch):
     """solve_network takes the currents one after another, each started from the last
-    one's solution: in any column order the answer is each current solved alone from the
-    linear start (to the Newton's tolerance); a row the continuation start does not bring
-    to convergence is solved again from the linear start, not refused."""
+    one's solution: with the columns out of order the answer is each current solved alone
+    from the linear start (to the Newton's tolerance); a row the continuation start does
+    not bring to convergence is solved again from the linear start, not refused."""
     import magnetics.network as network
 
     f = {k: np.full(5, float(v)) for k, v in vars(replace(PAPER, n_drums=4)).items()}
@@ -397,8 +397,8 @@ def test_continuation_in_current_is_invisible_and_falls_back_to_the_linear_start
     cur = np.array([7.0, 0.0, 2.0, 100.0, 4.0])
     joint = solve_network(net, net.turns[:, None] * cur[None])
     alone = np.stack([solve_network(net, net.turns[:, None] * c)[:, 0] for c in cur], axis=1)
-    scale = np.abs(alone).max(axis=-1, keepdims=True)
-    np.testing.assert_allclose(joint, alone, rtol=0, atol=1e-8 * scale.max())
+    tol = 1e-8 * np.abs(alone).max()
+    np.testing.assert_allclose(joint, alone, rtol=0, atol=tol)
     newton = network._newton
     cold = []
 
@@ -412,7 +412,7 @@ def test_continuation_in_current_is_invisible_and_falls_back_to_the_linear_start
     monkeypatch.setattr(network, "_newton", warm_fails)
     again = solve_network(net, net.turns[:, None] * cur[None])
     assert cold == [5] * 5  # the first current cold, the four others retried cold
-    np.testing.assert_allclose(again, alone, rtol=0, atol=1e-8 * scale.max())
+    np.testing.assert_allclose(again, alone, rtol=0, atol=tol)
 
 
 @pytest.mark.parametrize("n", [1, 4])
