@@ -75,6 +75,22 @@ def checks_of(base) -> list[dict[str, float]]:  # type: ignore[no-untyped-def]
     ]
 
 
+def grid_nodes() -> list[dict[str, float]]:
+    """The map's designs: every combination of the AXES values (the last axis fastest)."""
+    return [dict(zip(AXES, v, strict=True)) for v in itertools.product(*AXES.values())]
+
+
+def pool_map(fn, work: list, jobs: int, chunksize: int) -> list:  # type: ignore[no-untyped-def]
+    """fn over ``work`` on ``jobs`` processes, in order, a count of those done on stderr."""
+    out = []
+    with ProcessPoolExecutor(jobs) as ex:
+        for k, r in enumerate(ex.map(fn, work, chunksize=chunksize)):
+            out.append(r)
+            print(f"\r{k + 1}/{len(work)}", end="", file=sys.stderr, flush=True)
+    print(file=sys.stderr)
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--jobs", type=int, default=2)
@@ -82,8 +98,7 @@ def main() -> None:
     from mrclutch.design import design_preset
 
     base = design_preset("paper").clutch
-    names = list(AXES)
-    nodes = [dict(zip(names, v, strict=True)) for v in itertools.product(*AXES.values())]
+    nodes = grid_nodes()
     on_slice = [
         n["drum_inner_diameter"] == base.drum_inner_diameter
         and n["drum_thickness"] == base.drum_thickness
@@ -91,12 +106,7 @@ def main() -> None:
     ]
     checks = checks_of(base)
     work = [(n, s) for n, s in zip(nodes, on_slice, strict=True)] + [(c, False) for c in checks]
-    out = []
-    with ProcessPoolExecutor(a.jobs) as ex:
-        for k, r in enumerate(ex.map(_node, work, chunksize=4)):
-            out.append(r)
-            print(f"\r{k + 1}/{len(work)}", end="", file=sys.stderr, flush=True)
-    print(file=sys.stderr)
+    out = pool_map(_node, work, a.jobs, chunksize=4)
     errs = [e for e, _ in out[: len(nodes)]]
     sliced = [f for (_, f), sl in zip(out[: len(nodes)], on_slice, strict=True) if sl and f]
     fem_bound = {s: max(abs(f[s]) for f in sliced) for s in COARSE_SIZES}

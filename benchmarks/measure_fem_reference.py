@@ -15,14 +15,12 @@ from __future__ import annotations
 
 import argparse
 import datetime
-import itertools
 import json
 import sys
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from measure_circuit_map import AXES
+from measure_circuit_map import AXES, grid_nodes, pool_map
 
 CURRENTS = (2.0, 4.0, 7.0)
 CONVENTIONS = ("mid-line", "weakest-layer")
@@ -83,16 +81,10 @@ def main() -> None:
     ap.add_argument("--random", type=int, default=200)
     ap.add_argument("--seed", type=int, default=2026)
     a = ap.parse_args()
-    names = list(AXES)
-    grid = [dict(zip(names, v, strict=True)) for v in itertools.product(*AXES.values())]
+    grid = grid_nodes()
     rand = random_designs(a.random, a.seed)
     work = grid + rand
-    res = []
-    with ProcessPoolExecutor(a.jobs) as ex:
-        for k, r in enumerate(ex.map(_design, work, chunksize=2)):
-            res.append(r)
-            print(f"\r{k + 1}/{len(work)}", end="", file=sys.stderr, flush=True)
-    print(file=sys.stderr)
+    res = pool_map(_design, work, a.jobs, chunksize=2)
 
     def rows(designs, results):  # type: ignore[no-untyped-def]
         return [{"design": d, "torque": r} for d, r in zip(designs, results, strict=True)]
