@@ -569,27 +569,40 @@ def _display(name: str, values: np.ndarray) -> np.ndarray:
 
 
 @contextmanager
-def sigterm_as_interrupt() -> Iterator[threading.Event]:
+def sigterm_as_interrupt(*, deferred: bool = False) -> Iterator[threading.Event]:
     """``kill`` (SIGTERM) stops the work as Ctrl-C does (KeyboardInterrupt), so ``finally``
     clauses run: a sweep after the current chunk is safe, a report removing its staging
     folder (mrclutch.cli.report). Yields an event set by the signal: a KeyboardInterrupt
     raised inside a C extension's callback can be swallowed there, so long work checks the
-    event between its steps too."""
+    event between its steps too.
+
+    ``deferred=True`` (work that runs C++ extensions: OpenCascade, VTK, manifold3d): the
+    first SIGTERM or Ctrl-C only sets the event and the work raises KeyboardInterrupt at its
+    next check. An exception raised asynchronously in Python code that C++ runs (a
+    nanobind or pybind11 module's import, a callback) cannot unwind through it: the process
+    aborts (``terminate called after throwing an instance of 'nanobind::python_error'``,
+    SIGABRT, seen when a report was killed while ``trimesh`` imported ``manifold3d``). A
+    second signal raises at once.
+    """
     terminated = threading.Event()
 
     def handler(signum: int, frame: Any) -> None:
+        again = terminated.is_set()
         terminated.set()
-        raise KeyboardInterrupt
+        if not deferred or again:
+            raise KeyboardInterrupt
 
+    signals = (signal.SIGTERM, signal.SIGINT) if deferred else (signal.SIGTERM,)
     try:
-        old = signal.signal(signal.SIGTERM, handler)
+        old = {s: signal.signal(s, handler) for s in signals}
     except ValueError:  # not the main thread
         yield terminated
         return
     try:
         yield terminated
     finally:
-        signal.signal(signal.SIGTERM, old)
+        for s, h in old.items():
+            signal.signal(s, h)
 
 
 def run_sweep(

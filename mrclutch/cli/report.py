@@ -16,10 +16,10 @@
 * ``report.html`` (one page, read first).
 
 Everything is built in a temporary folder beside ``out_dir`` (``.<name>-partial-<pid>-…``)
-and moved in only when all of it succeeded, so an error, Ctrl-C or ``kill`` (SIGTERM, turned
-into KeyboardInterrupt while the report is built) never leaves a half-written report; the
-staging folders of processes that died harder (SIGKILL, power loss) are removed by the next
-report into the same place.
+and moved in only when all of it succeeded, so an error, Ctrl-C or ``kill`` (SIGTERM) never
+leaves a half-written report: either signal stops the build at its next step (a second one at
+once) and the staging folder is removed. The staging folders of processes that died harder
+(SIGKILL, power loss) are removed by the next report into the same place.
 """
 
 from __future__ import annotations
@@ -78,10 +78,12 @@ def write_report(
     out.parent.mkdir(parents=True, exist_ok=True)
     report = progress if progress is not None else (lambda _msg: None)
     remove_stale_partials(out)
-    with sigterm_as_interrupt() as terminated:
+    # deferred: CAD and the 3D view run C++ (OpenCascade, manifold3d, VTK) that a
+    # KeyboardInterrupt raised inside cannot unwind through; the build stops between steps
+    with sigterm_as_interrupt(deferred=True) as terminated:
 
         def tick(msg: str) -> None:
-            if terminated.is_set():  # the signal's KeyboardInterrupt was swallowed
+            if terminated.is_set():
                 raise KeyboardInterrupt
             report(msg)
 
