@@ -1,0 +1,88 @@
+"""Where the shell's flux goes on one design, network against the FEM: the flux through the
+poles, the back iron, the air outside the shell and the coil window, and the back iron's
+flux density and MMF.
+
+    python benchmarks/diagnose_shell.py [--drums 1] [--zone-mm 9] [--gap-mm 0.7]
+        [--thickness-mm 0.3] [--bore-mm 18] [--current 7] [--fem-mm 0.25]
+
+The rest of the design is the paper preset (``diagnose_zones``' options). FEM fluxes are
+2π·ψ differences across the back iron's mid-plane (``diagnose_zones._psi``): inside the
+pole's radius (the drums and gaps), the window (pole radius to the back iron), the back
+iron, and outside it to the domain's edge. Network: the shell's loop flux x_{m−1} + x_w,
+the outer air's x_o, the back iron's share (the shell's less the air's) and the window's
+x_w. Used for docs/magnetics.md's "The shell, traced".
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from diagnose_zones import _psi
+
+from geometry.params import broadcast_fields, preset
+from geometry.regions import evaluate
+from geometry.section import build_section
+from magnetics.fem import build_grid, solve_fem
+from magnetics.materials import magnetic
+from magnetics.network import _odd, network_from_regions, solve_network
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--drums", type=int, default=1)
+    ap.add_argument("--zone-mm", type=float, default=9.0)
+    ap.add_argument("--gap-mm", type=float, default=None)
+    ap.add_argument("--thickness-mm", type=float, default=None)
+    ap.add_argument("--bore-mm", type=float, default=18.0)
+    ap.add_argument("--current", type=float, default=7.0)
+    ap.add_argument("--fem-mm", type=float, default=0.25)
+    a = ap.parse_args()
+    kw = {"n_drums": a.drums, "zone_length": a.zone_mm * 1e-3}
+    for key, val in (("gap", a.gap_mm), ("drum_thickness", a.thickness_mm),
+                     ("drum_inner_diameter", a.bore_mm)):  # fmt: skip
+        if val is not None:
+            kw[key] = val * 1e-3
+    c = replace(preset("paper"), **kw)
+    rg = evaluate(broadcast_fields({k: np.array([v], float) for k, v in vars(c).items()}),
+                  c.n_drums)  # fmt: skip
+    at = {k: float(np.ravel(v)[0]) for k, v in rg.at.items()}
+    net = network_from_regions(rg)
+    m = net.m
+    x = solve_network(net, [[c.coil_turns * a.current]])[0, 0]
+    shell, window, air = abs(x[m - 1] + x[m]), abs(x[m]), abs(x[m + 1])
+    back = shell - air
+    steel = magnetic(net.steel)
+    mmf = float(_odd(steel, np.array(back), net.back_k[0], net.back_w[0])[0])
+    spec = {sp.name: sp for sp in rg}
+    b, pole = spec["shell_back"], spec["shell_A"]
+    r_p, r0, r1 = at[pole.r0], at[b.r0], at[b.r1]
+    area = np.pi * (r1**2 - r0**2)
+    sec = build_section(c)
+    grid = build_grid(sec, a.fem_mm * 1e-3)
+    flux = _psi(grid, solve_fem(sec, a.current, grid=grid))
+    zm = 0.5 * (at[b.z0] + at[b.z1])
+    edge = 0.999 * float(grid.r_lines.max())
+    f_in, f_p, f_b, f_out = (abs(flux(r, zm)) for r in (r_p, r0, r1, edge))
+    fem = {"window": abs(f_p - f_in), "back": abs(f_b - f_p), "air": abs(f_out - f_b)}
+    print(f"{kw} at {a.current} A; back iron {r0 * 1e3:.2f}-{r1 * 1e3:.2f} mm over "
+          f"{(at[b.z1] - at[b.z0]) * 1e3:.2f} mm (network's length "
+          f"{net.back_w[0, 0] * 1e3:.2f} mm), its MMF in the network {mmf:.0f} of "
+          f"{c.coil_turns * a.current:.0f} A")  # fmt: skip
+    print("flux at the back iron's mid-plane (µWb) | network | FEM")
+    print(f"back iron + outside air               | {shell * 1e6:7.1f} | "
+          f"{(fem['back'] + fem['air']) * 1e6:7.1f}")  # fmt: skip
+    print(f"back iron (B, T)                      | {back * 1e6:7.1f} ({back / area:.3f}) | "
+          f"{fem['back'] * 1e6:7.1f} ({fem['back'] / area:.3f})")  # fmt: skip
+    print(f"air outside the shell                 | {air * 1e6:7.1f} | {fem['air'] * 1e6:7.1f}")
+    print(f"coil window                           | {window * 1e6:7.1f} | "
+          f"{fem['window'] * 1e6:7.1f}")  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()
