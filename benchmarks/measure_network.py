@@ -5,6 +5,11 @@ error model/FEM − 1 of the yield torque at 2, 4 and 7 A on the 648-design grid
 with ``--plot PATH``, a histogram of the errors.
 
     python benchmarks/measure_network.py [--convention mid-line] [--plot docs/network.png]
+        [--outer-air-scale 1.4]
+
+``--outer-air-scale`` multiplies the network's permeance of the air outside the shell: a
+diagnostic of how much of the error that element holds (docs/magnetics.md, "The shell,
+traced"), not a model; the preset's FEM check is skipped with it.
 """
 
 from __future__ import annotations
@@ -56,11 +61,29 @@ def table(err: np.ndarray, n: np.ndarray) -> list[tuple[str, int, float, float, 
     return out
 
 
+def _scale_outer_air(scale: float) -> None:
+    """Every network built from here on has its outside air's permeance × ``scale``."""
+    from dataclasses import replace
+
+    import magnetics.torque as torque
+
+    build = torque.network_from_regions
+
+    def scaled(*args, **kwargs):  # type: ignore[no-untyped-def]
+        net = build(*args, **kwargs)
+        return replace(net, outer_air=net.outer_air / scale)
+
+    torque.network_from_regions = scaled
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--convention", default="mid-line")
     ap.add_argument("--plot", type=Path)
+    ap.add_argument("--outer-air-scale", type=float, default=None)
     a = ap.parse_args()
+    if a.outer_air_scale is not None:
+        _scale_outer_air(a.outer_air_scale)
     res = {m: errors(m, a.convention) for m in ("network", "circuit")}
     for m, (err, rnd, f) in res.items():
         for part, sel in (("grid (648)", ~rnd), ("random (200)", rnd)):
@@ -69,6 +92,8 @@ def main() -> None:
             print("|---|---|---|---|---|---|")
             for lab, cnt, w5, w10, lo, hi in table(err[sel], f["n_drums"][sel]):
                 print(f"| {lab} | {cnt} | {w5:.0%} | {w10:.0%} | {lo:+.1%} | {hi:+.1%} |")
+    if a.outer_air_scale is not None:
+        return
     from magnetics.torque import torque_curve
     from mrclutch.design import design_preset
 
