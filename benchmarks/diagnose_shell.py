@@ -15,18 +15,14 @@ x_w. Used for docs/magnetics.md's "The shell, traced".
 
 from __future__ import annotations
 
-import argparse
 import sys
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from diagnose_zones import _psi
+from diagnose_zones import _psi, design_from_args
 
-from geometry.params import broadcast_fields, preset
-from geometry.regions import evaluate
 from geometry.section import build_section
 from magnetics.fem import build_grid, solve_fem
 from magnetics.materials import magnetic
@@ -34,24 +30,7 @@ from magnetics.network import _odd, network_from_regions, solve_network
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--drums", type=int, default=1)
-    ap.add_argument("--zone-mm", type=float, default=9.0)
-    ap.add_argument("--gap-mm", type=float, default=None)
-    ap.add_argument("--thickness-mm", type=float, default=None)
-    ap.add_argument("--bore-mm", type=float, default=18.0)
-    ap.add_argument("--current", type=float, default=7.0)
-    ap.add_argument("--fem-mm", type=float, default=0.25)
-    a = ap.parse_args()
-    kw = {"n_drums": a.drums, "zone_length": a.zone_mm * 1e-3}
-    for key, val in (("gap", a.gap_mm), ("drum_thickness", a.thickness_mm),
-                     ("drum_inner_diameter", a.bore_mm)):  # fmt: skip
-        if val is not None:
-            kw[key] = val * 1e-3
-    c = replace(preset("paper"), **kw)
-    rg = evaluate(broadcast_fields({k: np.array([v], float) for k, v in vars(c).items()}),
-                  c.n_drums)  # fmt: skip
-    at = {k: float(np.ravel(v)[0]) for k, v in rg.at.items()}
+    a, kw, c, rg, at = design_from_args(9.0, 18.0, 7.0)
     net = network_from_regions(rg)
     m = net.m
     x = solve_network(net, [[c.coil_turns * a.current]])[0, 0]

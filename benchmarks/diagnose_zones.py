@@ -50,14 +50,17 @@ def _psi(grid, sol):  # type: ignore[no-untyped-def]
     return flux
 
 
-def main() -> None:
+def design_from_args(zone_mm: float, bore_mm: float | None, current: float):  # type: ignore[no-untyped-def]
+    """(options, the changes to the paper preset, the clutch, its region table, its
+    stations) from the command line: the options both diagnostics take, with their
+    defaults for the zone, the bore and the current."""
     ap = argparse.ArgumentParser()
     ap.add_argument("--drums", type=int, default=1)
-    ap.add_argument("--zone-mm", type=float, default=3.0)
+    ap.add_argument("--zone-mm", type=float, default=zone_mm)
     ap.add_argument("--gap-mm", type=float, default=None)
     ap.add_argument("--thickness-mm", type=float, default=None)
-    ap.add_argument("--bore-mm", type=float, default=None)
-    ap.add_argument("--current", type=float, default=2.0)
+    ap.add_argument("--bore-mm", type=float, default=bore_mm)
+    ap.add_argument("--current", type=float, default=current)
     ap.add_argument("--fem-mm", type=float, default=0.25)
     a = ap.parse_args()
     kw = {"n_drums": a.drums, "zone_length": a.zone_mm * 1e-3}
@@ -69,6 +72,11 @@ def main() -> None:
     rg = evaluate(broadcast_fields({k: np.array([v], float) for k, v in vars(c).items()}),
                   c.n_drums)  # fmt: skip
     at = {k: float(np.ravel(v)[0]) for k, v in rg.at.items()}
+    return a, kw, c, rg, at
+
+
+def main() -> None:
+    a, kw, c, rg, at = design_from_args(3.0, None, 2.0)
     net = network_from_regions(rg)
     m = net.m
     x = solve_network(net, [[c.coil_turns * a.current]])[0, 0]
