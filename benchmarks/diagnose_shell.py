@@ -10,7 +10,10 @@ The rest of the design is the paper preset (``diagnose_zones``' options). FEM fl
 pole's radius (the drums and gaps), the window (pole radius to the back iron), the back
 iron, and outside it to the domain's edge. Network: the shell's loop flux x_{m−1} + x_w,
 the outer air's x_o, the back iron's share (the shell's less the air's) and the window's
-x_w. Used for docs/magnetics.md's "The shell, traced".
+x_w. The back iron's MMF in the FEM: ∫H_z dz along the shell's outer face, H_z = B_z/μ0 in
+the first air cell outside it (tangential H is continuous), over the band and over the
+network's span (zone centre to zone centre). Used for docs/magnetics.md's "The shell,
+traced".
 """
 
 from __future__ import annotations
@@ -25,7 +28,7 @@ from diagnose_zones import _psi, design_from_args
 
 from geometry.section import build_section
 from magnetics.fem import build_grid, solve_fem
-from magnetics.materials import magnetic
+from magnetics.materials import MU0, magnetic
 from magnetics.network import _odd, network_from_regions, solve_network
 
 
@@ -49,10 +52,18 @@ def main() -> None:
     edge = 0.999 * float(grid.r_lines.max())
     f_in, f_p, f_b, f_out = (abs(flux(r, zm)) for r in (r_p, r0, r1, edge))
     fem = {"window": abs(f_p - f_in), "back": abs(f_b - f_p), "air": abs(f_out - f_b)}
+    r2 = grid.r_lines[np.searchsorted(grid.r_lines, r1 + 1e-9)]  # the first air cell
+    z = np.linspace(at[pole.z0], at[spec["shell_B"].z1], 2001)
+    hz = np.array([(flux(r2, zz) - flux(r1, zz)) / (np.pi * (r2**2 - r1**2)) for zz in z]) / MU0
+    pot = np.concatenate([[0.0], np.cumsum(0.5 * (hz[1:] + hz[:-1]) * np.diff(z))])
+    za, zb = 0.5 * (at["zone_A0"] + at["zone_A1"]), 0.5 * (at["zone_B0"] + at["zone_B1"])
+    drop = {k: abs(np.interp(b1, z, pot) - np.interp(b0, z, pot))
+            for k, (b0, b1) in (("band", (at[b.z0], at[b.z1])), ("span", (za, zb)))}  # fmt: skip
     print(f"{kw} at {a.current} A; back iron {r0 * 1e3:.2f}-{r1 * 1e3:.2f} mm over "
           f"{(at[b.z1] - at[b.z0]) * 1e3:.2f} mm (network's length "
           f"{net.back_w[0, 0] * 1e3:.2f} mm), its MMF in the network {mmf:.0f} of "
-          f"{c.coil_turns * a.current:.0f} A")  # fmt: skip
+          f"{c.coil_turns * a.current:.0f} A; in the FEM {drop['span']:.0f} A over that span, "
+          f"{drop['band']:.0f} A over the back iron")  # fmt: skip
     print("flux at the back iron's mid-plane (µWb) | network | FEM")
     print(f"back iron + outside air               | {shell * 1e6:7.1f} | "
           f"{(fem['back'] + fem['air']) * 1e6:7.1f}")  # fmt: skip

@@ -29,7 +29,8 @@ node by a rung:
   outer film's half over the band, non-linear), whose MMF from the distributed winding
   falls linearly across the coil (the window element's permeance is weighted accordingly,
   [roters1941] ch. 5, leakage of a uniformly wound coil), and, beside the back iron, the
-  air outside the shell (``_outer_air_permeance``).
+  air outside the shell (``magnetics.outer_air``: a solved exterior field problem, stored
+  as a table in the shell's proportions).
 
 Past each zone's far end an end leak runs from the pole to the core through the regions
 in front of the walls (``_end_leak``), in parallel with the zone's stack: film k carries
@@ -59,6 +60,7 @@ from numpy.typing import ArrayLike, NDArray
 from geometry.materials import MRF, STEEL
 from geometry.regions import ZONES, Regions, RegionSpec
 from geometry.validation import ParameterError
+from magnetics import outer_air
 from magnetics.materials import MATERIALS, MU0, Magnetic, magnetic
 
 FloatArray = NDArray[np.float64]
@@ -312,8 +314,8 @@ def network_from_regions(
         shell_k=np.concatenate(sk, axis=1), shell_w=np.concatenate(sw, axis=1),
         back_k=back_k, back_w=back_w, window_perm=perm_w,
         window_fluid=fluid_w_area,
-        outer_air=1.0 / _outer_air_permeance(at["outer"], band,
-                                             np.minimum(za1 - pa[2], pb[3] - zb0)),
+        outer_air=1.0 / outer_air.permeance(at["outer"], band, za1 - pa[2], pb[3] - zb0,
+                                            0.5 * (pa[0] + pb[0])),
         end_leak=_end_leak(rg, at, mats, [wall(films[k].walls[0], z) for k in range(m)
                                           for z in ("A", "B")]),
     )  # fmt: skip
@@ -346,20 +348,6 @@ def _each(mat: Magnetic, phi: FloatArray, k: FloatArray, w: FloatArray):  # type
     sign (H odd)."""
     h, dh = _terms(mat, np.abs(phi), k, w)
     return np.copysign(h, phi), dh
-
-
-def _outer_air_permeance(radius: FloatArray, band: FloatArray, pole: FloatArray) -> FloatArray:
-    """Permeance (H) of the air outside the shell between its two poles, in parallel with
-    the back iron ([roters1941] ch. 5, flux tubes).
-
-    The poles (thick steel) are equipotentials ±F/2 on the outer face; between them, over
-    the back iron's length b (the band), the potential falls linearly. A tube leaves the
-    face at height u above the centre plane and returns at −u on a half circle of length
-    πu, whose mean circumference is 2π(R + 2u/π). Its MMF is F·2u/b for u < b/2 and F
-    beyond, up to U = b/2 + the shorter pole:
-    P = μ0·[2R·(1 + ln(2U/b)) + (4U − b)/π]. The end caps' faces are left out."""
-    u = 0.5 * band + pole
-    return MU0 * (2 * radius * (1 + np.log(2 * u / band)) + (4 * u - band) / np.pi)
 
 
 def _end_leak(rg: Regions, at, mats, walls: list[RegionSpec]) -> FloatArray:  # type: ignore[no-untyped-def]
