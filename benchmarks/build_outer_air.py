@@ -44,10 +44,11 @@ def main() -> None:
     idx = [i for i in itertools.product(*(range(n) for n in shape)) if i[1] <= i[2]]
     point = lambda i: tuple(AXES[k][j] for k, j in zip(AXES, i, strict=True))  # noqa: E731
     rng = np.random.default_rng(12)
-    lo = np.array([np.log(AXES[k][0]) if k != "pole_radius" else AXES[k][0] for k in AXES])
-    hi = np.array([np.log(AXES[k][-1]) if k != "pole_radius" else AXES[k][-1] for k in AXES])
-    u = rng.uniform(lo, hi, (N_CHECKS, 4))
-    checks = [tuple(float(x) for x in (*np.exp(r[:3]), r[3])) for r in u]
+    coords = outer_air._log_axes()  # the interpolation's coordinates (ln of the lengths)
+    u = rng.uniform([v[0] for v in coords.values()], [v[-1] for v in coords.values()],
+                    (N_CHECKS, len(coords)))  # fmt: skip
+    checks = [tuple(float(np.exp(x)) if k in outer_air._LOG_AXES else float(x)
+                    for k, x in zip(AXES, r, strict=True)) for r in u]  # fmt: skip
     work = [(*point(i), SIZE, "fem") for i in idx]
     work += [(*c, SIZE, "fem") for c in checks]
     work += [(*s, SIZE / 2, "fem") for s in SAMPLE] + [(*s, SIZE, "fem") for s in SAMPLE]

@@ -7,7 +7,9 @@ with ``--plot PATH``, a histogram of the errors.
     python benchmarks/measure_network.py [--convention mid-line] [--plot docs/network.png]
         [--outer-air-scale 1.4]
 
-``--outer-air-scale`` multiplies the network's permeance of the air outside the shell: a
+``--outer-air-scale`` multiplies the network's permeance of the air outside the shell (the
+solved one, magnetics.outer_air; docs/magnetics.md's ×1.4 figures scaled the flux tubes
+it replaced, at revision 06bf0ce): a
 diagnostic of how much of the error that element holds (docs/magnetics.md, "The shell,
 traced"), not a model; the preset's FEM check is skipped with it.
 """
