@@ -514,11 +514,12 @@ def network_torque_and_flux(
     The film's flux x_k spreads over its walls' overlap L plus the fringing length
     (``Network.gap_eff``): over the overlap B = x_k·(L/L_eff)/(2π r L), and past each end,
     at a distance s into the fluid the film still holds (``Network.fringe_h``), the
-    fringing tube of length g + πs carries the film's MMF H_e·g, so H(s) = H_e·g/(g + πs)
-    — the same flush-edge tubes whose permeance the network's fringing length is
-    ([roters1941] ch. 5). The fringe's share, 2π r²·∫0^h τy(H(s)) ds, is by Gauss–Legendre
-    in w = ln(1 + πs/g): (g/π)·∫0^W e^w·τy(H_e e^−w) dw (``_FRINGE_POINTS``: within 7e-6
-    of 64 points on the FEM reference's designs at 0.5–7 A).
+    fringing tube carries the film's MMF H_e·g, and leaves H(s) = H_e·g/(g + cπs) in the
+    film: the network's flush-edge tubes ([roters1941] ch. 5), whose legs round the walls'
+    ends run through the laminate beside the film (c, ``Network.fringe_c``). The fringe's
+    share, 2π r²·∫0^h τy(H(s)) ds, is by Gauss–Legendre in w = ln(1 + cπs/g):
+    (g/cπ)·∫0^W e^w·τy(H_e e^−w) dw (``_FRINGE_POINTS``: within 7e-6 of 64 points on the
+    FEM reference's designs at 0.5–7 A).
     ``convention``: "mid-line" reads the field at the film's mid radius; "weakest-layer"
     takes the lesser of r²·τy at the inner and the outer wall (B ∝ 1/r across the film:
     for MRF-132DG the inner wall, ``_gap_torque``)."""
@@ -532,17 +533,19 @@ def network_torque_and_flux(
     x = solve_network(net, net.turns[:, None] * cur, mats, start=start)
     two = lambda a: np.concatenate([a[:, :, 0], a[:, :, 1]], axis=1)  # noqa: E731  zone A, B
     length, eff, depth = two(net.gap_len), two(net.gap_eff), two(net.fringe_h)  # (S, K[, 2])
+    c = two(net.fringe_c)  # (S, K, 2)
     r0, r1 = np.tile(net.gap_r0, 2), np.tile(net.gap_r1, 2)
     g = (r1 - r0)[:, None, :, None, None]
     ok = length > 0
     xl, xe = x[..., : net.m], x[..., net.leaks]
     zones = np.abs(np.concatenate([xl - xe[..., :1], xl - xe[..., 1:]], axis=-1))  # A, B
     phi = zones / np.where(ok, eff, 1.0)[:, None, :]  # Φ per metre of L_eff
-    w_end = np.log1p(np.pi * depth / np.where(ok, r1 - r0, 1.0)[..., None])  # (S, K, 2)
+    w_end = np.log1p(c * np.pi * depth / np.where(ok, r1 - r0, 1.0)[..., None])  # (S, K, 2)
     u, wt = np.polynomial.legendre.leggauss(_FRINGE_POINTS)
     w = 0.5 * w_end[:, None, :, :, None] * (u + 1.0)  # (S, 1, K, 2 ends, points)
     decay = np.exp(-w)  # H(s)/H_e at the points
-    weight = (g / np.pi) * 0.5 * w_end[:, None, :, :, None] * wt / decay  # ds = (g/π)·e^w dw
+    cpi = np.pi * c[:, None, :, :, None]
+    weight = (g / cpi) * 0.5 * w_end[:, None, :, :, None] * wt / decay  # ds = (g/cπ)·e^w dw
 
     def per_length(r: FloatArray) -> FloatArray:
         """r²·(τy over the overlap · L + ∫ τy over both fringes) at radius r (S, K)."""

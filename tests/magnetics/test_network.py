@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from geometry.params import broadcast_fields, preset
 from geometry.regions import evaluate
 from magnetics.circuit import path_from_regions, solve_flux
-from magnetics.materials import FLUIDS, MU0, linear_materials, magnetic
+from magnetics.materials import FLUIDS, MATERIALS, MU0, linear_materials, magnetic
 from magnetics.network import (
     NetworkConvergenceError,
     network_from_regions,
@@ -415,13 +415,44 @@ def test_continuation_in_current_is_invisible_and_falls_back_to_the_linear_start
     np.testing.assert_allclose(again, alone, rtol=0, atol=tol)
 
 
+def test_fringe_decay_is_the_laminate_beside_the_film():
+    """Past the band-side end of each zone a film's fringing tubes run a leg round each
+    wall's end through the laminate on that side: the film's fluid (g) and its share of the
+    stainless layer there (half a drum's band, which borders two films; the whole sleeve,
+    which borders the outer film only); the core goes on as steel, so film 0 has no inner
+    leg. Closed form c = Σ_sides ½·μf·(g + t)/(μf·g + μss·t) at both band-side ends, to
+    1e-12; with the stainless as permeable as the fluid, c = 1 (Roters' tubes) past every
+    end where both walls end; thicker bands make the fringe decay faster."""
+    c, rg = _regions()
+    net = network_from_regions(rg)
+    mu_f = magnetic(net.fluid).mu_initial
+    mu_ss = magnetic("stainless_304").mu_initial
+    rho = [float(rg.at[f"rho{j}"][0]) for j in range(8)] + [float(rg.at["coil_in"][0])]
+    g = np.diff(rho)[0::2]  # films 0 … 3
+    t = np.diff(rho)[1::2] * np.array([0.5, 0.5, 0.5, 1.0])  # out1, in1, out2's halves, sleeve
+
+    def leg(share):  # type: ignore[no-untyped-def]
+        return 0.5 * mu_f * (g + share) / (mu_f * g + mu_ss * share)
+
+    expect = leg(t) + np.where(np.arange(4) == 0, 0.0, leg(np.concatenate([[0.0], t[:-1]])))
+    np.testing.assert_allclose(net.fringe_c[0, :, 0, 1], expect, rtol=1e-12)  # zone A, top
+    np.testing.assert_allclose(net.fringe_c[0, :, 1, 0], expect, rtol=1e-12)  # zone B, bottom
+    assert expect[0] < 0.7 and np.all(expect[1:] > 1.1)
+    fluid_only = network_from_regions(rg, {**MATERIALS, "stainless_304": magnetic(net.fluid)})
+    np.testing.assert_allclose(fluid_only.fringe_c[0, 1:, 0, 1], 1.0, rtol=1e-12)
+    np.testing.assert_allclose(fluid_only.fringe_c[0, 0, 0, 1], 0.5, rtol=1e-12)
+    thick = network_from_regions(_regions(drum_thickness=2 * c.drum_thickness)[1])
+    assert np.all(thick.fringe_c[0, :, 0, 1] > net.fringe_c[0, :, 0, 1])
+
+
 @pytest.mark.parametrize("n", [1, 4])
 def test_fringe_torque_is_the_fringe_permeance_in_the_linear_limit(n):
-    """At a tiny current τy = c·H (tanh linear) and the fringe's field H_e·g/(g + πs)
-    integrates to c·H_e·(g/π)·ln(1 + πh/g): each film's torque is 2π r²·τy(H_e)·(L + δ)
-    with δ that fringing length over the film's own fluid (``Network.fringe_h``), to 1e-9;
-    its flux spreads over L_eff ≥ L + δ (the pockets past the film add permeance, not
-    torque); at saturating currents the 6-point rule agrees with 64 points to 1e-5."""
+    """At a tiny current τy = a·H (tanh linear) and the fringe's field H_e·g/(g + cπs)
+    integrates to a·H_e·(g/cπ)·ln(1 + cπh/g): each film's torque is 2π r²·τy(H_e)·(L + δ)
+    with δ that fringing length over the film's own fluid (``Network.fringe_h``, c
+    ``Network.fringe_c``), to 1e-9; its flux spreads over L_eff ≥ L + δ (Roters' tubes,
+    c = 1, are at least as long; the pockets past the film add permeance, not torque); at
+    saturating currents the 6-point rule agrees with 64 points to 1e-5."""
     c, rg = _regions(n_drums=n, gap=0.4e-3)
     net = network_from_regions(rg)
     i = 1e-5  # A: αH ≈ 6e-5, tanh linear to 1e-9
@@ -431,7 +462,9 @@ def test_fringe_torque_is_the_fringe_permeance_in_the_linear_limit(n):
     g = net.gap_r1[0] - net.gap_r0[0]
     for z in (0, 1):
         eff, length = net.gap_eff[0, :, z], net.gap_len[0, :, z]
-        own = length + sum((g / np.pi) * np.log1p(np.pi * net.fringe_h[0, :, z, e] / g)
+        cz = net.fringe_c[0, :, z]
+        own = length + sum((g / (cz[:, e] * np.pi))
+                           * np.log1p(cz[:, e] * np.pi * net.fringe_h[0, :, z, e] / g)
                            for e in (0, 1))  # fmt: skip
         x = np.abs(sol[: net.m] - sol[net.leaks][z])  # the zone's film flux
         h_e = magnetic(net.fluid).h_of_b(x / (2 * np.pi * r * eff))
@@ -472,32 +505,32 @@ def measured():  # type: ignore[no-untyped-def]
 
 def test_network_against_the_fem_reference(measured):
     """Torque at 2, 4, 7 A against the FEM (0.25 mm, mid-line) on the 648-design grid and
-    200 random designs (benchmarks/measure_network.py). Measured: within ±10 % on 97.0 % of
-    the grid and 99.8 % of the random designs (±5 %: 75 %, 87.5 %), worst −16.6 … +12.2 %;
-    the single loop 39 %, 38 %, worst −86 … +77 %. The issue's goal (±5 % on ≥ 90 %, ±10 %
-    on all) is not met. Floors just under the measurement: a regression guard, not a
-    fitted parameter."""
+    200 random designs (benchmarks/measure_network.py). Measured: within ±5 % on 90.3 % of
+    the grid and 98.2 % of the random designs (issue 12's goal: ≥ 90 %), within ±10 % on
+    99.9 % and 100 % (the goal, all, is missed by two grid points at 7 A, −10.9 % and
+    −10.3 %); the single loop 39 %, 38 % within ±10 %, worst −86 … +77 %."""
     err, rnd, _ = measured["network"]
     old, _, _ = measured["circuit"]
     within = lambda e: float(np.mean(np.abs(e) <= 0.10))  # noqa: E731
-    assert within(err[~rnd]) >= 0.96 and within(err[rnd]) >= 0.99
-    assert float(np.mean(np.abs(err[~rnd]) <= 0.05)) >= 0.73
-    assert float(np.mean(np.abs(err[rnd]) <= 0.05)) >= 0.86
-    assert np.abs(err).max() <= 0.18
+    assert float(np.mean(np.abs(err[~rnd]) <= 0.05)) >= 0.90
+    assert float(np.mean(np.abs(err[rnd]) <= 0.05)) >= 0.90
+    assert within(err[~rnd]) >= 0.998 and within(err[rnd]) == 1.0
+    assert np.abs(err).max() <= 0.11
     for sel in (~rnd, rnd):  # better than the single loop on both sets, by far
         assert within(err[sel]) >= within(old[sel]) + 0.25
         assert np.abs(err[sel]).max() < 0.5 * np.abs(old[sel]).max()
 
 
 def test_network_is_better_than_the_loop_at_every_drum_count(measured):
-    """Per drum count on the grid, within ±10 %: the network 86–98 %, the loop 17–64 %
-    (worst at 5–6 drums, 17–24 %)."""
+    """Per drum count on the grid, within ±10 %: the network 100 % at every drum count
+    (two of 1944 points just outside, at 1 and 2 drums), the loop 17–64 % (worst at 5–6
+    drums, 17–24 %)."""
     err, rnd, f = measured["network"]
     old, _, _ = measured["circuit"]
     for n in range(1, 7):
         sel = (f["n_drums"] == n) & ~rnd
         net, loop = (float(np.mean(np.abs(e[sel]) <= 0.1)) for e in (err, old))
-        assert net >= 0.84 and net >= loop + (0.6 if n >= 5 else 0.25)
+        assert net >= 0.99 and net >= loop + (0.6 if n >= 5 else 0.25)
 
 
 def test_the_networks_error_map_is_this_measurement_and_bounds_its_checks():

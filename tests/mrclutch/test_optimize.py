@@ -236,7 +236,10 @@ def test_stability_is_searched_again_when_no_passive_member_is_stable(monkeypatc
         return r
 
     monkeypatch.setattr(opt_mod, "evaluate_batch", batch)
-    o = optimize(design_preset("paper"), drum_counts=(4,), maxiter=15, popsize=10)
+    # Only ~0.2 % of the box meets every limit with gaps ≥ 0.8 mm at 4 drums (uniform
+    # draws): 10 members per parameter found it with the torque before the fringe's
+    # laminate (issue 12) and missed it after, 16 find it
+    o = optimize(design_preset("paper"), drum_counts=(4,), maxiter=15, popsize=16)
     assert o.stability_searches == 1
     assert o.feasible and o.design.clutch.gap >= 0.8e-3
 
