@@ -343,10 +343,10 @@ def network_from_regions(
 
 
 def _fringe_decay(
-    at,
+    at: Mapping[str, FloatArray],
     f: RegionSpec,
     beside: list[tuple[RegionSpec, float]],
-    edge: FloatArray,  # type: ignore[no-untyped-def]
+    edge: FloatArray,
     gap: FloatArray,
     mu: Mapping[str, float],
     side: int,
@@ -359,7 +359,8 @@ def _fringe_decay(
     edge, each with its share of its thickness (1/the number of films it borders: a drum's
     band is split between the films on its two sides, the sleeve is the outer film's alone);
     along its layers a laminate's μ is their thickness-weighted mean ([wiener1912]). In fluid
-    only, c = 1: Roters' tubes."""
+    only, c = 1: Roters' tubes. Steel going on on both sides (no legs): the film goes on at
+    H_e, c → 0, kept at 1e-6 so that (g/cπ)·ln(1 + cπh/g) = h to 1e-6 without 0/0."""
     probe = edge + side * 1e-9  # just past the walls' end, m
     c = np.zeros_like(gap)
     for inner in (True, False):
@@ -376,7 +377,7 @@ def _fringe_decay(
             num = num + layer * mu[sp.material]
             den = den + layer
         c += np.where(steel, 0.0, 0.5 * mu[f.material] * den / num)
-    return c
+    return np.maximum(c, 1e-6)
 
 
 def _terms(mat: Magnetic, a: FloatArray, k: FloatArray, w: FloatArray, mean: bool = False):  # type: ignore[no-untyped-def]  # fmt: skip
