@@ -40,9 +40,9 @@ from magnetics.thermal import coil_resistance, continuous_current_sq
 
 FloatArray = NDArray[np.float64]
 #: "network": the reluctance ladder generated from the section (magnetics.network; the
-#: default: within 1 % of the FEM on the paper preset and ±10 % on 97 % of the measured
-#: designs, docs/magnetics.md); "circuit": the single saturating loop (tuned at the paper
-#: preset, far off elsewhere); "fem": the axisymmetric FEM reference.
+#: default: within 2.1 % of the FEM on the paper preset and ±10 % on 99.9 % of the
+#: measured designs, docs/magnetics.md); "circuit": the single saturating loop (tuned at
+#: the paper preset, far off elsewhere); "fem": the axisymmetric FEM reference.
 METHODS = ("network", "circuit", "fem")
 #: How a gap's torque reads its field across the gap's thickness (``_gap_torque``,
 #: ``FEMSolution.gap_yield_torque``): "mid-line", r²·τy(H) at the gap's mid radius;
@@ -485,7 +485,7 @@ def network_yield_at(net: Network, materials: Mapping[str, Magnetic] | None = No
     return at
 
 
-_FRINGE_POINTS = 6  # Gauss–Legendre points in ln(1 + πs/g) over each fringe
+_FRINGE_POINTS = 6  # Gauss–Legendre points in ln(1 + cπs/g) over each fringe
 
 
 def network_gap_torque(

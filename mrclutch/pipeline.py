@@ -73,7 +73,7 @@ FIDELITIES: tuple[str, ...] = ("fast", "reference")
 #: fidelity. Bandwidth ∝ √(K_max/(m1+m2)) with K_max ∝ torque, so its error is about
 #: half the torque error plus half the reflected-mass error (analytic inertia is exact
 #: for the axisymmetric section). Holds where the network is within 10 % of the FEM —
-#: on 97 % of its measured map (docs/magnetics.md); its map bounds the torque error per
+#: on 99.9 % of its measured map (docs/magnetics.md); its map bounds the torque error per
 #: design (torque_error_bound in sweep rows; a note on evaluate where it exceeds 10 %).
 #: Checked on the paper preset, variants and the optimiser's optimum in
 #: tests/mrclutch/test_pipeline.py.
@@ -489,9 +489,10 @@ def evaluate_batch(
     The same physics as ``evaluate(design, "fast")``, on arrays: per drum count, the region
     table gives the analytic mass (``region_mass``), the max torque by the reluctance
     network (``network_from_regions``), the circuit (``path_from_regions``: the flux the
-    torque response and the continuous rating's chord start from), the drag terms
-    (``drag_terms``), the carried fluid (``coupled_fluid_inertia``) and the continuous
-    rating (``continuous_torque``); the pair at the hand is ``mr_at_hand``.
+    torque response starts from), the drag terms (``drag_terms``), the carried fluid
+    (``coupled_fluid_inertia``) and the continuous rating (``continuous_torque``, its chords
+    through the network's curve from the peak's loop fluxes, ``network_yield_at``); the
+    pair at the hand is ``mr_at_hand``.
     Designs that fail DrumClutch's validation get ``valid = 0`` and NaN outputs; no invalid
     number reaches a solver."""
     base = base if base is not None else ClutchDesign()
