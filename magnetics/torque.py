@@ -485,9 +485,6 @@ def network_yield_at(net: Network, materials: Mapping[str, Magnetic] | None = No
     return at
 
 
-_FRINGE_POINTS = 6  # Gauss–Legendre points in ln(1 + cπs/g) over each fringe
-
-
 def network_gap_torque(
     net: Network,
     currents: ArrayLike,
@@ -517,9 +514,9 @@ def network_torque_and_flux(
     fringing tube carries the film's MMF H_e·g, and leaves H(s) = H_e·g/(g + cπs) in the
     film: the network's flush-edge tubes ([roters1941] ch. 5), whose legs round the walls'
     ends run through the laminate beside the film (c, ``Network.fringe_c``). The fringe's
-    share, 2π r²·∫0^h τy(H(s)) ds, is by Gauss–Legendre in w = ln(1 + cπs/g):
-    (g/cπ)·∫0^W e^w·τy(H_e e^−w) dw (``_FRINGE_POINTS``: within 7e-6 of 64 points on the
-    FEM reference's designs at 0.5–7 A).
+    share, 2π r²·∫0^h τy(H(s)) ds, is (g/cπ)·∫0^W e^w·τy(H_e e^−w) dw in
+    w = ln(1 + cπs/g), W = ln(1 + cπh/g): Carlson's law in closed form
+    (``MRFluid.tau_y_decay``).
     ``convention``: "mid-line" reads the field at the film's mid radius; "weakest-layer"
     takes the lesser of r²·τy at the inner and the outer wall (B ∝ 1/r across the film:
     for MRF-132DG the inner wall, ``_gap_torque``)."""
@@ -535,23 +532,19 @@ def network_torque_and_flux(
     length, eff, depth = two(net.gap_len), two(net.gap_eff), two(net.fringe_h)  # (S, K[, 2])
     c = two(net.fringe_c)  # (S, K, 2)
     r0, r1 = np.tile(net.gap_r0, 2), np.tile(net.gap_r1, 2)
-    g = (r1 - r0)[:, None, :, None, None]
     ok = length > 0
     xl, xe = x[..., : net.m], x[..., net.leaks]
     zones = np.abs(np.concatenate([xl - xe[..., :1], xl - xe[..., 1:]], axis=-1))  # A, B
     phi = zones / np.where(ok, eff, 1.0)[:, None, :]  # Φ per metre of L_eff
     w_end = np.log1p(c * np.pi * depth / np.where(ok, r1 - r0, 1.0)[..., None])  # (S, K, 2)
-    u, wt = np.polynomial.legendre.leggauss(_FRINGE_POINTS)
-    w = 0.5 * w_end[:, None, :, :, None] * (u + 1.0)  # (S, 1, K, 2 ends, points)
-    decay = np.exp(-w)  # H(s)/H_e at the points
-    cpi = np.pi * c[:, None, :, :, None]
-    weight = (g / cpi) * 0.5 * w_end[:, None, :, :, None] * wt / decay  # ds = (g/cπ)·e^w dw
+    w_end = w_end[:, None]  # (S, 1, K, 2 ends)
+    scale = (r1 - r0)[:, None, :, None] / (np.pi * c[:, None])  # ds = (g/cπ)·e^w dw
 
     def per_length(r: FloatArray) -> FloatArray:
         """r²·(τy over the overlap · L + ∫ τy over both fringes) at radius r (S, K)."""
         r = r[:, None, :]
         h_e = bh.h_of_b(phi / (2 * np.pi * r))  # (S, C, K)
-        fringe = (fl.tau_y(h_e[..., None, None] * decay) * weight).sum(axis=(-1, -2))
+        fringe = (fl.tau_y_decay(h_e[..., None], w_end) * scale).sum(axis=-1)
         return r**2 * (fl.tau_y(h_e) * length[:, None, :] + fringe)
 
     if convention == "mid-line":

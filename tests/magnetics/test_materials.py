@@ -83,3 +83,38 @@ def test_importing_the_materials_does_not_import_scipy() -> None:
 
     code = "import sys, magnetics.materials; assert 'scipy' not in sys.modules, 'scipy'"
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_yield_stress_along_a_hyperbolic_decay_in_closed_form() -> None:
+    """MRFluid.tau_y_decay, ∫0^W τy(H·e^−v)·e^v dv, against 2000 Gauss–Legendre points of
+    τy itself from the weak field to deep saturation (to 1e-8: the table's Hermite
+    interpolation, rounding at the smallest W), and its two limits: a·W·τ_max where τy is
+    linear in H, (e^W − 1)·τ_max where τy is τ_max along the whole decay."""
+    fluid = MRF_132DG
+    u, wt = np.polynomial.legendre.leggauss(2000)
+    h = np.array([1e-3, 1e2, 3e4, 1.6e5, 4e5, 2e6, 3e7, 1e9])[:, None]
+    w = np.array([1e-3, 0.3, 1.0, 3.0, 8.0])[None, :]
+    v = 0.5 * w[..., None] * (u + 1)
+    ref = 0.5 * w * (fluid.tau_y(h[..., None] * np.exp(-v)) * np.exp(v) * wt).sum(-1)
+    np.testing.assert_allclose(fluid.tau_y_decay(h, w), ref, rtol=1e-8)
+    np.testing.assert_allclose(fluid.tau_y_decay(1e-3, w), 6.33e-9 * w * fluid.tau_y_max,
+                               rtol=1e-9)  # fmt: skip
+    np.testing.assert_allclose(fluid.tau_y_decay(1e300, w), np.expm1(w) * fluid.tau_y_max,
+                               rtol=1e-12)  # fmt: skip
+    assert np.all(fluid.tau_y_decay(h, 0.0) == 0.0)
+    assert np.all(fluid.tau_y_decay(0.0, w) == 0.0)
+    assert np.all(np.isfinite(fluid.tau_y_decay(np.inf, w)))
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.floats(0.0, 1e9), st.floats(0.0, 1e9), st.floats(0.0, 10.0), st.floats(0.0, 10.0))
+def test_yield_stress_along_a_decay_grows_with_the_field_and_the_depth(h0, h1, w0, w1) -> None:
+    """More field or a longer decay never lowers the summed yield stress (τy ≥ 0 and
+    non-decreasing in |H|), and it stays within its bounds: ≤ (e^W − 1)·τ_max; each to the
+    closed form's rounding: 1e-9 relative, and τ_max·1e-11 absolute (the table's Hermite
+    error, which e^W·S(ln a − W) − S(ln a) keeps where W is tiny)."""
+    (ha, hb), (wa, wb) = sorted((h0, h1)), sorted((w0, w1))
+    f, top = MRF_132DG.tau_y_decay, MRF_132DG.tau_y_max
+    assert f(ha, wa) <= f(hb, wa) * (1 + 1e-9) + 1e-11 * top
+    assert f(ha, wa) <= f(ha, wb) * (1 + 1e-9) + 1e-11 * top
+    assert -1e-11 * top <= f(hb, wb) <= np.expm1(wb) * top * (1 + 1e-9) + 1e-11 * top
