@@ -73,7 +73,7 @@ FIDELITIES: tuple[str, ...] = ("fast", "reference")
 #: fidelity. Bandwidth ∝ √(K_max/(m1+m2)) with K_max ∝ torque, so its error is about
 #: half the torque error plus half the reflected-mass error (analytic inertia is exact
 #: for the axisymmetric section). Holds where the network is within 10 % of the FEM —
-#: on 99.9 % of its measured map (docs/magnetics.md); its map bounds the torque error per
+#: on all of its measured map (docs/magnetics.md); its map bounds the torque error per
 #: design (torque_error_bound in sweep rows; a note on evaluate where it exceeds 10 %).
 #: Checked on the paper preset, variants and the optimiser's optimum in
 #: tests/mrclutch/test_pipeline.py.
