@@ -336,7 +336,8 @@ class MRFluid:
         Closed form of Carlson's law: with a = k·|H| and t = a·e^−v it is
         τ_max·a·∫_{a e^−W}^{a} tanh(t)/t² dt = τ_max·[e^W·S(ln a − W) − S(ln a)], S(v) =
         e^v·∫_{e^v}^∞ tanh(t)/t² dt (``_carlson_s``). Limits: a·W·τ_max for a weak field
-        (τy linear in H), (e^W − 1)·τ_max in deep saturation (S = 1)."""
+        (τy linear in H), (e^W − 1)·τ_max in deep saturation (S = 1). It is ``tau_y``'s
+        law: a fluid with another law overrides both."""
         a = np.minimum(_CARLSON_K * np.abs(np.asarray(h, dtype=float)), 1e200)
         w = np.asarray(w, dtype=float)
         v = np.log(np.maximum(a, 1e-300))

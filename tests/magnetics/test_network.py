@@ -505,7 +505,7 @@ def test_fringe_torque_is_the_fringe_permeance_in_the_linear_limit(n):
         x = np.abs(sol[: net.m] - sol[net.leaks][z])
         b_r = x / (2 * np.pi * r * net.gap_eff[0, :, z])
         b_z = 0.5 * (q[:, z] + np.concatenate([q[1:, z], [0.0]]))  # inner, outer half
-        assert np.all(b_z > 0)  # small here (≤ 6 % of B_r): test_film_torque_reads_...
+        assert np.all(b_z > 0)  # ≤ 6 % of B_r here; large in the test after this one
         over = sum(w * fluid.tau_y(h_r(b_r, tk * b_z)) for tk, w in zip(t, tw, strict=True))
         fringe = 0.0
         for e in (0, 1):
@@ -527,8 +527,8 @@ def test_film_torque_reads_the_fluids_axial_flux():
     bore, 1 mm gaps, 0.1 mm drums, 9 mm zones, 7 A: the core and the drum saturate and the
     films carry B_z ≈ B_r) that reading adds 2.9 % to the torque, and it is the torque's
     only: with the sheaths' fluxes set to 0 the reading is H(B_r), every film's torque is
-    lower, and with them doubled it is higher still (H/B rises with B). The fluxes
-    themselves are the same either way (the solve does not see it)."""
+    lower, and with them doubled it is higher still (H/B rises with B). network_film_torque
+    reads the fluxes it is given: the solve itself does not see the coupling."""
     _, rg = _regions(n_drums=1, drum_inner_diameter=6e-3, gap=1e-3, drum_thickness=0.1e-3,
                      zone_length=9e-3)  # fmt: skip
     net = network_from_regions(rg)
