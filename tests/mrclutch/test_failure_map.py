@@ -80,10 +80,10 @@ def test_circuit_off_the_fem_warns(paper):
 def test_fast_evaluate_notes_an_untrusted_network(paper, monkeypatch):
     """The fast fidelity's torque is the reluctance network's. Its own measured map bounds
     it within CIRCUIT_TORQUE_TRUST at every node and cell centre of the map (largest bound
-    9.7 %, 5 drums with 1 mm gaps and 3 mm zones); its worst corner (one drum with a 6 mm
-    bore, 0.1 mm walls and 1 mm gaps, −8.3 % at 7 A; −10.9 % before the torque read the
-    fluid's axial flux) carries no note. Where the bound is past the trust (here with the
-    trust lowered to 5 %), or the shell is off the map, it is still used, and says so."""
+    8.8 %, at its worst corner: one drum with a 6 mm bore, 0.1 mm walls, 1 mm gaps and
+    9 mm zones, −8.8 % at 7 A; −10.9 % before the torque read the fluid's axial flux),
+    which so carries no note. Where the bound is past the trust (here with the trust
+    lowered to 5 %), or the shell is off the map, it is still used, and says so."""
     import itertools
 
     import mrclutch.trust as trust

@@ -85,12 +85,14 @@ def test_choose_picks_cheapest_meeting_target(paper):
     assert choose(paper, 0.01).torque == "circuit"
     pick = choose(paper, 0.003)  # neither fast model's bound meets it: the FEM, and why
     assert pick.torque == "fem" and any("reluctance network" in n for n in pick.notes)
-    assert torque_error_bound(paper.clutch, "network", None) > 0.02  # the map: 2.07 %
-    assert choose(three, 0.01).torque == "network"  # and 0.72 % on 3 drums
+    assert torque_error_bound(paper.clutch, "network", None) > 0.015  # the map: 1.57 %
+    assert choose(three, 0.01).torque == "network"  # and 0.30 % on 3 drums
     pick = choose(three, 0.1)  # the circuit is > 10 % off on 3 drums: it says so
     assert pick.torque == "network" and any("circuit" in n and "-12.1%" in n for n in pick.notes)
     six = replace(paper, clutch=replace(paper.clutch, n_drums=6))
-    assert choose(six, 0.003).torque == "network"  # 0.10 % on 6 drums
+    assert choose(six, 0.01).torque == "network"  # 0.47 % on 6 drums
+    pick = choose(six, 0.003)  # past the network's bound there: the FEM, and why
+    assert pick.torque == "fem" and any("reluctance network" in n for n in pick.notes)
     holes = replace(paper, clutch=replace(paper.clutch, hub_holes=6))
     assert inertia_bound(paper) == 0.0 and inertia_bound(holes) > 0.0
 
