@@ -40,7 +40,7 @@ from magnetics.thermal import coil_resistance, continuous_current_sq
 
 FloatArray = NDArray[np.float64]
 #: "network": the reluctance ladder generated from the section (magnetics.network; the
-#: default: within 2.1 % of the FEM on the paper preset and ±10 % on all of the 848
+#: default: within 1.6 % of the FEM on the paper preset and ±10 % on all of the 848
 #: measured designs, docs/magnetics.md); "circuit": the single saturating loop (tuned at
 #: the paper preset, far off elsewhere); "fem": the axisymmetric FEM reference.
 METHODS = ("network", "circuit", "fem")

@@ -52,7 +52,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument(
         "--method",
         default="network",
-        help="network (default: the reluctance network built from the section, within 2.1 %% "
+        help="network (default: the reluctance network built from the section, within 1.6 %% "
         "of the FEM on the paper preset and 10 %% on all 848 measured designs, "
         "docs/magnetics.md), circuit (the single loop, tuned at the paper preset), fem, or "
         "both (the network checked against the FEM: both curves, and the largest relative "
