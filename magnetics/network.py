@@ -189,6 +189,7 @@ def network_from_regions(
                 q0, q1 = at[sp.z0], at[sp.z1]
                 e0 = np.where(np.abs(q1 - e0) < 1e-12, np.minimum(e0, q0), e0)
                 e1 = np.where(np.abs(q0 - e1) < 1e-12, np.maximum(e1, q1), e1)
+        near = _window_regions(at, f, rg)  # what the fringes' legs may run through
         for z, (zname, z0, z1) in enumerate(zones):
             a, b = wall(inner, zname), wall(outer, zname)
             lo = np.maximum(np.maximum(at[a.z0], at[b.z0]), g0)
@@ -218,8 +219,8 @@ def network_from_regions(
             h_hi = np.maximum(np.minimum(g1, mid if not z else g1) - hi, 0.0)
             x_lo = np.maximum(lo - np.maximum(e0, mid if z else e0), 0.0)
             x_hi = np.maximum(np.minimum(e1, mid if not z else e1) - hi, 0.0)
-            c = np.stack([_fringe_decay(at, f, rg, lo, gap, mu, -1),
-                          _fringe_decay(at, f, rg, hi, gap, mu, 1)], axis=-1)  # fmt: skip
+            c = np.stack([_fringe_decay(at, f, near, lo, gap, mu, -1),
+                          _fringe_decay(at, f, near, hi, gap, mu, 1)], axis=-1)  # fmt: skip
             fringe = (gap / np.pi) * (np.log1p(np.pi * x_lo / gap) + np.log1p(np.pi * x_hi / gap))
             eff = length + (fringe if fringing else 0.0)
             if fringing:
@@ -338,10 +339,26 @@ def network_from_regions(
     )  # fmt: skip
 
 
+def _window_regions(
+    at: Mapping[str, FloatArray], f: RegionSpec, rg: Regions
+) -> tuple[list[RegionSpec], list[RegionSpec]]:
+    """The regions that reach, in some design, within one gap's width inside and outside
+    film ``f``'s radii (``_fringe_decay``'s windows), the film itself left out."""
+    gap = at[f.r1] - at[f.r0]
+    inside, outside = [], []
+    for sp in rg:
+        if sp is not f:
+            if np.any((at[sp.r1] > at[f.r0] - gap) & (at[sp.r0] < at[f.r0])):
+                inside.append(sp)
+            if np.any((at[sp.r1] > at[f.r1]) & (at[sp.r0] < at[f.r1] + gap)):
+                outside.append(sp)
+    return inside, outside
+
+
 def _fringe_decay(
     at: Mapping[str, FloatArray],
     f: RegionSpec,
-    rg: Regions,
+    near: tuple[list[RegionSpec], list[RegionSpec]],
     edge: FloatArray,
     gap: FloatArray,
     mu: Mapping[str, float],
@@ -357,7 +374,8 @@ def _fringe_decay(
     lie at depths s ~ g, whose legs reach about that far. Along its layers a laminate's μ
     is their thickness-weighted mean ([wiener1912]). In fluid only, c = 1: Roters' tubes.
     Steel going on on both sides (no legs): the film goes on at H_e, c → 0, kept at 1e-6 so
-    that (g/cπ)·ln(1 + cπh/g) = h to 1e-6 without 0/0."""
+    that (g/cπ)·ln(1 + cπh/g) = h to 1e-6 without 0/0. ``near``: the regions that can lie
+    in the inner and the outer window (``_window_regions``)."""
     probe = edge + side * 1e-9  # just past the walls' end, m
     c = np.zeros_like(gap)
     for inner in (True, False):
@@ -365,9 +383,7 @@ def _fringe_decay(
         w0, w1 = (r_edge - gap, r_edge) if inner else (r_edge, r_edge + gap)
         num, den = gap * mu[f.material], gap.copy()
         steel = np.zeros(gap.shape, bool)
-        for sp in rg:
-            if sp is f:
-                continue
+        for sp in near[0 if inner else 1]:
             there = (at[sp.z0] <= probe) & (probe < at[sp.z1])
             if sp.material == STEEL and (sp.r1 == f.r0 if inner else sp.r0 == f.r1):
                 steel |= there  # the wall itself goes on
