@@ -418,6 +418,14 @@ def _odd(mat: Magnetic, phi: FloatArray, k: FloatArray, w: FloatArray, mean: boo
     return np.copysign(f, phi), d
 
 
+def _rowsum(a: FloatArray) -> FloatArray:
+    """Σ over the last (short) axis, by slices (``_odd``)."""
+    out = a[..., 0].copy()
+    for j in range(1, a.shape[-1]):
+        out += a[..., j]
+    return out
+
+
 def _each(mat: Magnetic, phi: FloatArray, k: FloatArray, w: FloatArray):  # type: ignore[no-untyped-def]
     """w·H(k·Φ) and its Φ-derivative element by element (one Gauss point each), Φ of any
     sign (H odd)."""
@@ -555,8 +563,8 @@ def _residual(net: Network, mats, x: FloatArray, ni: FloatArray, warm=None):  # 
     fs, rq, pa, pk, cond = _pair(steel, fluid, y[..., :m, None], q[..., : 2 * m].reshape(shape),
                                  ex(net.rung_k), ex(net.rung_w),
                                  ex(net.sheath_k), ex(net.sheath_w), True)  # fmt: skip
-    f[..., :m] = fs.sum(-1)
-    df[..., :m] = cond.sum(-1)
+    f[..., :m] = fs[..., 0] + fs[..., 1]  # zones A and B (slices beat a reduce over 2)
+    df[..., :m] = cond[..., 0] + cond[..., 1]
     # the core over the band beside half of film 0
     fc, rc, pac, pkc, dc = _pair(steel, fluid, y[..., 0], q[..., 2 * m],
                                  ex(net.core_k), ex(net.core_w),
@@ -584,7 +592,7 @@ def _residual(net: Network, mats, x: FloatArray, ni: FloatArray, warm=None):  # 
     res[..., m] = f[..., m] + win - ni
     res[..., m + 1] = air * xo - bk
     leak = ex(net.end_leak)
-    res[..., net.leaks] = leak * xe - np.stack([gz[0].sum(-1), gz[1].sum(-1)], axis=-1)
+    res[..., net.leaks] = leak * xe - np.stack([_rowsum(gz[0]), _rowsum(gz[1])], axis=-1)
     res[..., net.sheaths] = np.concatenate([rq.reshape(*q.shape[:-1], 2 * m), rc[..., None]], -1)
     dm = df[..., m] + dsh + dbk  # dF_shell/dy_m
     diag = dg[..., : m - 1] + df[..., 1:m] + df[..., : m - 1]
@@ -598,8 +606,8 @@ def _residual(net: Network, mats, x: FloatArray, ni: FloatArray, warm=None):  # 
     border = np.zeros((*x.shape[:-1], m + 2, 2))
     border[..., :m, 0], border[..., :m, 1] = -dgz[0], -dgz[1]
     corner = np.zeros((*x.shape[:-1], 2, 2))
-    corner[..., 0, 0] = leak[..., 0] + dgz[0].sum(-1)
-    corner[..., 1, 1] = leak[..., 1] + dgz[1].sum(-1)
+    corner[..., 0, 0] = leak[..., 0] + _rowsum(dgz[0])
+    corner[..., 1, 1] = leak[..., 1] + _rowsum(dgz[1])
     # the band fluid's B, the next call's start (``_band``), travels with the Jacobian
     state = np.concatenate([b_rung, b_win[..., None]], axis=-1)
     flat = (*q.shape[:-1], 2 * m)
