@@ -410,16 +410,11 @@ def _odd(mat: Magnetic, phi: FloatArray, k: FloatArray, w: FloatArray, mean: boo
     """Σ_j w·H(k·Φ) over the last axis and its Φ-derivative, for Φ of any sign (H odd;
     ``mean``: build-up kernels, ``_terms``)."""
     h, dh = _terms(mat, np.abs(phi)[..., None], k, w, mean)
-    # the last axis is short (1–6 points): a sum of slices beats a strided reduce
-    f, d = h[..., 0], dh[..., 0]
-    for j in range(1, h.shape[-1]):
-        f = f + h[..., j]
-        d = d + dh[..., j]
-    return np.copysign(f, phi), d
+    return np.copysign(_rowsum(h), phi), _rowsum(dh)
 
 
 def _rowsum(a: FloatArray) -> FloatArray:
-    """Σ over the last (short) axis, by slices (``_odd``)."""
+    """Σ over the last axis, short (1–12 points): a sum of slices beats a strided reduce."""
     out = a[..., 0].copy()
     for j in range(1, a.shape[-1]):
         out += a[..., j]
