@@ -29,7 +29,8 @@ from diagnose_zones import _psi, design_from_args
 from geometry.section import build_section
 from magnetics.fem import build_grid, solve_fem
 from magnetics.materials import MU0, magnetic
-from magnetics.network import _odd, network_from_regions, solve_network
+from magnetics.network import network_from_regions, solve_network
+from magnetics.network.solve import _odd
 
 
 def main() -> None:

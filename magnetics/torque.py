@@ -34,7 +34,16 @@ from magnetics.circuit import (
 from magnetics.drag import ROOM_TEMPERATURE, Drag, Support, clutch_drag
 from magnetics.fem import MESHES, build_grid, solve_fem
 from magnetics.materials import FLUIDS, MATERIALS, Magnetic, MRFluid, magnetic
-from magnetics.network import Network, network_from_regions, solve_network
+from magnetics.network import network_from_regions
+from magnetics.network.torque import (  # noqa: F401  (the network's torque, importable here)
+    CONVENTIONS,
+    DEFAULT_CONVENTION,
+    network_film_torque,
+    network_gap_torque,
+    network_torque_and_flux,
+    network_torque_batch,
+    network_yield_at,
+)
 from magnetics.thermal import Network as ThermalNetwork
 from magnetics.thermal import coil_resistance, continuous_current_sq
 
@@ -44,11 +53,6 @@ FloatArray = NDArray[np.float64]
 #: measured designs, docs/magnetics.md); "circuit": the single saturating loop (tuned at
 #: the paper preset, far off elsewhere); "fem": the axisymmetric FEM reference.
 METHODS = ("network", "circuit", "fem")
-#: How a gap's torque reads its field across the gap's thickness (``_gap_torque``,
-#: ``FEMSolution.gap_yield_torque``): "mid-line", r²·τy(H) at the gap's mid radius;
-#: "weakest-layer", min over r in [r0, r1] of r²·τy(H(r)) (the fluid yields first there).
-CONVENTIONS = ("mid-line", "weakest-layer")
-DEFAULT_CONVENTION = "mid-line"
 
 
 def rpm_to_rad_s(rpm: float) -> float:
@@ -456,175 +460,3 @@ def continuous_torque(
         c1 = np.where(i > 0, t / np.where(i > 0, i, 1.0), 0.0)
         i = fixed_point(c1, 1e-9 if k == passes - 1 else 1e-4)  # intermediate: a chord's point
     return i, np.where(i_a > 0, off + c1 * i, 0.0)
-
-
-# ---- the reluctance network (magnetics.network): one design is a batch of one -------------
-
-
-def network_yield_at(net: Network, materials: Mapping[str, Magnetic] | None = None,
-                     fluid: MRFluid | None = None, convention: str = DEFAULT_CONVENTION,
-                     seed: tuple[FloatArray, FloatArray] | None = None) -> Any:  # fmt: skip
-    """The yield torque (S,) of the network's S designs, each at its own current (S,) A:
-    ``continuous_torque``'s ``torque_at``. Each call's Newton starts from the last call's
-    loop fluxes scaled to the new current (``seed``: (current (S,), loop fluxes (S, 1, ·))
-    of a solve already done, e.g. at the peak), which roughly halves its steps on the
-    chords' nearby currents."""
-    state = {} if seed is None else {"i": np.asarray(seed[0], dtype=float)[:, None],
-                                     "x": np.asarray(seed[1], dtype=float)}  # fmt: skip
-
-    def at(current: FloatArray) -> FloatArray:
-        cur = np.asarray(current, dtype=float)[:, None]
-        start = None
-        if state:
-            ratio = np.where(state["i"] != 0, cur / np.where(state["i"] != 0, state["i"], 1), 0)
-            start = state["x"] * ratio[..., None]
-        t, x = network_torque_and_flux(net, cur, materials, fluid, convention, start)
-        state.update(i=cur, x=x)
-        return t.sum(-1)[:, 0]
-
-    return at
-
-
-def network_gap_torque(
-    net: Network,
-    currents: ArrayLike,
-    materials: Mapping[str, Magnetic] | None = None,
-    fluid: MRFluid | None = None,
-    convention: str = DEFAULT_CONVENTION,
-) -> FloatArray:
-    """Yield torque (S, C, 2m) of every film in zone A then B at currents (S, C) A
-    (``network_torque_and_flux`` without the loop fluxes)."""
-    return network_torque_and_flux(net, currents, materials, fluid, convention)[0]
-
-
-def network_torque_and_flux(
-    net: Network,
-    currents: ArrayLike,
-    materials: Mapping[str, Magnetic] | None = None,
-    fluid: MRFluid | None = None,
-    convention: str = DEFAULT_CONVENTION,
-    start: FloatArray | None = None,
-) -> tuple[FloatArray, FloatArray]:
-    """(yield torque (S, C, 2m) of every film in zone A then B, the loop fluxes
-    (S, C, ``Network.unknowns``)) at currents (S, C) A, the Newton started at ``start`` if given.
-
-    The film's flux x_k spreads over its walls' overlap L plus the fringing length
-    (``Network.gap_eff``): over the overlap B = x_k·(L/L_eff)/(2π r L), and past each end,
-    at a distance s into the fluid the film still holds (``Network.fringe_h``), the
-    fringing tube carries the film's MMF H_e·g, and leaves H(s) = H_e·g/(g + cπs) in the
-    film: the network's flush-edge tubes ([roters1941] ch. 5), whose legs round the walls'
-    ends run through the laminate beside the film (c, ``Network.fringe_c``). The fringe's
-    share, 2π r²·∫0^h τy(H(s)) ds, is (g/cπ)·∫0^W e^w·τy(H_e e^−w) dw in
-    w = ln(1 + cπs/g), W = ln(1 + cπh/g): Carlson's law in closed form
-    (``MRFluid.tau_y_decay``).
-    The torque reads H_r, as the FEM's does (``magnetics.fem.post``), and the fluid is one
-    isotropic material whose permeability is set by |B|: where the film's fluid also
-    carries the axial flux beside the walls (its sheaths, ``Network.sheath_k``; B_z rising
-    linearly along the zone to the band, ``_film_axial_b``), H_r = B_r·H(|B|)/|B| is the
-    larger for the same B_r (Gauss–Legendre along the zone, ``_AXIAL_POINTS``; at the
-    band's end of the overlap the fringe starts from that H_r). The network's own film
-    element keeps H(B_r): the reading is the torque's only (docs/magnetics.md, "The fluid's
-    axial flux").
-    ``convention``: "mid-line" reads the field at the film's mid radius (B_z the mean of
-    its two halves'); "weakest-layer" takes the lesser of r²·τy at the inner and the outer
-    wall (B ∝ 1/r across the film: for MRF-132DG the inner wall, ``_gap_torque``; B_z of
-    the half beside each wall)."""
-    mats = MATERIALS if materials is None else materials
-    check_choice("convention", convention, CONVENTIONS)
-    fl = FLUIDS[net.fluid] if fluid is None else fluid
-    cur = np.asarray(currents, dtype=float)
-    cur = np.broadcast_to(cur if cur.ndim == 2 else cur.reshape(1, -1),
-                          (net.turns.size, cur.shape[-1] if cur.ndim else 1))  # fmt: skip
-    x = solve_network(net, net.turns[:, None] * cur, mats, start=start)
-    return network_film_torque(net, x, mats, fl, convention), x
-
-
-def network_film_torque(
-    net: Network,
-    x: FloatArray,
-    materials: Mapping[str, Magnetic] | None = None,
-    fluid: MRFluid | None = None,
-    convention: str = DEFAULT_CONVENTION,
-) -> FloatArray:
-    """Yield torque (S, C, 2m) of every film in zone A then B at the network's loop fluxes
-    x (S, C, ``Network.unknowns``): the reading ``network_torque_and_flux`` describes."""
-    mats = MATERIALS if materials is None else materials
-    check_choice("convention", convention, CONVENTIONS)
-    fl = FLUIDS[net.fluid] if fluid is None else fluid
-    bh = magnetic(net.fluid, mats)
-    two = lambda a: np.concatenate([a[:, :, 0], a[:, :, 1]], axis=1)  # noqa: E731  zone A, B
-    length, eff, depth = two(net.gap_len), two(net.gap_eff), two(net.fringe_h)  # (S, K[, 2])
-    c = two(net.fringe_c)  # (S, K, 2)
-    r0, r1 = np.tile(net.gap_r0, 2), np.tile(net.gap_r1, 2)
-    ok = length > 0
-    xl, xe = x[..., : net.m], x[..., net.leaks]
-    zones = np.abs(np.concatenate([xl - xe[..., :1], xl - xe[..., 1:]], axis=-1))  # A, B
-    phi = zones / np.where(ok, eff, 1.0)[:, None, :]  # Φ per metre of L_eff
-    w_end = np.log1p(c * np.pi * depth / np.where(ok, r1 - r0, 1.0)[..., None])  # (S, K, 2)
-    w_end = w_end[:, None]  # (S, 1, K, 2 ends)
-    scale = (r1 - r0)[:, None, :, None] / (np.pi * c[:, None])  # ds = (g/cπ)·e^w dw
-    # The film's fluid also carries the axial flux beside the walls (the sheaths): at the
-    # band's end of the zone B_z = q/A of the sheath that holds it (the inner half of film
-    # k beside wall k, the outer half beside wall k + 1; none beside the pole), falling
-    # linearly to 0 at the zone's far end as the sheath's flux builds up.
-    bz_in, bz_out = _film_axial_b(net, x)  # (S, C, K)
-    t, tw = np.polynomial.legendre.leggauss(_AXIAL_POINTS)
-    t, tw = 0.5 * (t + 1.0), 0.5 * tw  # along the zone, far end (0) to band (1)
-    band_end = np.zeros((2 * net.m, 2))  # which end of each overlap faces the band
-    band_end[: net.m, 1] = band_end[net.m :, 0] = 1.0
-
-    def h_r(b_r: FloatArray, b_z: FloatArray) -> FloatArray:
-        """H_r = B_r·H(|B|)/|B|: one isotropic fluid, its permeability set by |B|."""
-        b = np.maximum(np.hypot(b_r, b_z), 1e-300)
-        return b_r * bh.h_dh(b)[0] / b
-
-    def per_length(r: FloatArray, b_z: FloatArray) -> FloatArray:
-        """r²·(τy over the overlap · L + ∫ τy over both fringes) at radius r (S, K),
-        B_z at the zone's band end ``b_z`` (S, C, K)."""
-        r = r[:, None, :]
-        b_r = phi / (2 * np.pi * r)  # (S, C, K)
-        over = sum(wk * fl.tau_y(h_r(b_r, tk * b_z)) for tk, wk in zip(t, tw, strict=True))
-        h_e = h_r(b_r[..., None], b_z[..., None] * band_end)  # at each end (S, C, K, 2)
-        fringe = (fl.tau_y_decay(h_e, w_end) * scale).sum(axis=-1)
-        return r**2 * (over * length[:, None, :] + fringe)
-
-    if convention == "mid-line":
-        tau = per_length(0.5 * (r0 + r1), 0.5 * (bz_in + bz_out))
-    else:
-        tau = np.minimum(per_length(r0, bz_in), per_length(r1, bz_out))
-    return np.where(ok[:, None, :], 2 * np.pi * tau, 0.0)
-
-
-_AXIAL_POINTS = 4  # Gauss–Legendre points along the zone, where the film's B_z builds up
-
-
-def _film_axial_b(net: Network, x: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """|B_z| (S, C, 2m; zone A's films then B's) at the band's end of each zone in the
-    inner and the outer half of each film: the sheath fluxes ``x[..., net.sheaths]`` over
-    their areas (``Network.sheath_k``), wall k's for film k's inner half, wall k + 1's for
-    its outer half (0 for the outer film's outer half, beside the pole)."""
-    m = net.m
-    q = np.abs(x[..., net.sheaths][..., : 2 * m]).reshape(*x.shape[:-1], m, 2)
-    wall = q * net.sheath_k[:, None, :, :, 0]  # (S, C, m walls, 2 zones)
-    outer = np.concatenate([wall[:, :, 1:], np.zeros_like(wall[:, :, :1])], axis=2)
-    two = lambda a: np.concatenate([a[..., 0], a[..., 1]], axis=-1)  # noqa: E731
-    return two(wall), two(outer)
-
-
-def network_torque_batch(
-    fields: Mapping[str, ArrayLike],
-    currents: ArrayLike,
-    materials: Mapping[str, Magnetic] | None = None,
-    fluid: MRFluid | None = None,
-    convention: str = DEFAULT_CONVENTION,
-) -> FloatArray:
-    """Yield torque (S, C) of S designs at every one of C currents by the network, one
-    batch per drum count; NaN rows for designs that fail DrumClutch's validation."""
-    p = broadcast_fields(fields)
-    cur = np.atleast_1d(np.asarray(currents, dtype=float))
-
-    def one(rg: Regions, rows: np.ndarray) -> dict[str, FloatArray]:
-        net = network_from_regions(rg, materials)
-        return {"t": network_gap_torque(net, cur[None, :], materials, fluid, convention).sum(-1)}
-
-    return per_topology(p, valid(p), one)["t"]

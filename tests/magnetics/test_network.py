@@ -21,14 +21,14 @@ from magnetics.network import (
     network_from_regions,
     solve_network,
 )
-from magnetics.torque import (
+from magnetics.network.torque import (
     _film_axial_b,
     network_film_torque,
     network_gap_torque,
     network_torque_and_flux,
     network_torque_batch,
-    torque_curve,
 )
+from magnetics.torque import torque_curve
 
 PAPER = preset("paper")
 BENCH = Path(__file__).resolve().parents[2] / "benchmarks"
@@ -276,7 +276,7 @@ def test_a_saturated_wall_hands_its_flux_to_the_fluid_beside_it():
     with a 6 mm bore at 7 A the drum's steel saturates and its sheaths carry more of its
     rung's flux than the steel in both zones (in the FEM's band plane of that design the
     fluid beside the walls carries 22 µWb, the drum 0.25: docs/magnetics.md)."""
-    from magnetics.network import _odd
+    from magnetics.network.solve import _odd
 
     def split(c, rg, mats, cur):  # type: ignore[no-untyped-def]
         net = network_from_regions(rg, mats)
@@ -315,7 +315,7 @@ def test_band_element_shares_its_mmf_between_steel_free_paths(y, perm, area):
     its MMF F carries perm·F + A·B_fluid(F/l) = |y| to 1e-10 on the fluid's own B–H, F is
     odd in y, dF/dy matches a central difference, and a warm start from any B (the last
     Newton iterate's) finds the same F; no fluid: F = y/perm; neither: 0."""
-    from magnetics.network import _band
+    from magnetics.network.solve import _band
 
     fl = magnetic("mrf_132dg")
     length = 8e-3
@@ -375,7 +375,7 @@ def test_no_convergence_is_refused_with_the_rows_named():
 def test_blocks_are_invisible_and_refusals_name_global_rows(monkeypatch):
     """Designs solved in blocks (network._BLOCK) give the one-block answer, and a refused
     design is named by its row in the whole batch, not in its block."""
-    import magnetics.network as network
+    import magnetics.network.solve as network
 
     f = {k: np.full(7, float(v)) for k, v in vars(replace(PAPER, n_drums=3)).items()}
     f["gap"] = np.linspace(0.2e-3, 0.8e-3, 7)
@@ -396,7 +396,7 @@ def test_continuation_in_current_is_invisible_and_falls_back_to_the_linear_start
     one's solution: with the columns out of order the answer is each current solved alone
     from the linear start (to the Newton's tolerance); a row the continuation start does
     not bring to convergence is solved again from the linear start, not refused."""
-    import magnetics.network as network
+    import magnetics.network.solve as network
 
     f = {k: np.full(5, float(v)) for k, v in vars(replace(PAPER, n_drums=4)).items()}
     f["drum_thickness"] = np.linspace(0.1e-3, 0.6e-3, 5)
