@@ -46,7 +46,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 REGISTRY = ROOT / "docs" / "figures.toml"
-SPAN = re.compile(r"<!-- fig: ([A-Za-z0-9_.\-]+) -->(.*?)<!-- /fig -->", re.S)
+#: A marked figure; one written in inline code (`<!-- fig: ...`, as in this docstring's
+#: Markdown twin in the README) is an example, not a figure.
+SPAN = re.compile(r"(?<!`)<!-- fig: ([A-Za-z0-9_.\-]+) -->(.*?)<!-- /fig -->", re.S)
 NUMBER = re.compile(r"[-−+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+−]?\d+)?")
 _KEYS = {
     "command",
