@@ -1,0 +1,307 @@
+"""A sampled mutation run over the physics modules (docs/testing.md): not part of CI.
+
+    python benchmarks/mutation_run.py --sample 200 --jobs 2 --out benchmarks/data/mutation.json
+
+Each mutant changes ONE expression of one module (an arithmetic operator, a comparison, a
+numeric constant, a unary minus, a boolean operator) by rewriting the module's AST. The
+modules are those of ``geometry/``, ``magnetics/`` and ``mrclutch/haptics/``; strings,
+docstrings, annotations, ``raise`` statements and the arguments of validation calls
+(``check_*``) are left alone (mutating an error message or a validation limit is not a
+physics error). Mutants are drawn uniformly at random (``--seed``) from every possible one.
+
+Each mutant runs in a private copy of the tree (no bytecode cache, its own numba cache)
+in two stages: first the test files of the module's own package that import it by name
+(fast, most mutants die here), and if it survives, every test of its package
+(``tests/geometry``, ``tests/magnetics`` or ``tests/mrclutch``), ``-x`` so a killed mutant
+stops at its first failure. Killed: a test failed or the run exceeded ``--timeout``.
+Survived: every test passed. The JSON lists each mutant with its location, the original
+and the mutated source, its status and the test that killed it; ``--report`` prints the
+Markdown survival table docs/testing.md quotes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import ast
+import concurrent.futures as cf
+import copy
+import json
+import os
+import random
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = {"geometry": "tests/geometry", "magnetics": "tests/magnetics",
+            "mrclutch/haptics": "tests/mrclutch"}  # fmt: skip
+
+_BINOPS = {ast.Add: ast.Sub, ast.Sub: ast.Add, ast.Mult: ast.Div, ast.Div: ast.Mult,
+           ast.Pow: ast.Mult, ast.FloorDiv: ast.Div, ast.Mod: ast.FloorDiv}  # fmt: skip
+_CMPOPS = {ast.Lt: ast.LtE, ast.LtE: ast.Lt, ast.Gt: ast.GtE, ast.GtE: ast.Gt,
+           ast.Eq: ast.NotEq, ast.NotEq: ast.Eq}  # fmt: skip
+
+
+@dataclass
+class Mutant:
+    module: str  # path relative to the root
+    index: int  # which candidate of the module (its order in the AST walk)
+    line: int
+    kind: str
+    before: str
+    after: str
+    status: str = "pending"
+    killed_by: str = ""
+    seconds: float = 0.0
+
+
+def _skip_zones(tree: ast.AST) -> set[int]:
+    """ids of nodes never mutated: docstrings, annotations, raise statements, the arguments
+    of check_* validation calls and of decorators, f-strings."""
+    skip: set[int] = set()
+
+    def mark(node: ast.AST | None) -> None:
+        if node is not None:
+            skip.update(id(n) for n in ast.walk(node))
+
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Raise | ast.JoinedStr | ast.Assert):
+            mark(node)
+        elif isinstance(node, ast.AnnAssign):
+            mark(node.annotation)
+        elif isinstance(node, ast.arg):
+            mark(node.annotation)
+        elif isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+            mark(node.returns)
+            for d in node.decorator_list:
+                mark(d)
+        elif isinstance(node, ast.Call):
+            name = (
+                node.func.attr
+                if isinstance(node.func, ast.Attribute)
+                else getattr(node.func, "id", "")
+            )
+            if name.startswith("check_") or name in {"ParameterError", "warn", "print"}:
+                mark(node)
+    return skip
+
+
+def _candidates(tree: ast.AST) -> list[tuple[ast.AST, str]]:
+    """Every mutable node of the module, in ast.walk order, with the kind of mutation."""
+    skip = _skip_zones(tree)
+    out: list[tuple[ast.AST, str]] = []
+    for node in ast.walk(tree):
+        if id(node) in skip:
+            continue
+        if isinstance(node, ast.BinOp) and type(node.op) in _BINOPS:
+            out.append((node, "binop"))
+        elif isinstance(node, ast.Compare) and len(node.ops) == 1 and type(node.ops[0]) in _CMPOPS:
+            out.append((node, "compare"))
+        elif (isinstance(node, ast.Constant) and type(node.value) in (int, float)
+              and not isinstance(node.value, bool)):  # fmt: skip
+            out.append((node, "constant"))
+        elif isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub):
+            out.append((node, "unary"))
+        elif isinstance(node, ast.BoolOp):
+            out.append((node, "boolop"))
+    return out
+
+
+def _mutate(node: ast.AST, kind: str) -> ast.AST:
+    new = copy.deepcopy(node)
+    if kind == "binop":
+        new.op = _BINOPS[type(node.op)]()
+    elif kind == "compare":
+        new.ops = [_CMPOPS[type(node.ops[0])]()]
+    elif kind == "constant":
+        v = node.value
+        new.value = (v + 1) if isinstance(v, int) else (v * 1.1 if v != 0 else 1e-3)
+    elif kind == "unary":
+        return new.operand
+    elif kind == "boolop":
+        new.op = ast.Or() if isinstance(node.op, ast.And) else ast.And()
+    return new
+
+
+class _Replace(ast.NodeTransformer):
+    def __init__(self, target: ast.AST, replacement: ast.AST) -> None:
+        self.target, self.replacement = target, replacement
+
+    def generic_visit(self, node: ast.AST) -> ast.AST:
+        if node is self.target:
+            return self.replacement
+        return super().generic_visit(node)
+
+
+def modules() -> list[Path]:
+    mods: list[Path] = []
+    for pkg in PACKAGES:
+        mods += [p for p in sorted((ROOT / pkg).rglob("*.py")) if p.name != "__init__.py"]
+    return mods
+
+
+def enumerate_mutants() -> list[Mutant]:
+    out: list[Mutant] = []
+    for path in modules():
+        src = path.read_text()
+        tree = ast.parse(src)
+        for i, (node, kind) in enumerate(_candidates(tree)):
+            before = ast.get_source_segment(src, node) or ast.unparse(node)
+            after = ast.unparse(_mutate(node, kind))
+            if before.strip() == after.strip():
+                continue
+            out.append(Mutant(str(path.relative_to(ROOT)), i, node.lineno, kind,
+                              before[:120], after[:120]))  # fmt: skip
+    return out
+
+
+def mutated_source(m: Mutant) -> str:
+    src = (ROOT / m.module).read_text()
+    tree = ast.parse(src)
+    node, kind = _candidates(tree)[m.index]
+    new = _Replace(node, _mutate(node, kind)).visit(tree)
+    return ast.unparse(ast.fix_missing_locations(new))
+
+
+def _package_tests(module: str) -> str:
+    for pkg, tests in PACKAGES.items():
+        if module.startswith(pkg + "/"):
+            return tests
+    raise ValueError(module)
+
+
+def _importers(tree_root: Path, module: str) -> list[str]:
+    """Test files of the module's package that import it by its dotted name."""
+    dotted = module[:-3].replace("/", ".")
+    dotted = dotted.removesuffix(".__init__")
+    tests = tree_root / _package_tests(module)
+    return sorted(str(p.relative_to(tree_root)) for p in tests.rglob("test_*.py")
+                  if dotted in p.read_text())  # fmt: skip
+
+
+def _pytest(tree: Path, targets: list[str], timeout: float) -> tuple[str, str]:
+    env = dict(os.environ, PYTHONPATH=str(tree), PYTHONDONTWRITEBYTECODE="1",
+               NUMBA_CACHE_DIR=str(tree / ".numba"), OPENBLAS_NUM_THREADS="1")  # fmt: skip
+    cmd = [sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider",
+           "--no-header", "-o", "addopts=--benchmark-disable", *targets]  # fmt: skip
+    try:
+        r = subprocess.run(cmd, cwd=tree, env=env, capture_output=True, text=True,
+                           timeout=timeout)  # fmt: skip
+    except subprocess.TimeoutExpired:
+        return "killed", "timeout"
+    if r.returncode == 0:
+        return "survived", ""
+    failed = [ln.split(" ")[1] for ln in r.stdout.splitlines() if ln.startswith("FAILED ")]
+    if r.returncode in (1, 2) and (failed or "Error" in r.stdout):
+        return "killed", failed[0] if failed else "collection error"
+    return "killed", f"exit {r.returncode}"
+
+
+def _worker_tree() -> Path:
+    """A private copy of the whole tree (the tests read docs/, examples/, benchmarks/)."""
+    tree = Path(tempfile.mkdtemp(prefix="mutation-")) / "tree"
+    shutil.copytree(ROOT, tree, ignore=shutil.ignore_patterns(".git", "__pycache__", "*.pyc"))
+    return tree
+
+
+_TREE: Path | None = None
+
+
+def run_one(m: Mutant, timeout: float) -> Mutant:
+    global _TREE
+    if _TREE is None:
+        _TREE = _worker_tree()
+    target = _TREE / m.module
+    original = target.read_text()
+    t0 = time.perf_counter()
+    try:
+        target.write_text(mutated_source(m))
+        status, by = _pytest(_TREE, _importers(_TREE, m.module) or [_package_tests(m.module)],
+                             timeout)  # fmt: skip
+        if status == "survived":
+            status, by = _pytest(_TREE, [_package_tests(m.module)], timeout * 4)
+    finally:
+        target.write_text(original)
+    m.status, m.killed_by, m.seconds = status, by, time.perf_counter() - t0
+    return m
+
+
+def report(mutants: list[Mutant]) -> str:
+    done = [m for m in mutants if m.status != "pending"]
+    lines = ["| package | mutants | killed | survived |", "|---|---:|---:|---:|"]
+    for pkg in PACKAGES:
+        mine = [m for m in done if m.module.startswith(pkg + "/")]
+        killed = sum(m.status == "killed" for m in mine)
+        lines.append(f"| {pkg}/ | {len(mine)} | {killed} | {len(mine) - killed} |")
+    killed = sum(m.status == "killed" for m in done)
+    lines.append(f"| all | {len(done)} | {killed} | {len(done) - killed} |")
+    lines += ["", "| survivor | line | before → after |", "|---|---:|---|"]
+    for m in done:
+        if m.status == "survived":
+            lines.append(f"| {m.module} | {m.line} | `{m.before}` → `{m.after}` |")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--sample", type=int, default=200)
+    ap.add_argument("--seed", type=int, default=35)
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--timeout", type=float, default=240.0, help="s per stage-1 run")
+    ap.add_argument("--out", type=Path, default=ROOT / "benchmarks/data/mutation.json")
+    ap.add_argument("--list", action="store_true", help="print the sample, run nothing")
+    ap.add_argument("--report", action="store_true", help="print the table of --out")
+    ap.add_argument("--only", nargs="*", help="re-run these 'module:index' mutants only")
+    args = ap.parse_args(argv)
+    if args.report:
+        print(report([Mutant(**d) for d in json.loads(args.out.read_text())["mutants"]]))
+        return 0
+    everything = enumerate_mutants()
+    sample = random.Random(args.seed).sample(everything, min(args.sample, len(everything)))
+    if args.only:
+        keys = set(args.only)
+        sample = [m for m in everything if f"{m.module}:{m.index}" in keys]
+    if args.list:
+        for m in sample:
+            print(f"{m.module}:{m.line} [{m.kind}] {m.before!r} -> {m.after!r}")
+        print(f"{len(sample)} of {len(everything)} candidate mutants")
+        return 0
+    t0 = time.perf_counter()
+    base = _worker_tree()
+    for tests in sorted({_package_tests(m.module) for m in sample}):  # the unmutated baseline
+        status, by = _pytest(base, [tests], args.timeout * 4)
+        if status != "survived":
+            print(f"baseline: {tests} fails unmutated ({by}): fix that first", file=sys.stderr)
+            return 1
+    shutil.rmtree(base.parent)
+    print(f"baseline green in {time.perf_counter() - t0:.0f} s", flush=True)
+    done: list[Mutant] = []
+    with cf.ProcessPoolExecutor(args.jobs) as pool:
+        futures = [pool.submit(run_one, m, args.timeout) for m in sample]
+        for k, fut in enumerate(cf.as_completed(futures), 1):
+            m = fut.result()
+            done.append(m)
+            print(f"[{k}/{len(sample)}] {m.status:8s} {m.module}:{m.line} {m.before!r} -> "
+                  f"{m.after!r} ({m.seconds:.0f} s) {m.killed_by}", flush=True)  # fmt: skip
+            args.out.parent.mkdir(parents=True, exist_ok=True)
+            args.out.write_text(
+                json.dumps(
+                    {
+                        "candidates": len(everything),
+                        "seed": args.seed,
+                        "mutants": [asdict(x) for x in done],
+                    },
+                    indent=1,
+                )
+            )
+    print(f"\n{len(done)} mutants in {time.perf_counter() - t0:.0f} s\n")
+    print(report(done))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
