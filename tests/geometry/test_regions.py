@@ -50,6 +50,12 @@ def test_table_topology(n):
     kinds = [layer(j)[0] for j in range(n_layers(n))]
     assert kinds[::2] == ["gap"] * (2 * n)
     assert kinds[1::2] == ["out", "in"] * (n - 1) + ["out"]
+    # the drums counted from 1 outward, output and input each on their own: layer 1 is
+    # out1, 3 in1, 5 out2, 7 in2, …; gap k is layer 2k
+    assert [layer(j) for j in range(1, n_layers(n), 2)] == [
+        (kind, j // 4 + 1) for j, kind in zip(range(1, n_layers(n), 2), kinds[1::2], strict=True)
+    ]
+    assert [layer(2 * k) for k in range(2 * n)] == [("gap", k) for k in range(2 * n)]
     gaps = [r for r in rows if r.film == "cylinder"]
     assert len(gaps) == 2 * n
     for k, gp in enumerate(gaps):
