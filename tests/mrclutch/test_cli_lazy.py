@@ -1,0 +1,112 @@
+"""The CLI parses its arguments before it imports numpy or any physics (issue 31): the
+command table names each command's module, which is imported only when that command runs."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from mrclutch.cli.main import COMMANDS, build_parser, command_of, main
+
+ROOT = Path(__file__).resolve().parents[2]
+#: The only project modules ``mrclutch --help`` may import.
+LIGHT = {"mrclutch", "mrclutch.__main__", "mrclutch.cli", "mrclutch.cli.main",
+         "mrclutch.cli.errors", "mrclutch.cli.paths"}  # fmt: skip
+
+
+def _imported(*args: str) -> tuple[subprocess.CompletedProcess[str], set[str]]:
+    """Run ``python -X importtime -m mrclutch ARGS``; (the process, the modules imported)."""
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    cmd = [sys.executable, "-X", "importtime", "-m", "mrclutch", *args]
+    p = subprocess.run(cmd, capture_output=True, text=True, env=env, cwd=ROOT, timeout=120)
+    names = {line.rsplit("|", 1)[1].strip() for line in p.stderr.splitlines()
+             if line.startswith("import time:") and "|" in line}  # fmt: skip
+    return p, names
+
+
+def _loaded(*args: str) -> set[str]:
+    """sys.modules after ``main(ARGS)`` in a fresh interpreter (importlib.import_module's
+    own module is not timed by -X importtime, so this sees what that cannot)."""
+    code = (
+        "import sys\nfrom mrclutch.cli.main import main\ntry:\n    main(sys.argv[1:])\n"
+        "except SystemExit:\n    pass\nprint('\\n'.join(sys.modules), file=sys.stderr)"
+    )
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    p = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True,
+                       env=env, cwd=ROOT, timeout=120)  # fmt: skip
+    return set(p.stderr.split())
+
+
+def _ours(names: set[str]) -> set[str]:
+    return {n for n in names if n.split(".")[0] in ("geometry", "magnetics", "mrclutch")}
+
+
+def test_help_imports_neither_numpy_nor_any_physics_module() -> None:
+    p, names = _imported("--help")
+    assert p.returncode == 0
+    for name in COMMANDS:  # every command listed, with its summary's start
+        assert f"    {name} " in p.stdout
+    assert "numpy" not in names
+    assert _ours(names) and _ours(names) <= LIGHT, sorted(_ours(names) - LIGHT)
+    loaded = _loaded("--help")
+    assert "numpy" not in loaded and "argparse" in loaded
+    assert _ours(loaded) <= LIGHT, sorted(_ours(loaded) - LIGHT)
+
+
+def test_a_command_imports_its_own_module_only() -> None:
+    """``mrclutch haptic --help`` loads the haptic commands, not the FEM's or the design's."""
+    loaded = _loaded("haptic", "--help")
+    assert {COMMANDS["haptic"][0], "numpy"} <= loaded
+    assert COMMANDS["torque"][0] not in loaded and COMMANDS["evaluate"][0] not in loaded
+
+
+def test_the_table_says_what_each_module_registers() -> None:
+    """The full parser (every module loaded) has exactly the table's commands, and each
+    module's own summary is the table's (one text, two places: they must not drift)."""
+    parser = build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command")
+    assert list(sub.choices) == list(COMMANDS)
+    helps = {a.dest: a.help for a in sub._choices_actions}
+    assert helps == {name: summary for name, (_, summary) in COMMANDS.items()}
+
+
+def test_the_lazy_parser_registers_the_command_in_full() -> None:
+    """Parsing with only the command's module loaded gives the same options as the full
+    parser; the other commands are stubs with no options of their own."""
+    full = build_parser()
+    full_sub = next(a for a in full._actions if a.dest == "command").choices
+    for name in COMMANDS:
+        lazy_sub = next(a for a in build_parser([name])._actions if a.dest == "command").choices
+        opts = lambda p: sorted(o for a in p._actions for o in a.option_strings)  # noqa: E731
+        assert opts(lazy_sub[name]) == opts(full_sub[name])
+        other = next(n for n in COMMANDS if COMMANDS[n][0] != COMMANDS[name][0])
+        assert opts(lazy_sub[other]) == []
+
+
+@pytest.mark.parametrize(
+    ("argv", "command"),
+    [([], None), (["--help"], None), (["torque", "--json"], "torque"),
+     (["--version"], None), (["evaluate", "x.toml"], "evaluate")],
+)  # fmt: skip
+def test_command_of_finds_the_first_word(argv: list[str], command: str | None) -> None:
+    assert command_of(argv) == command
+
+
+def test_an_unknown_command_exits_2(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as e:
+        main(["torqeu"])
+    assert e.value.code == 2
+    assert "invalid choice: 'torqeu'" in capsys.readouterr().err
+
+
+def test_version_is_read_when_asked(capsys: pytest.CaptureFixture[str]) -> None:
+    from importlib.metadata import version
+
+    with pytest.raises(SystemExit) as e:
+        main(["--version"])
+    assert e.value.code == 0
+    assert capsys.readouterr().out.strip() == f"mrclutch {version('mrclutch')}"
