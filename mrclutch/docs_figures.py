@@ -98,11 +98,9 @@ class Figure:
             raise ValueError(f"figure {self.key!r}: several json paths need an expr")
 
     def render(self, value: float) -> str:
-        """The value as the span writes it (exponents without padding: 1.55e-2)."""
-        text = self.format.format(value)
-        return re.sub(
-            r"e([-+])0*(\d)", lambda m: "e" + m.group(1).replace("+", "") + m.group(2), text
-        )
+        """The value as the span writes it (exponents without padding: 1.55e-2; − for minus)."""
+        text = re.sub(r"e\+?(-?)0*(\d)", r"e\1\2", self.format.format(value))
+        return re.sub(r"^-", "−", text)  # the docs' minus sign (U+2212)
 
 
 @dataclass(frozen=True)

@@ -85,6 +85,8 @@ def test_render_strips_exponent_padding():
     assert df.Figure("k", command="x", json="a", format="{:.2e}").render(0.0155) == "1.55e-2"
     assert df.Figure("k", command="x", json="a", format="{:.0e}").render(3e15) == "3e15"
     assert df.Figure("k", command="x", json="a", format="{:.3f}").render(0.42723) == "0.427"
+    assert df.Figure("k", command="x", json="a", format="{:+.1f}").render(-1.27) == "−1.3"
+    assert df.Figure("k", command="x", json="a", format="{:.1e}").render(-2e-5) == "−2.0e-5"
 
 
 def test_json_path_index_and_selector():
