@@ -1,0 +1,208 @@
+"""Robust verdicts (mrclutch.robust): the vectorised stability limit against the exact
+kernel, the box search, the monotonicity claims the corners rest on, and the never-
+optimistic guarantee against dense sampling of the ranges."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from mrclutch.design import design_preset
+from mrclutch.haptics.actuator import HapticParams
+from mrclutch.haptics.model import bandwidth, max_passive_stiffness, max_stable_stiffness
+from mrclutch.robust import (
+    ROBUST_COLUMNS,
+    box_search,
+    hand_box_batch,
+    robust_columns_batch,
+    robust_limits,
+    stable_stiffness_batch,
+)
+from mrclutch.uncertainty import no_uncertainty
+
+
+def _random_params(rng, n):
+    return HapticParams(
+        10 ** rng.uniform(-4, -1.5, n),
+        10 ** rng.uniform(-2, 1, n),
+        10 ** rng.uniform(2.5, 4.5, n),
+        10 ** rng.uniform(-1, 2, n),
+        10 ** rng.uniform(-3, -1, n),
+        delay=10 ** rng.uniform(-4.5, -2, n),
+    )
+
+
+def test_stable_stiffness_batch_equals_the_exact_kernel():
+    """Independent of the exact kernel's scan (another grid, one pass over all designs):
+    both give the same first crossing on 300 random 2-DOF designs over wide ranges."""
+    p = _random_params(np.random.default_rng(7), 300)
+    fast = stable_stiffness_batch(p)
+    exact = np.array([max_stable_stiffness(p.item(i)) for i in range(300)])
+    np.testing.assert_allclose(fast, exact, rtol=1e-9)
+
+
+def test_stable_stiffness_batch_without_delay_and_with_a_hold_goes_exact():
+    p = HapticParams(
+        np.array([1.5e-3, 1.5e-3]), np.array([0.3, 0.3]), 4000.0, 20.0, 14e-3,
+        delay=np.array([0.0, 1e-3]), sample_period=np.array([0.0, 1e-3]),
+    )  # fmt: skip
+    got = stable_stiffness_batch(p)
+    assert got[0] == max_stable_stiffness(p.item(0))
+    assert got[1] == pytest.approx(max_stable_stiffness(p.item(1)), rel=1e-12)
+
+
+def test_box_search_finds_an_interior_minimum_and_a_corner_maximum():
+    lo = np.array([[0.0, 0.0], [-1.0, -1.0]])
+    hi = np.array([[1.0, 1.0], [1.0, 1.0]])
+    centre = np.array([[0.3, 0.7], [-0.55, 0.2]])
+
+    def f(x):
+        return np.sum((x - centre[:, None, :]) ** 2, axis=-1)
+
+    v, arg = box_search(f, lo, hi, sense=-1)
+    np.testing.assert_allclose(arg, centre, atol=0.02)
+    assert np.all(v <= 2 * (1 / 32) ** 2)  # within half a final cell (1/16 of 1/4, twice zoomed)
+    v, arg = box_search(f, lo, hi, sense=1)
+    np.testing.assert_allclose(arg, [[1.0, 0.0], [1.0, -1.0]])
+    np.testing.assert_allclose(v, [0.7**2 + 0.7**2, 1.55**2 + 1.2**2])
+
+
+@pytest.fixture(scope="module")
+def paper_box():
+    d = design_preset("paper")
+    return d, hand_box_batch({"gap": np.array([0.7e-3, 0.5e-3, 0.9e-3])}, d)
+
+
+def test_box_holds_the_nominal_and_widens_with_each_input(paper_box):
+    _, box = paper_box
+    for nom, lo, hi in (box.m1, box.b1, box.delay, box.K):
+        assert np.all(lo <= nom * (1 + 1e-12)) and np.all(nom <= hi * (1 + 1e-12))
+    # bench damping: added to the top of b1 whole
+    assert np.all(box.b1[2] > box.b1[0] + 0.7)
+    # the delay: from the typed 1 ms to the geometry's equivalent delay (above 2 ms here)
+    np.testing.assert_allclose(box.delay[1], 1e-3)
+    assert np.all(box.delay[2] > 2e-3)
+
+
+def test_no_uncertainty_gives_the_nominal_answer(paper_box):
+    d, _ = paper_box
+    box = hand_box_batch({"gap": np.array([0.7e-3])}, d, no_uncertainty(d))
+    lim = robust_limits(box)
+    for q in ("max_stable_K", "max_passive_K", "bandwidth"):
+        assert lim[f"{q}_worst"][0] == pytest.approx(lim[f"{q}_nominal"][0], rel=1e-9)
+        assert lim[f"{q}_best"][0] == pytest.approx(lim[f"{q}_nominal"][0], rel=1e-9)
+    # the paper pair's nominal limits (evaluate's figures)
+    assert lim["max_stable_K_nominal"][0] == pytest.approx(253.4, rel=1e-3)
+
+
+def test_robust_columns_batch_worst_below_nominal_and_nan_for_invalid(paper_box):
+    d, _ = paper_box
+    cols = robust_columns_batch({"gap": np.array([0.7e-3, -1.0])}, d)
+    assert tuple(cols) == ROBUST_COLUMNS
+    lim = robust_limits(hand_box_batch({"gap": np.array([0.7e-3])}, d, no_uncertainty(d)))
+    assert cols["max_stable_K_worst_N_per_m"][0] < lim["max_stable_K_nominal"][0]
+    assert cols["max_passive_K_worst_N_per_m"][0] < lim["max_passive_K_nominal"][0]
+    assert cols["bandwidth_worst_hz"][0] < lim["bandwidth_nominal"][0]
+    for v in cols.values():
+        assert np.isnan(v[1])
+
+
+# ---- the monotonicity claims the corners use ------------------------------------------
+
+_design = st.tuples(
+    st.floats(-4, -1.5), st.floats(-2, 1), st.floats(2.5, 4.5), st.floats(-1, 2),
+    st.floats(-3, -1), st.floats(-4.5, -2),
+)  # fmt: skip
+
+
+def _hp(x, **scale):
+    m1, b1, k, b, m2, tau = (10**v for v in x)
+    vals = {"m1": m1, "b1": b1, "delay": tau}
+    for name, f in scale.items():
+        vals[name] *= f
+    return HapticParams(vals["m1"], vals["b1"], k, b, m2, delay=vals["delay"])
+
+
+@settings(max_examples=60, deadline=None)
+@given(_design, st.floats(1.01, 3.0))
+def test_passive_limit_monotone_in_m1_b1_delay(x, f):
+    """The corners of the largest passive K: non-increasing in m1, non-decreasing in b1,
+    non-increasing in τ."""
+    k0 = max_passive_stiffness(_hp(x))
+    tol = 1e-7 * k0
+    assert max_passive_stiffness(_hp(x, m1=f)) <= k0 + tol
+    assert max_passive_stiffness(_hp(x, b1=f)) >= k0 - tol
+    assert max_passive_stiffness(_hp(x, delay=f)) <= k0 + tol
+
+
+@settings(max_examples=60, deadline=None)
+@given(_design, st.floats(1.01, 3.0))
+def test_stable_limit_monotone_in_b1(x, f):
+    """The corner of the largest stable K in b1: more damping never destabilises."""
+    k0 = max_stable_stiffness(_hp(x))
+    assert max_stable_stiffness(_hp(x, b1=f)) >= k0 * (1 - 1e-9)
+
+
+def test_bandwidth_is_not_monotone_in_K_so_it_is_searched():
+    """Why robust_limits searches K for the bandwidth: a stable loop with a long delay
+    renders a narrower band at a stiffer spring (found by hypothesis)."""
+    p = HapticParams(1e-3, 1.0, 10**2.5, 1.0, 1e-3, delay=1e-2)
+    K = 0.5 * max_stable_stiffness(p)
+    assert bandwidth(p, 1.01 * K) < bandwidth(p, K)
+
+
+# ---- never optimistic: the reported worst case against dense sampling -----------------
+
+
+def _random_boxes(rng, n):
+    """n random 2-DOF designs near haptic practice (m1 0.3–30 g, b1 0.05–3 N·s/m, k 1–20
+    kN/m, b 1–50 N·s/m, m2 5–50 g, τ 0.2–3 ms, K 50–1000 N/m), each with random ranges:
+    m1 ± up to 20 %, b1 from −60 % to +300 %, τ up to ×3, K ± up to 20 %."""
+    from mrclutch.robust import HandBox
+
+    def rng_log(a, b):
+        return 10 ** rng.uniform(np.log10(a), np.log10(b), n)
+
+    m1, b1, tau, K = rng_log(3e-4, 3e-2), rng_log(0.05, 3.0), rng_log(2e-4, 3e-3), rng_log(50, 1e3)
+    k, b, m2 = rng_log(1e3, 2e4), rng_log(1.0, 50.0), rng_log(5e-3, 5e-2)
+    spans = {
+        "m1": (m1 * (1 - rng.uniform(0, 0.2, n)), m1 * (1 + rng.uniform(0, 0.2, n))),
+        "b1": (b1 * (1 - rng.uniform(0, 0.6, n)), b1 * (1 + rng.uniform(0, 3.0, n))),
+        "delay": (tau, tau * rng.uniform(1.0, 3.0, n)),
+        "K": (K * (1 - rng.uniform(0, 0.2, n)), K * (1 + rng.uniform(0, 0.2, n))),
+    }
+    nom = {"m1": m1, "b1": b1, "delay": tau, "K": K}
+    return HandBox(
+        **{f: (nom[f], *spans[f]) for f in spans}, k=k, b=b, m2=m2, valid=np.ones(n, bool)
+    )
+
+
+DENSE = 1000  # samples of each design's ranges
+
+
+@pytest.mark.slow
+def test_worst_case_never_optimistic_against_dense_sampling():
+    """200 random designs with random ranges: the reported worst largest stable K, passive
+    K and bandwidth are ≤ the smallest over 1000 random samples of the ranges (corners
+    included) and within 2 % of it. The samples are evaluated all at once (vectorised)."""
+    rng = np.random.default_rng(29)
+    n = 200
+    box = _random_boxes(rng, n)
+    lim = robust_limits(box)
+    u = rng.uniform(size=(n, DENSE, 4))
+    u[:, :16] = np.stack(np.meshgrid(*[[0.0, 1.0]] * 4, indexing="ij"), -1).reshape(16, 4)
+    spans = (box.m1, box.b1, box.delay, box.K)
+    m1, b1, tau, K = (lo[:, None] + (hi - lo)[:, None] * u[..., i]
+                      for i, (_, lo, hi) in enumerate(spans))  # fmt: skip
+    dense = {q: np.empty(n) for q in ("max_stable_K", "max_passive_K", "bandwidth")}
+    for a in range(0, n, 8):  # 8 designs × 1000 samples a pass: bounded memory
+        sl = slice(a, a + 8)
+        p = HapticParams(m1[sl], b1[sl], box.k[sl, None], box.b[sl, None], box.m2[sl, None],
+                         delay=tau[sl])  # fmt: skip
+        dense["max_stable_K"][sl] = np.min(stable_stiffness_batch(p), axis=1)
+        dense["max_passive_K"][sl] = np.min(max_passive_stiffness(p), axis=1)
+        dense["bandwidth"][sl] = np.nanmin(bandwidth(p, K[sl]), axis=1)
+    for q, d in dense.items():
+        worst = lim[f"{q}_worst"]
+        assert np.all(worst <= d * (1 + 1e-9)), (q, np.max(worst / d))
+        assert np.all(worst >= 0.98 * d), (q, np.min(worst / d))
