@@ -30,7 +30,6 @@ from geometry.section import build_section
 from magnetics.fem import build_grid, solve_fem
 from magnetics.materials import MU0, magnetic
 from magnetics.network import network_from_regions, solve_network
-from magnetics.network.solve import _odd
 
 
 def main() -> None:
@@ -41,7 +40,8 @@ def main() -> None:
     shell, window, air = abs(x[m - 1] + x[m]), abs(x[m]), abs(x[m + 1])
     back = shell - air
     steel = magnetic(net.steel)
-    mmf = float(_odd(steel, np.array(back), net.back_k[0], net.back_w[0])[0])
+    # the back iron's MMF, w·H(k·Φ) (one Gauss point), as the network's kernel reads it
+    mmf = float(net.back_w[0, 0] * steel.h_dh(np.array([net.back_k[0, 0] * back]))[0][0])
     spec = {sp.name: sp for sp in rg}
     b, pole = spec["shell_back"], spec["shell_A"]
     r_p, r0, r1 = at[pole.r0], at[b.r0], at[b.r1]

@@ -31,6 +31,7 @@ LAZY_OK = {
     "dask": "only when a sweep runs on a Dask cluster",
     "distributed": "≈ 1 s; only when a sweep runs on a Dask cluster",
     "pyarrow": "≈ 0.3 s; only when a sweep writes or reads Parquet",
+    "numba": "≈ 0.3 s and its compiled kernels; only when the network is solved",
 }
 
 

@@ -8,21 +8,37 @@ sheaths' q (2m + 1). The equations are the loop MMF balances — the gradient of
 (convex) magnetic co-energy — so the Jacobian is symmetric positive definite: each sheath
 couples to its own rung only and is condensed out element by element, leaving a tridiagonal
 chain with a 3 × 3 tail, bordered by the two end leaks. Damped Newton with a backtracking
-line search on the residual, each step one batched Thomas solve and a 2 × 2 Schur
-complement, vectorised over designs × currents. A row that does not converge is refused
-(``NetworkConvergenceError``, the rows named), never returned.
+line search on the residual, each step one Thomas solve and a 2 × 2 Schur complement. A row
+that does not converge is refused (``NetworkConvergenceError``, the rows named), never
+returned.
+
+**One compiled kernel** (issue 31, docs/architecture.md): the residual, its Jacobian, the
+Newton step and the whole Newton with its line search are the plain Python functions below,
+compiled by numba (``@njit(cache=True)``, ``_kernels``) and run one design and current at a
+time; they are the network's only solver. numba is imported, and the kernels compiled or
+loaded from numba's cache, on the first solve of a process (``_kernels``); a first compile
+on a machine (≈ 10 s) says so on stderr. ``NUMBA_DISABLE_JIT=1`` runs the same functions as
+Python (the debug path: slow, the same answers). The network's arrays travel to the kernel
+packed one row per design (``_pack``), each material as its piecewise-linear H(B) on a
+uniform grid (``_tables``: the tables ``BHCurve.h_dh`` and ``h_mean_dh`` index).
 """
 
 from __future__ import annotations
 
+import functools
+import math
+import sys
+import threading
+import time
 from collections.abc import Mapping
-from dataclasses import fields, replace
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from geometry.validation import ParameterError
-from magnetics.materials import MATERIALS, Magnetic, magnetic
+from magnetics.materials import MATERIALS, MU0, LinearMaterial, Magnetic, magnetic
 from magnetics.network.build import Network
 
 FloatArray = NDArray[np.float64]
@@ -32,246 +48,495 @@ class NetworkConvergenceError(ParameterError):
     """The network's Newton did not converge for some designs (they are named)."""
 
 
-def _terms(mat: Magnetic, a: FloatArray, k: FloatArray, w: FloatArray, mean: bool = False):  # type: ignore[no-untyped-def]  # fmt: skip
-    """w·H(k·a) and its a-derivative w·k·H'(k·a) at fluxes a ≥ 0, element by element
-    (``mean``: w·H̄(k·a), a build-up kernel, ``Network``)."""
-    h, dh = (mat.h_mean_dh if mean else mat.h_dh)(k * a)
-    h *= w
-    dh *= w
-    dh *= k
-    return h, dh
+_BLOCK = 2048  # designs whose currents' order of continuation is read from their median
+_FLOOR = 1e-8  # relative residual accepted when the line search finds no decrease
+_LINE_STEPS = 30  # step halvings in the line search
+_BAND_ITER = 30  # Newton steps of a band element's inner solve
+_COMPILE_NOTICE_S = 1.0  # a first compile longer than this says so on stderr
+
+# The network's per-design arrays, packed in this order one row per design (``_pack``); the
+# kernels read field F of design s at P[s, off[F] + j], j the field's flattened index.
+_PACKED = ("fluid_k", "fluid_w", "wall_k", "wall_w", "rung_k", "rung_w", "sheath_k",
+           "sheath_w", "rung_perm", "rung_fluid", "core_k", "core_w", "core_sheath_k",
+           "core_sheath_w", "shell_k", "shell_w", "back_k", "back_w", "window_perm",
+           "window_fluid", "band_len", "outer_air", "end_leak")  # fmt: skip
+(_FK, _FW, _WK, _WW, _RK, _RW, _SK, _SW, _RP, _RF, _CK, _CW, _CSK, _CSW, _HK, _HW, _BK, _BW,
+ _WP, _WF, _BL, _AIR, _LEAK) = range(len(_PACKED))  # fmt: skip
+_STEEL, _FLUID = 0, 1  # the materials' rows in the tables (``_tables``)
 
 
-def _odd(mat: Magnetic, phi: FloatArray, k: FloatArray, w: FloatArray, mean: bool = False):  # type: ignore[no-untyped-def]  # fmt: skip
-    """Σ_j w·H(k·Φ) over the last axis and its Φ-derivative, for Φ of any sign (H odd;
-    ``mean``: build-up kernels, ``_terms``)."""
-    h, dh = _terms(mat, np.abs(phi)[..., None], k, w, mean)
-    return np.copysign(_rowsum(h), phi), _rowsum(dh)
+def _pack(net: Network) -> tuple[FloatArray, NDArray[np.int64]]:
+    """(P (S, L), off): the ``_PACKED`` fields of ``net``, one row per design."""
+    size = net.turns.size
+    cols = [np.asarray(getattr(net, name), dtype=float).reshape(size, -1) for name in _PACKED]
+    off = np.concatenate([[0], np.cumsum([c.shape[1] for c in cols])[:-1]]).astype(np.int64)
+    return np.ascontiguousarray(np.concatenate(cols, axis=1)), off
 
 
-def _rowsum(a: FloatArray) -> FloatArray:
-    """Σ over the last axis, short (1–12 points): a sum of slices beats a strided reduce."""
-    out = a[..., 0].copy()
-    for j in range(1, a.shape[-1]):
-        out += a[..., j]
-    return out
+def _tables(steel: Magnetic, fluid: Magnetic) -> tuple[FloatArray, FloatArray, NDArray[np.int64]]:
+    """(T (2, N, 3), 1/step (2,), segments (2,)): the steel's and the fluid's H(B) as the
+    piecewise-linear curve on a uniform grid that ``BHCurve.h_dh`` indexes (per segment i:
+    slope, H = icpt + slope·B, ∫0^B H = gcpt + icpt·B + slope·B²/2); a linear material is
+    one segment of slope 1/μ through the origin (1/step 0: every B is in it)."""
+    rows = []
+    for mat in (steel, fluid):
+        if isinstance(mat, LinearMaterial):
+            nu = 1.0 / (MU0 * mat.mu_r)  # H = B/μ, as LinearMaterial.h_dh
+            rows.append((0.0, np.array([nu]), np.zeros(1), np.zeros(1)))
+        else:
+            rows.append((mat._inv_step, mat._slope, mat._icpt, mat._gcpt))
+    n = max(r[1].size for r in rows)
+    table = np.zeros((2, n, 3))  # a segment's three numbers side by side (one cache line)
+    for i, (_, slope, icpt, gcpt) in enumerate(rows):
+        table[i, : slope.size, 0], table[i, : slope.size, 1] = slope, icpt
+        table[i, : slope.size, 2] = gcpt
+    inv = np.array([r[0] for r in rows], dtype=float)
+    return table, inv, np.array([r[1].size for r in rows], dtype=np.int64)
 
 
-def _each(mat: Magnetic, phi: FloatArray, k: FloatArray, w: FloatArray):  # type: ignore[no-untyped-def]
-    """w·H(k·Φ) and its Φ-derivative element by element (one Gauss point each), Φ of any
-    sign (H odd)."""
-    h, dh = _terms(mat, np.abs(phi), k, w)
-    return np.copysign(h, phi), dh
+# ---- the kernels: plain Python, compiled by ``_kernels`` -----------------------------------
+# x of one design and current: x[:m] loops, x[m] window, x[m + 1] outer air, x[m + 2 : m + 4]
+# end leaks, x[m + 4 :] sheaths (wall j in zone z at 2j + z, the core over the band at 2m).
+# The Jacobian of one row, flat (``_jac_layout``): the chain's diagonal (m − 1) and
+# off-diagonal (m − 1), the 3 × 3 tail (row-major), the border (m + 2) × 2, the corner 2 × 2,
+# the band fluid's B (m: the drums' bands, the window), the sheaths' slopes a and a + b
+# (2m + 1 each).
 
 
-def _band(fluid: Magnetic, y: FloatArray, perm: FloatArray, area: FloatArray, length: FloatArray,
-          start: FloatArray | None = None):  # type: ignore[no-untyped-def]  # fmt: skip
+def _jac_layout(m):  # type: ignore[no-untyped-def]
+    """Offsets of (off-diagonal, tail, border, corner, band state, sa, sk) and the length."""
+    o_off = m - 1
+    o_tail = 2 * m - 2
+    o_border = o_tail + 9
+    o_corner = o_border + 2 * (m + 2)
+    o_state = o_corner + 4
+    o_sa = o_state + m
+    o_sk = o_sa + 2 * m + 1
+    return o_off, o_tail, o_border, o_corner, o_state, o_sa, o_sk, o_sk + 2 * m + 1
+
+
+def _h_dh(tab, inv, nseg, mat, b):  # type: ignore[no-untyped-def]
+    """(H, dH/dB) of material ``mat`` at B ≥ 0 (``BHCurve.h_dh``: the segment's line)."""
+    t = b * inv[mat]
+    top = nseg[mat] - 1
+    if t > top:
+        t = top
+    i = int(t)
+    s = tab[mat, i, 0]
+    return tab[mat, i, 1] + s * b, s
+
+
+def _h_mean_dh(tab, inv, nseg, mat, b):  # type: ignore[no-untyped-def]
+    """(H̄, dH̄/dB), H̄(B) = (1/B)·∫0^B H, at B ≥ 0 (``BHCurve.h_mean_dh``)."""
+    t = b * inv[mat]
+    top = nseg[mat] - 1
+    if t > top:
+        t = top
+    i = int(t)
+    s = tab[mat, i, 0]
+    bb = max(b, 1e-300)
+    g = tab[mat, i, 2] / bb
+    h = tab[mat, i, 1] + g
+    s2 = 0.5 * s
+    h = h + s2 * b
+    return h, s2 - g / bb
+
+
+def _odd(tab, inv, nseg, mat, phi, k, w, mean):  # type: ignore[no-untyped-def]
+    """w·H(k·|Φ|)·sign(Φ) and its Φ-derivative w·k·H'(k·|Φ|), one Gauss point (``mean``:
+    a build-up kernel, w·H̄(k·|Φ|), ``Network``)."""
+    a = abs(phi)
+    if mean:
+        h, dh = _h_mean_dh(tab, inv, nseg, mat, k * a)
+    else:
+        h, dh = _h_dh(tab, inv, nseg, mat, k * a)
+    return math.copysign(h * w, phi), dh * w * k
+
+
+def _pair(tab, inv, nseg, y, q, ks, ws, kf, wf, mean):  # type: ignore[no-untyped-def]
+    """A wall's steel section (kernel ks, ws) in parallel with its fluid sheath (kf, wf)
+    carrying y − q and q: (the steel's MMF, the residual F_fluid(q) − F_steel(y − q), the
+    steel's slope a, a + the sheath's slope b, the pair's slope a·b/(a + b)). Without a
+    sheath (wf = 0) the residual is q and the slopes (0, 1, a): q stays 0, the steel alone."""
+    fs, a = _odd(tab, inv, nseg, 0, y - q, ks, ws, mean)
+    ff, b = _odd(tab, inv, nseg, 1, q, kf, wf, mean)
+    if wf > 0:
+        ab = a + b
+        return fs, ff - fs, a, ab, a * b / ab
+    return fs, q, 0.0, 1.0, a
+
+
+def _band(tab, inv, nseg, y, perm, area, length, start, warm):  # type: ignore[no-untyped-def]
     """MMF F (odd in y) and dF/dy of a band element: a linear permeance ``perm`` (H) in
-    parallel with ``area`` (m²) of ``fluid`` over ``length`` (m), carrying flux y.
+    parallel with ``area`` (m²) of fluid over ``length`` (m), carrying flux y.
 
     The two share F = l·H: |y| = perm·l·H(B) + A·B for the fluid's B, solved by Newton on
     B from above the root (the linear start B0 = |y|/(A + perm·l·H'(0)) has r ≥ 0, since
-    H(B) ≥ H'(0)·B on a saturating curve), or from ``start`` (the fluid's B at the last
-    Newton iterate: 1–2 steps instead of 4–6); dF/dy = l·H'/(perm·l·H' + A). Without fluid
-    (A = 0) F = |y|/perm; with neither (the core's and shell's rungs) F = 0. Returns
-    (F, dF/dy, the fluid's B)."""
-    a = np.abs(y)
+    H(B) ≥ H'(0)·B on a saturating curve), or from ``start`` if ``warm`` (the fluid's B at
+    the last Newton iterate: 1–2 steps instead of 4–6); dF/dy = l·H'/(perm·l·H' + A).
+    Without fluid (A = 0) F = |y|/perm; with neither (the core's and shell's rungs) F = 0.
+    Returns (F, dF/dy, the fluid's B)."""
+    a = abs(y)
     fl = area > 0
     lp = perm * length
-    s0 = fluid.h_dh(np.zeros(1))[1][0]
-    b = a / np.where(fl, area + lp * s0, 1.0) if start is None else start.copy()
-    safe = np.where(fl, area, 1.0)  # the elements without fluid iterate harmlessly
+    safe = area if fl else 1.0  # the elements without fluid iterate harmlessly
+    if warm:
+        b = start
+    else:
+        b = a / ((area + lp * tab[1, 0, 0]) if fl else 1.0)  # H'(0): the first segment's
     for _ in range(_BAND_ITER):
-        h, dh = fluid.h_dh(b)
-        r = np.where(fl, lp * h + area * b - a, 0.0)
-        b = np.maximum(b - r / (lp * dh + safe), 0.0)
-        if np.all(np.abs(r) <= 1e-13 * a):
+        h, dh = _h_dh(tab, inv, nseg, 1, b)
+        r = (lp * h + area * b - a) if fl else 0.0
+        b = max(b - r / (lp * dh + safe), 0.0)
+        if abs(r) <= 1e-13 * a:
             break
-    h, dh = fluid.h_dh(b)
-    lin = np.where(perm > 0, 1.0 / np.where(perm > 0, perm, 1.0), 0.0)
-    f = np.where(fl, length * h, a * lin)
-    d = np.where(fl, length * dh / (lp * dh + safe), lin)
-    return np.copysign(f, y), d, b
+    h, dh = _h_dh(tab, inv, nseg, 1, b)
+    lin = 1.0 / perm if perm > 0 else 0.0
+    if fl:
+        return math.copysign(length * h, y), length * dh / (lp * dh + safe), b
+    return math.copysign(a * lin, y), lin, b
 
 
-_BAND_ITER = 30
-
-
-def _pair(steel: Magnetic, fluid: Magnetic, y, q, ks, ws, kf, wf, mean):  # type: ignore[no-untyped-def]
-    """A wall's steel section (kernel ks, ws) in parallel with its fluid sheath (kf, wf)
-    carrying y − q and q, both build-up kernels if ``mean``: (the steel's MMF, the residual
-    F_fluid(q) − F_steel(y − q), the steel's slope a, a + the sheath's slope b, the pair's
-    slope a·b/(a + b)). Without a sheath (wf = 0) the residual is q and the slopes (0, 1, a):
-    q stays 0 and the section is the steel alone."""
-    fs, a = _odd(steel, y - q, ks, ws, mean)
-    ff, b = _odd(fluid, q, kf, wf, mean)
-    has = wf.sum(-1) > 0
-    ab = np.where(has, a + b, 1.0)
-    return (fs, np.where(has, ff - fs, q), np.where(has, a, 0.0), ab,
-            np.where(has, a * b / ab, a))  # fmt: skip
-
-
-def _residual(net: Network, mats, x: FloatArray, ni: FloatArray, warm=None):  # type: ignore[no-untyped-def]
-    """Loop MMF residuals (S, C, ``Network.unknowns``) at the loop fluxes x (films, window,
-    outer air, the two end leaks, the sheaths') and the Jacobian: the chain's diagonal (…, m − 1)
-    and off-diagonal (…, m − 1) for loops 0 … m − 2, the dense block (…, 3, 3) of loops
-    m − 1, window, outer air, the end leaks' border (…, m + 2, 2) and block (…, 2, 2), the
-    band fluid's state, and the sheaths' slopes (a, a + b) (…, 2m + 1) each.
+def _residual(p, off, m, npole, tab, inv, nseg, x, ni, jw, warm, res, jac, work):  # type: ignore[no-untyped-def]
+    """Loop MMF residuals ``res`` of one design and current at the loop fluxes x, and its
+    Jacobian ``jac`` (``_jac_layout``); the bands' Newton starts from ``jw``'s band state if
+    ``warm``. ``work`` (≥ 5 rows of m + 1): scratch.
 
     End leak z (zone A, B) runs from the pole to the core past the zone's far end, in
     parallel with the zone's stack of films and drum walls: film k carries x_k − e_z in
-    zone z (``_end_leak``). Sheath q (wall j in zone A, B, then the core over the band)
-    carries q of its rung's flux y, the wall's steel y − q (``_pair``); its loop's
+    zone z (``build._end_leak``). Sheath q (wall j in zone A, B, then the core over the
+    band) carries q of its rung's flux y, the wall's steel y − q (``_pair``); its loop's
     equation is F_fluid(q) = F_steel(y − q). The chain's rows hold the rungs' slopes with
     the sheaths condensed out, a·b/(a + b) (``_solve`` restores them)."""
-    steel, fluid = magnetic(net.steel, mats), magnetic(net.fluid, mats)
-    ex = lambda a: a[:, None]  # noqa: E731  (S, 1, …): broadcast over currents
-    m = net.m
-    xl, xw, xo, xe = x[..., :m], x[..., m], x[..., m + 1], x[..., net.leaks]
-    q = x[..., net.sheaths]
-    # each zone's films and drum walls, at the zone's film flux (…, m, 2)
-    xz = np.stack([xl - xe[..., :1], xl - xe[..., 1:]], axis=-1)
-    a, da = _each(fluid, xz, ex(net.fluid_k), ex(net.fluid_w))
-    b, db = _each(steel, xz, ex(net.wall_k), ex(net.wall_w))
-    gzz, dgzz = a + b, da + db
-    gz, dgz = (gzz[..., 0], gzz[..., 1]), (dgzz[..., 0], dgzz[..., 1])
-    g, dg = gz[0] + gz[1], dgz[0] + dgz[1]
+    o_off, o_tail, o_border, o_corner, o_state, o_sa, o_sk, _ = _jac_layout(m)
+    y, f, df, g, dg = work[0], work[1], work[2], work[3], work[4]
+    xw, xo, e0, e1 = x[m], x[m + 1], x[m + 2], x[m + 3]
+    # each zone's film and drum wall at the zone's film flux; their sums over the stack
+    sg0, sg1, sdg0, sdg1 = 0.0, 0.0, 0.0, 0.0
+    for k in range(m):
+        z0 = x[k] - e0
+        a, da = _odd(tab, inv, nseg, 1, z0, p[off[_FK] + 2 * k], p[off[_FW] + 2 * k], False)
+        b, db = _odd(tab, inv, nseg, 0, z0, p[off[_WK] + 2 * k], p[off[_WW] + 2 * k], False)
+        z1 = x[k] - e1
+        a1, da1 = _odd(tab, inv, nseg, 1, z1, p[off[_FK] + 2 * k + 1], p[off[_FW] + 2 * k + 1],
+                       False)  # fmt: skip
+        b1, db1 = _odd(tab, inv, nseg, 0, z1, p[off[_WK] + 2 * k + 1], p[off[_WW] + 2 * k + 1],
+                       False)  # fmt: skip
+        g0, g1, dg0, dg1 = a + b, a1 + b1, da + db, da1 + db1
+        g[k], dg[k] = g0 + g1, dg0 + dg1
+        jac[o_border + 2 * k], jac[o_border + 2 * k + 1] = -dg0, -dg1
+        sg0 += g0
+        sg1 += g1
+        sdg0 += dg0
+        sdg1 += dg1
+    for i in range(2 * m, 2 * m + 4):  # the leaks' own rows of the border
+        jac[o_border + i] = 0.0
     # rung fluxes, A → B: y0 = −x0 (core), y_i = x_{i−1} − x_i, y_m = x_{m−1} + x_w (shell)
-    y = np.concatenate([-xl[..., :1], xl[..., :-1] - xl[..., 1:], (xl[..., -1] + xw)[..., None]],
-                       axis=-1)  # fmt: skip
-    f, df = np.zeros_like(y), np.zeros_like(y)
+    y[0] = -x[0]
+    for i in range(1, m):
+        y[i] = x[i - 1] - x[i]
+    y[m] = x[m - 1] + xw
     # every wall's steel in both zones beside its fluid sheaths (rungs 0 … m − 1)
-    shape = (*q.shape[:-1], m, 2)
-    fs, rq, pa, pk, cond = _pair(steel, fluid, y[..., :m, None], q[..., : 2 * m].reshape(shape),
-                                 ex(net.rung_k), ex(net.rung_w),
-                                 ex(net.sheath_k), ex(net.sheath_w), True)  # fmt: skip
-    f[..., :m] = fs[..., 0] + fs[..., 1]  # zones A and B (slices beat a reduce over 2)
-    df[..., :m] = cond[..., 0] + cond[..., 1]
+    for j in range(m):
+        fj, dfj = 0.0, 0.0
+        for z in range(2):
+            i = 2 * j + z
+            fs, rq, pa, pk, cond = _pair(tab, inv, nseg, y[j], x[m + 4 + i], p[off[_RK] + i],
+                                         p[off[_RW] + i], p[off[_SK] + i], p[off[_SW] + i],
+                                         True)  # fmt: skip
+            fj += fs
+            dfj += cond
+            res[m + 4 + i], jac[o_sa + i], jac[o_sk + i] = rq, pa, pk
+        f[j], df[j] = fj, dfj
     # the core over the band beside half of film 0
-    fc, rc, pac, pkc, dc = _pair(steel, fluid, y[..., 0], q[..., 2 * m],
-                                 ex(net.core_k), ex(net.core_w),
-                                 ex(net.core_sheath_k), ex(net.core_sheath_w), False)  # fmt: skip
-    f[..., 0] += fc
-    df[..., 0] += dc
-    # the drums' bands (rungs 1 … m − 1; the shell's is its own element below)
-    mid = slice(1, m)
-    band = ex(net.band_len)
-    fb, dfb, b_rung = _band(fluid, y[..., mid], ex(net.rung_perm[:, mid]),
-                            ex(net.rung_fluid[:, mid]), band[..., None],
-                            None if warm is None else warm[..., : m - 1])  # fmt: skip
-    f[..., mid] += fb
-    df[..., mid] += dfb
-    sh, dsh = _odd(steel, y[..., m], ex(net.shell_k), ex(net.shell_w))  # the poles
-    yb = y[..., m] - xo  # the back iron: the shell's flux less the outer air's
-    bk, dbk = _odd(steel, yb, ex(net.back_k), ex(net.back_w))
-    f[..., m] += sh + bk
-    win, dwin, b_win = _band(fluid, xw, ex(net.window_perm), ex(net.window_fluid), band,
-                             None if warm is None else warm[..., m - 1])  # fmt: skip
-    air = net.outer_air[:, None]
-    res = np.empty_like(x)
-    res[..., :m] = g + f[..., 1:] - f[..., :-1]
-    res[..., m - 1] -= ni
-    res[..., m] = f[..., m] + win - ni
-    res[..., m + 1] = air * xo - bk
-    leak = ex(net.end_leak)
-    res[..., net.leaks] = leak * xe - np.stack([_rowsum(gz[0]), _rowsum(gz[1])], axis=-1)
-    res[..., net.sheaths] = np.concatenate([rq.reshape(*q.shape[:-1], 2 * m), rc[..., None]], -1)
-    dm = df[..., m] + dsh + dbk  # dF_shell/dy_m
-    diag = dg[..., : m - 1] + df[..., 1:m] + df[..., : m - 1]
-    off = -df[..., 1:m]
-    tail = np.empty((*x.shape[:-1], 3, 3))
-    tail[..., 0, 0] = dg[..., m - 1] + dm + df[..., m - 1]
-    tail[..., 0, 1] = tail[..., 1, 0] = dm
-    tail[..., 1, 1] = dm + dwin
-    tail[..., 0, 2] = tail[..., 2, 0] = tail[..., 1, 2] = tail[..., 2, 1] = -dbk
-    tail[..., 2, 2] = air + dbk
-    border = np.zeros((*x.shape[:-1], m + 2, 2))
-    border[..., :m, 0], border[..., :m, 1] = -dgz[0], -dgz[1]
-    corner = np.zeros((*x.shape[:-1], 2, 2))
-    corner[..., 0, 0] = leak[..., 0] + _rowsum(dgz[0])
-    corner[..., 1, 1] = leak[..., 1] + _rowsum(dgz[1])
-    # the band fluid's B, the next call's start (``_band``), travels with the Jacobian
-    state = np.concatenate([b_rung, b_win[..., None]], axis=-1)
-    flat = (*q.shape[:-1], 2 * m)
-    sa = np.concatenate([pa.reshape(flat), pac[..., None]], axis=-1)
-    sk = np.concatenate([pk.reshape(flat), pkc[..., None]], axis=-1)
-    return res, (diag, off, tail, border, corner, state, sa, sk)
+    fc, rc, pac, pkc, dc = _pair(tab, inv, nseg, y[0], x[3 * m + 4], p[off[_CK]], p[off[_CW]],
+                                 p[off[_CSK]], p[off[_CSW]], False)  # fmt: skip
+    f[0] += fc
+    df[0] += dc
+    res[3 * m + 4], jac[o_sa + 2 * m], jac[o_sk + 2 * m] = rc, pac, pkc
+    # the drums' bands (rungs 1 … m − 1; the shell's is its window below)
+    band = p[off[_BL]]
+    for j in range(1, m):
+        fb, dfb, bs = _band(tab, inv, nseg, y[j], p[off[_RP] + j], p[off[_RF] + j], band,
+                            jw[o_state + j - 1], warm)  # fmt: skip
+        f[j] += fb
+        df[j] += dfb
+        jac[o_state + j - 1] = bs
+    sh, dsh = 0.0, 0.0  # the poles, radially (Gauss points in ln r)
+    for j in range(npole):
+        h, dh = _odd(tab, inv, nseg, 0, y[m], p[off[_HK] + j], p[off[_HW] + j], False)
+        sh += h
+        dsh += dh
+    yb = y[m] - xo  # the back iron: the shell's flux less the outer air's
+    bk, dbk = _odd(tab, inv, nseg, 0, yb, p[off[_BK]], p[off[_BW]], False)
+    f[m] = sh + bk
+    win, dwin, bw = _band(tab, inv, nseg, xw, p[off[_WP]], p[off[_WF]], band,
+                          jw[o_state + m - 1], warm)  # fmt: skip
+    jac[o_state + m - 1] = bw
+    air = p[off[_AIR]]
+    for k in range(m):
+        res[k] = g[k] + f[k + 1] - f[k]
+    res[m - 1] -= ni
+    res[m] = f[m] + win - ni
+    res[m + 1] = air * xo - bk
+    leak0, leak1 = p[off[_LEAK]], p[off[_LEAK] + 1]
+    res[m + 2] = leak0 * e0 - sg0
+    res[m + 3] = leak1 * e1 - sg1
+    dm = dsh + dbk  # dF_shell/dy_m
+    for i in range(m - 1):
+        jac[i] = dg[i] + df[i + 1] + df[i]
+        jac[o_off + i] = -df[i + 1]
+    jac[o_tail] = dg[m - 1] + dm + df[m - 1]
+    jac[o_tail + 1] = jac[o_tail + 3] = dm
+    jac[o_tail + 4] = dm + dwin
+    jac[o_tail + 2] = jac[o_tail + 6] = jac[o_tail + 5] = jac[o_tail + 7] = -dbk
+    jac[o_tail + 8] = air + dbk
+    jac[o_corner], jac[o_corner + 1] = leak0 + sdg0, 0.0
+    jac[o_corner + 2], jac[o_corner + 3] = 0.0, leak1 + sdg1
 
 
-def _solve(jac, rhs: FloatArray) -> FloatArray:  # type: ignore[no-untyped-def]
-    """Solve J·d = rhs, J symmetric: the sheaths condensed out (each couples to its rung's
-    flux only: a sheath row reads −a·dy + (a + b)·dq = r_q, so its rung's rows gain
-    a·r_q/(a + b), and dq = (r_q + a·dy)/(a + b) after), then the ladder
+def _solve(m, jac, rhs, out, work):  # type: ignore[no-untyped-def]
+    """Solve J·d = rhs into ``out``, J symmetric: the sheaths condensed out (each couples to
+    its rung's flux only: a sheath row reads −a·dy + (a + b)·dq = r_q, so its rung's rows
+    gain a·r_q/(a + b), and dq = (r_q + a·dy)/(a + b) after), then the ladder
     (``_solve_ladder``) bordered by the two end leaks, by their 2 × 2 Schur complement
-    (J is SPD, so is the complement)."""
-    diag, off, tail, border, corner, _, sa, sk = jac
-    n = border.shape[-2]
-    m = n - 2
-    rq = rhs[..., n + 2 :]
-    t = sa * rq / sk
-    tr = t[..., : 2 * m : 2] + t[..., 1 : 2 * m : 2]  # per rung 0 … m − 1
-    tr[..., 0] += t[..., 2 * m]
-    rl = rhs[..., : n + 2].copy()
-    rl[..., : m - 1] += tr[..., 1:] - tr[..., :-1]  # loop k: rungs k + 1 (+) and k (−)
-    rl[..., m - 1] -= tr[..., m - 1]
-    # the ladder's solve for the right-hand side and both border columns at once
-    uv = _solve_ladder((diag, off, tail), np.concatenate([rl[..., :n, None], border], -1))
-    u, v = uv[..., 0], uv[..., 1:]
-    bt = np.swapaxes(border, -1, -2)
-    schur = corner - bt @ v  # D − Bᵀ·A⁻¹·B, (…, 2, 2)
-    re = rl[..., n:] - (bt @ u[..., None])[..., 0]
-    det = schur[..., 0, 0] * schur[..., 1, 1] - schur[..., 0, 1] * schur[..., 1, 0]
-    e0 = (schur[..., 1, 1] * re[..., 0] - schur[..., 0, 1] * re[..., 1]) / det
-    e1 = (schur[..., 0, 0] * re[..., 1] - schur[..., 1, 0] * re[..., 0]) / det
-    out = np.empty_like(rhs)
-    out[..., n], out[..., n + 1] = e0, e1
-    out[..., :n] = u - v[..., 0] * e0[..., None] - v[..., 1] * e1[..., None]
-    d = out[..., :m]
-    dy = np.concatenate([-d[..., :1], d[..., :-1] - d[..., 1:]], axis=-1)  # rungs 0 … m − 1
-    dyq = np.concatenate([np.repeat(dy, 2, axis=-1), dy[..., :1]], axis=-1)
-    out[..., n + 2 :] = (rq + sa * dyq) / sk
-    return out
-
-
-def _solve_ladder(jac, rhs: FloatArray) -> FloatArray:  # type: ignore[no-untyped-def]
-    """Solve the ladder's J·D = rhs (…, n, K), J symmetric: a tridiagonal chain (loops
-    0 … m − 2) ending in a dense 3 × 3 block (loop m − 1, window, outer air); Thomas down
-    the chain, batched over designs, currents and the K right-hand sides."""
-    diag, off, tail = jac
-    n = diag.shape[-1]  # m − 1 chain rows before the block
-    c = np.empty_like(off)
-    d = np.empty_like(rhs[..., :n, :])
+    (J is SPD, so is the complement). ``work`` (≥ 3 + 3 + 2 rows of m + 2): scratch."""
+    o_off, o_tail, o_border, o_corner, _, o_sa, o_sk, _ = _jac_layout(m)
+    n = m + 2
+    q0 = n + 2  # the sheaths' first row
+    u = work[0:3]  # the ladder's right-hand sides: the loops' rows, then the border's columns
+    tr = work[6]
+    rl = work[7]
+    for j in range(m):
+        i = 2 * j
+        tr[j] = (jac[o_sa + i] * rhs[q0 + i] / jac[o_sk + i]
+                 + jac[o_sa + i + 1] * rhs[q0 + i + 1] / jac[o_sk + i + 1])  # fmt: skip
+    tr[0] += jac[o_sa + 2 * m] * rhs[q0 + 2 * m] / jac[o_sk + 2 * m]
+    for i in range(n + 2):
+        rl[i] = rhs[i]
+    for i in range(m - 1):  # loop i: rungs i + 1 (+) and i (−)
+        rl[i] += tr[i + 1] - tr[i]
+    rl[m - 1] -= tr[m - 1]
     for i in range(n):
-        b = diag[..., i] - (off[..., i - 1] * c[..., i - 1] if i else 0.0)
-        c[..., i] = off[..., i] / b
-        prev = off[..., i - 1, None] * d[..., i - 1, :] if i else 0.0
-        d[..., i, :] = (rhs[..., i, :] - prev) / b[..., None]
-    blk = tail.copy()
-    r = rhs[..., n:, :].copy()
+        u[0, i] = rl[i]
+        u[1, i] = jac[o_border + 2 * i]
+        u[2, i] = jac[o_border + 2 * i + 1]
+    _solve_ladder(m, jac, o_off, o_tail, u, work[3:6])
+    s00, s01, s10, s11, r0, r1 = jac[o_corner], jac[o_corner + 1], jac[o_corner + 2], \
+        jac[o_corner + 3], rl[n], rl[n + 1]  # fmt: skip
+    for i in range(n):  # D − Bᵀ·A⁻¹·B and its right-hand side
+        b0, b1 = jac[o_border + 2 * i], jac[o_border + 2 * i + 1]
+        s00 -= b0 * u[1, i]
+        s01 -= b0 * u[2, i]
+        s10 -= b1 * u[1, i]
+        s11 -= b1 * u[2, i]
+        r0 -= b0 * u[0, i]
+        r1 -= b1 * u[0, i]
+    det = s00 * s11 - s01 * s10
+    e0 = (s11 * r0 - s01 * r1) / det
+    e1 = (s00 * r1 - s10 * r0) / det
+    out[n], out[n + 1] = e0, e1
+    for i in range(n):
+        out[i] = u[0, i] - u[1, i] * e0 - u[2, i] * e1
+    for j in range(m):  # the sheaths back from their rungs' dy
+        dy = -out[0] if j == 0 else out[j - 1] - out[j]
+        for z in range(2):
+            i = 2 * j + z
+            out[q0 + i] = (rhs[q0 + i] + jac[o_sa + i] * dy) / jac[o_sk + i]
+    i = 2 * m
+    out[q0 + i] = (rhs[q0 + i] + jac[o_sa + i] * -out[0]) / jac[o_sk + i]
+
+
+def _solve_ladder(m, jac, o_off, o_tail, u, work):  # type: ignore[no-untyped-def]
+    """Solve the ladder's J·X = U in place, U (3, m + 2): three right-hand sides, J
+    symmetric: a tridiagonal chain (loops 0 … m − 2) ending in a dense 3 × 3 block (loop
+    m − 1, window, outer air). Thomas down the chain, the block by its adjugate."""
+    n = m - 1  # chain rows before the block
+    c = work[0]
+    for i in range(n):
+        b = jac[i] - (jac[o_off + i - 1] * c[i - 1] if i else 0.0)
+        c[i] = jac[o_off + i] / b
+        for r in range(3):
+            prev = jac[o_off + i - 1] * u[r, i - 1] if i else 0.0
+            u[r, i] = (u[r, i] - prev) / b
+    a, bb, cc = jac[o_tail], jac[o_tail + 1], jac[o_tail + 2]
+    d, e, f = jac[o_tail + 4], jac[o_tail + 5], jac[o_tail + 8]
     if n:
-        blk[..., 0, 0] -= off[..., n - 1] * c[..., n - 1]
-        r[..., 0, :] -= off[..., n - 1, None] * d[..., n - 1, :]
-    out = np.empty_like(rhs)
-    out[..., n:, :] = _solve3(blk, r)
+        a -= jac[o_off + n - 1] * c[n - 1]
+        for r in range(3):
+            u[r, n] -= jac[o_off + n - 1] * u[r, n - 1]
+    # the symmetric 3 × 3 block by its adjugate
+    ca, cb, c3 = d * f - e * e, cc * e - bb * f, bb * e - cc * d
+    cd, ce, cf = a * f - cc * cc, bb * cc - a * e, a * d - bb * bb
+    det = 1.0 / (a * ca + bb * cb + cc * c3)
+    for r in range(3):
+        r0, r1, r2 = u[r, n], u[r, n + 1], u[r, n + 2]
+        u[r, n] = (ca * r0 + cb * r1 + c3 * r2) * det
+        u[r, n + 1] = (cb * r0 + cd * r1 + ce * r2) * det
+        u[r, n + 2] = (c3 * r0 + ce * r1 + cf * r2) * det
     for i in range(n - 1, -1, -1):
-        out[..., i, :] = d[..., i, :] - c[..., i, None] * out[..., i + 1, :]
-    return out
+        for r in range(3):
+            u[r, i] -= c[i] * u[r, i + 1]
 
 
-def _solve3(m: FloatArray, r: FloatArray) -> FloatArray:
-    """Solve the symmetric 3 × 3 systems m (…, 3, 3)·X = r (…, 3, K) by the adjugate
-    (batched LAPACK calls on 3 × 3 blocks cost more than the arithmetic)."""
-    a, b, c = m[..., 0, 0], m[..., 0, 1], m[..., 0, 2]
-    d, e, f = m[..., 1, 1], m[..., 1, 2], m[..., 2, 2]
-    ca, cb, cc = d * f - e * e, c * e - b * f, b * e - c * d
-    cd, ce, cf = a * f - c * c, b * c - a * e, a * d - b * b
-    inv = 1.0 / (a * ca + b * cb + c * cc)
-    r0, r1, r2 = r[..., 0, :], r[..., 1, :], r[..., 2, :]
-    out = np.empty_like(r)
-    out[..., 0, :] = (ca[..., None] * r0 + cb[..., None] * r1 + cc[..., None] * r2) * inv[..., None]
-    out[..., 1, :] = (cb[..., None] * r0 + cd[..., None] * r1 + ce[..., None] * r2) * inv[..., None]
-    out[..., 2, :] = (cc[..., None] * r0 + ce[..., None] * r1 + cf[..., None] * r2) * inv[..., None]
-    return out
+def _newton(p, off, m, npole, tab, inv, nseg, ni, start, warm_start, rtol, max_iter, x_out, ws):  # type: ignore[no-untyped-def]
+    """Damped Newton on one design at ampere-turns ``ni``, from ``start`` if
+    ``warm_start``, else from the linear network's solution; the answer in ``x_out``.
+    True if it converged. ``ws``: the workspace (``_workspace``)."""
+    nx = 3 * m + 5
+    x, xn, step, res, rn = ws[0], ws[1], ws[2], ws[3], ws[4]
+    jac, jn, work = ws[5], ws[6], ws[7:]
+    if warm_start:
+        for i in range(nx):
+            x[i] = start[i]
+    else:  # the linear start: one Newton step from 0
+        for i in range(nx):
+            xn[i] = 0.0
+        _residual(p, off, m, npole, tab, inv, nseg, xn, ni, jac, False, res, jac, work)
+        for i in range(nx):
+            rn[i] = -res[i]
+        _solve(m, jac, rn, x, work)
+    scale = max(abs(ni), 1e-300)
+    _residual(p, off, m, npole, tab, inv, nseg, x, ni, jac, False, res, jac, work)
+    stalled = False
+    for _ in range(max_iter):
+        err, norm0, big_x = 0.0, 0.0, 0.0
+        for i in range(nx):
+            r = res[i] / scale
+            err = max(err, abs(r))
+            norm0 += r * r
+            big_x = max(big_x, abs(x[i]))
+        if err <= rtol or stalled:
+            for i in range(nx):
+                x_out[i] = x[i]
+            return True
+        for i in range(nx):
+            rn[i] = -res[i]
+        _solve(m, jac, rn, step, work)
+        t = 1.0
+        better = False
+        for _ls in range(_LINE_STEPS):
+            for i in range(nx):
+                xn[i] = x[i] + t * step[i]
+            _residual(p, off, m, npole, tab, inv, nseg, xn, ni, jac, True, rn, jn, work)
+            norm = 0.0
+            for i in range(nx):
+                r = rn[i] / scale
+                norm += r * r
+            better = norm <= (1 - 1e-4 * t) * norm0
+            if better:
+                break
+            t *= 0.5
+        # At the rounding floor the residual is noise: the full Newton correction is then
+        # negligible against x, or (ill-conditioned, e.g. near-open leakage paths) no step
+        # along a descent direction lowers the residual. Either is the answer to working
+        # precision — the latter only once the residual is already below _FLOOR.
+        big_step = 0.0
+        for i in range(nx):
+            big_step = max(big_step, abs(step[i]))
+        stalled = big_step <= rtol * big_x or (not better and err <= _FLOOR)
+        x, xn = xn, x
+        res, rn = rn, res
+        jac, jn = jn, jac
+    return False
+
+
+def _workspace(m):  # type: ignore[no-untyped-def]
+    """Scratch rows for ``_newton`` (x, trial x, step, two residuals, two Jacobians, and
+    the residual's and the solve's work rows), each long enough for any of them."""
+    return np.zeros((7 + 8, max(_jac_layout(m)[-1], 3 * m + 5)))
+
+
+def _solve_rows(pk, off, m, npole, tab, inv, nseg, ni, order, start, has_start, rtol,
+                max_iter, out, ok):  # type: ignore[no-untyped-def]  # fmt: skip
+    """``solve_network``'s kernel: every design s, its currents in ``order[s]``, each Newton
+    started from ``start`` (if ``has_start``) or by continuation from the last current's
+    solution, the first (and a continuation that fails) from the linear network's; the
+    loop fluxes in ``out`` (S, C, 3m + 5), ``ok[s]`` False where one did not converge."""
+    ws = _workspace(m)
+    for s in range(pk.shape[0]):
+        p = pk[s]
+        prev = -1
+        for ci in range(ni.shape[1]):
+            c = order[s, ci]
+            if has_start:
+                conv = _newton(p, off, m, npole, tab, inv, nseg, ni[s, c], start[s, c], True,
+                               rtol, max_iter, out[s, c], ws)  # fmt: skip
+            else:
+                warm = prev >= 0
+                first = out[s, max(prev, 0)]
+                conv = _newton(p, off, m, npole, tab, inv, nseg, ni[s, c], first, warm, rtol,
+                               max_iter, out[s, c], ws)  # fmt: skip
+                if not conv and warm:  # again from the linear start
+                    conv = _newton(p, off, m, npole, tab, inv, nseg, ni[s, c], out[s, c],
+                                   False, rtol, max_iter, out[s, c], ws)  # fmt: skip
+            if not conv:
+                ok[s] = False
+            prev = c
+
+
+def _tangent_rows(pk, off, m, npole, tab, inv, nseg, x, ni, source, v):  # type: ignore[no-untyped-def]
+    """``flux_linkage``'s kernel: v = J⁻¹·source at the loop fluxes x (S, C, 3m + 5)."""
+    ws = _workspace(m)
+    res, jac, work = ws[3], ws[5], ws[7:]
+    for s in range(pk.shape[0]):
+        for c in range(x.shape[1]):
+            _residual(pk[s], off, m, npole, tab, inv, nseg, x[s, c], ni[s, c], jac, False, res,
+                      jac, work)  # fmt: skip
+            _solve(m, jac, source, v[s, c], work)
+
+
+_KERNELS = ("_jac_layout", "_h_dh", "_h_mean_dh", "_odd", "_pair", "_band", "_residual",
+            "_solve", "_solve_ladder", "_newton", "_workspace", "_solve_rows",
+            "_tangent_rows")  # fmt: skip
+
+
+@functools.cache
+def _kernels() -> Any:
+    """The compiled kernels (numba, cached on disk: a process after the machine's first
+    loads them; this module's globals, the kernels replaced by their compiled dispatchers).
+    Imports numba, then compiles or loads every kernel with ``solve_network``'s argument
+    types (a call on no design). A compile (numba's cache holds no ``_solve_rows`` yet) that
+    runs past ``_COMPILE_NOTICE_S`` says so on stderr while it runs, and its time after."""
+    import numba
+
+    g = globals()
+    for name in _KERNELS:  # in place: the kernels find each other compiled
+        g[name] = numba.njit(cache=True)(g[name])
+    entry = (g["_solve_rows"], g["_tangent_rows"])
+    cached = [Path(d.stats.cache_path).glob(f"{d.py_func.__module__.rpartition('.')[2]}."
+                                            f"{d.py_func.__name__}-*.nbi")
+              for d in entry if hasattr(d, "stats")]  # fmt: skip
+    cold = bool(cached) and not all(any(c) for c in cached)
+    timer = threading.Timer(_COMPILE_NOTICE_S, _notice)
+    timer.daemon = True
+    t0 = time.perf_counter()
+    if cold:
+        timer.start()
+    try:
+        tab, inv, nseg = _tables(magnetic("steel_1018"), magnetic("mrf_132dg"))
+        e2, e3 = np.zeros((0, 1)), np.zeros((0, 1, 8))
+        off = np.zeros(len(_PACKED), np.int64)
+        entry[0](e2, off, 1, 6, tab, inv, nseg, e2, np.zeros((0, 1), np.int64), e3, False,
+                 1e-10, 60, e3, np.zeros(0, np.bool_))  # fmt: skip
+        entry[1](e2, off, 1, 6, tab, inv, nseg, e3, e2, np.zeros(8), e3)
+    finally:
+        timer.cancel()
+    took = time.perf_counter() - t0
+    missed = sum(len(d.stats.cache_misses) for d in entry if hasattr(d, "stats"))
+    if missed and took > _COMPILE_NOTICE_S:
+        print(f"mrclutch: the network's kernel compiled in {took:.0f} s (cached: later runs "
+              "load it)", file=sys.stderr)  # fmt: skip
+    return g
+
+
+def _notice() -> None:
+    print("mrclutch: compiling the reluctance network's kernel (numba, once on this machine; "
+          "≈ 10–40 s) …", file=sys.stderr, flush=True)  # fmt: skip
+
+
+def _materials(net: Network, mats: Mapping[str, Magnetic]):  # type: ignore[no-untyped-def]
+    return _tables(magnetic(net.steel, mats), magnetic(net.fluid, mats))
 
 
 def solve_network(
@@ -288,104 +553,40 @@ def solve_network(
     Damped Newton: the full step, halved until the residual's norm falls (Armijo,
     [nocedal-wright] §3.1); the Jacobian is SPD tridiagonal (co-energy Hessian). Started at
     ``start`` or by continuation in the current: the currents one after another, the
-    weakest (on the block's median) from the linear network's solution (initial
-    permeabilities), each next one from the last one's solution, so each (design, current)
-    iterates only as long as it needs (a joint solve of all currents iterates every current
-    until the design's slowest settles: 1.6× the Newton work, docs/magnetics.md); a row
-    that does not converge from the continuation start is retried from the linear one.
-    Solved in blocks of ``_BLOCK`` designs (cache-sized temporaries: 2× faster at 10⁴
-    designs); designs that do not converge are refused together."""
+    weakest (on the median of each block of ``_BLOCK`` designs) from the linear network's
+    solution (initial permeabilities), each next one from the last one's solution, so each
+    (design, current) iterates only as long as it needs (a joint solve of all currents
+    iterates every current until the design's slowest settles: 1.6× the Newton work,
+    docs/magnetics.md); a row that does not converge from the continuation start is retried
+    from the linear one. Designs that do not converge are refused together."""
     mats = MATERIALS if materials is None else materials
     ni = np.atleast_2d(np.asarray(ampere_turns, dtype=float))
-    ni = np.broadcast_to(ni, (net.turns.size, ni.shape[-1])).copy()
+    ni = np.ascontiguousarray(np.broadcast_to(ni, (net.turns.size, ni.shape[-1])))
     if not np.all(np.isfinite(ni)):
         raise ParameterError("current: must be finite")
     shape = (*ni.shape, net.unknowns)
-    x0 = None if start is None else np.broadcast_to(np.asarray(start, dtype=float), shape)
-    out = np.zeros(shape)
-    failed: set[int] = set()
+    has_start = start is not None
+    x0 = (np.ascontiguousarray(np.broadcast_to(np.asarray(start, dtype=float), shape))
+          if has_start else np.zeros((0, 1, 1)))  # fmt: skip
+    order = np.empty(ni.shape, np.int64)
     for lo in range(0, shape[0], _BLOCK):
         blk = slice(lo, lo + _BLOCK)
-        part = net if shape[0] <= _BLOCK else _take(net, blk)
-        nb = ni[blk]
-        prev = None
-        for c in np.argsort(np.median(np.abs(nb), axis=0), kind="stable"):
-            col = slice(c, c + 1)
-            first = prev if x0 is None else x0[blk, col]
-            x, bad = _newton(part, nb[:, col], mats, rtol, max_iter, first)
-            if bad.size and x0 is None and prev is not None:  # again from the linear start
-                x[bad], bad2 = _newton(_take(part, bad), nb[bad, col], mats, rtol, max_iter,
-                                       None)  # fmt: skip
-                bad = bad[bad2]
-            out[blk, col] = prev = x
-            failed.update((lo + bad).tolist())
-    if failed:
-        rows = sorted(failed)
+        order[blk] = np.argsort(np.median(np.abs(ni[blk]), axis=0), kind="stable")
+    out = np.zeros(shape)
+    ok = np.ones(shape[0], np.bool_)
+    if out.size:
+        k = _kernels()
+        pk, off = _pack(net)
+        tab, inv, nseg = _materials(net, mats)
+        k["_solve_rows"](pk, off, net.m, net.shell_k.shape[1], tab, inv, nseg, ni, order, x0,
+                         has_start, float(rtol), int(max_iter), out, ok)  # fmt: skip
+    if not ok.all():
+        rows = np.flatnonzero(~ok).tolist()
         raise NetworkConvergenceError(
             f"network: no convergence in {max_iter} Newton steps for {len(rows)} design(s) "
             f"(rows {rows[:5]}…); refusing their torque"
         )
     return out
-
-
-_BLOCK = 2048  # designs per Newton block (one current at a time)
-_FLOOR = 1e-8  # relative residual accepted when the line search finds no decrease
-
-
-def _take(net: Network, rows: slice | NDArray[np.bool_] | NDArray[np.intp]) -> Network:
-    """The designs ``rows`` of ``net`` (a slice, a mask or indices)."""
-    return replace(net, **{f.name: getattr(net, f.name)[rows] for f in fields(net)
-                           if isinstance(getattr(net, f.name), np.ndarray)})  # fmt: skip
-
-
-def _newton(net, ni, mats, rtol, max_iter, start):  # type: ignore[no-untyped-def]
-    """``solve_network`` on one block: (loop fluxes, indices of the rows not converged)."""
-    shape = (*ni.shape, net.unknowns)
-    if start is None:
-        r0, j0 = _residual(net, mats, np.zeros(shape), ni)
-        x = _solve(j0, -r0)
-    else:
-        x = start.copy()
-    out = x.copy()
-    rows = np.arange(shape[0])
-    scale = np.maximum(np.abs(ni), 1e-300)[..., None]
-    if x.size == 0:  # no design (or no current): nothing to solve
-        return out, rows[:0]
-    res, jac = _residual(net, mats, x, ni)
-    stalled = np.zeros(ni.shape, bool)  # the last step moved x by ≤ rtol (rounding floor)
-    for _ in range(max_iter):
-        err = np.max(np.abs(res) / scale, axis=-1)  # (S', C)
-        settled = (err <= rtol) | stalled
-        done = settled.all(axis=1)
-        if done.any():
-            out[rows[done]] = x[done]
-            keep = ~done
-            rows, x, ni, scale = rows[keep], x[keep], ni[keep], scale[keep]
-            net = _take(net, keep)  # the rest iterate on their own designs only
-            res, jac, settled = res[keep], tuple(a[keep] for a in jac), settled[keep]
-            err = err[keep]
-            if rows.size == 0:
-                return out, rows
-        step = _solve(jac, -res)
-        norm0 = np.sum((res / scale) ** 2, axis=-1)
-        # a current already settled, of a design still iterating, stays where it is: its
-        # residual is noise at the rounding floor that no step would lower
-        t = np.where(settled, 0.0, 1.0)
-        for _ls in range(30):
-            xn = x + t[..., None] * step
-            rn, jn = _residual(net, mats, xn, ni, jac[5])
-            better = settled | (np.sum((rn / scale) ** 2, axis=-1) <= (1 - 1e-4 * t) * norm0)
-            if better.all():
-                break
-            t = np.where(better, t, 0.5 * t)
-        # At the rounding floor the residual is noise: the full Newton correction is then
-        # negligible against x, or (ill-conditioned, e.g. near-open leakage paths) no step
-        # along a descent direction lowers the residual. Either is the answer to working
-        # precision — the latter only once the residual is already below _FLOOR.
-        small = np.max(np.abs(step), axis=-1) <= rtol * np.max(np.abs(x), axis=-1)
-        stalled = settled | small | (~better & (err <= _FLOOR))
-        x, res, jac = xn, rn, jn
-    return out, rows
 
 
 def flux_linkage(
@@ -400,17 +601,19 @@ def flux_linkage(
     at the solution (SPD, so L_inc > 0)."""
     mats = MATERIALS if materials is None else materials
     x = solve_network(net, ampere_turns, mats)
-    ni = np.broadcast_to(np.atleast_2d(np.asarray(ampere_turns, dtype=float)), x.shape[:-1])
+    ni = np.ascontiguousarray(
+        np.broadcast_to(np.atleast_2d(np.asarray(ampere_turns, dtype=float)), x.shape[:-1])
+    )
     m = net.m
     n = net.turns[:, None]
-    source = np.zeros(x.shape)
-    source[..., m - 1] = source[..., m] = 1.0
-    lam, ind = np.zeros(x.shape[:-1]), np.zeros(x.shape[:-1])
-    for lo in range(0, x.shape[0], _BLOCK):  # the blocks solve_network used
-        blk = slice(lo, lo + _BLOCK)
-        part = net if x.shape[0] <= _BLOCK else _take(net, blk)
-        _, jac = _residual(part, mats, x[blk], np.ascontiguousarray(ni[blk]))
-        v = _solve(jac, source[blk])
-        lam[blk] = n[blk] * (x[blk, ..., m - 1] + x[blk, ..., m])
-        ind[blk] = n[blk] ** 2 * (v[..., m - 1] + v[..., m])
+    source = np.zeros(net.unknowns)
+    source[m - 1] = source[m] = 1.0
+    v = np.zeros(x.shape)
+    if x.size:
+        pk, off = _pack(net)
+        tab, inv, nseg = _materials(net, mats)
+        _kernels()["_tangent_rows"](pk, off, m, net.shell_k.shape[1], tab, inv, nseg, x, ni,
+                                    source, v)  # fmt: skip
+    lam = n * (x[..., m - 1] + x[..., m])
+    ind = n**2 * (v[..., m - 1] + v[..., m])
     return lam, ind

@@ -3,6 +3,8 @@ ladder's solve against an independent nodal solve, limits and robustness, refusa
 measured error against the stored FEM reference (benchmarks/data/fem_reference.json)."""
 
 import json
+import os
+import subprocess
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -31,7 +33,8 @@ from magnetics.network.torque import (
 from magnetics.torque import torque_curve
 
 PAPER = preset("paper")
-BENCH = Path(__file__).resolve().parents[2] / "benchmarks"
+ROOT = Path(__file__).resolve().parents[2]
+BENCH = ROOT / "benchmarks"
 
 
 def _regions(clutch=PAPER, **kw):  # type: ignore[no-untyped-def]
@@ -276,7 +279,10 @@ def test_a_saturated_wall_hands_its_flux_to_the_fluid_beside_it():
     with a 6 mm bore at 7 A the drum's steel saturates and its sheaths carry more of its
     rung's flux than the steel in both zones (in the FEM's band plane of that design the
     fluid beside the walls carries 22 µWb, the drum 0.25: docs/magnetics.md)."""
-    from magnetics.network.solve import _odd
+
+    def mmf(mat, phi, k, w):  # type: ignore[no-untyped-def]
+        """w·H̄(k·|Φ|)·sign(Φ): a build-up element's MMF, from the material's own H̄."""
+        return np.sign(phi) * w * mat.h_mean_dh(k * np.abs(phi))[0]
 
     def split(c, rg, mats, cur):  # type: ignore[no-untyped-def]
         net = network_from_regions(rg, mats)
@@ -285,8 +291,8 @@ def test_a_saturated_wall_hands_its_flux_to_the_fluid_beside_it():
         y = np.concatenate([[-x[0]], x[: m - 1] - x[1:m]])  # rungs 0 … m − 1
         q = x[net.sheaths][: 2 * m].reshape(m, 2)  # each wall's sheath in zone A, B
         steel, fluid = magnetic(net.steel, mats), magnetic(net.fluid, mats)
-        fs = _odd(steel, y[:, None] - q, net.rung_k[0], net.rung_w[0], mean=True)[0]
-        ff = _odd(fluid, q, net.sheath_k[0], net.sheath_w[0], mean=True)[0]
+        fs = mmf(steel, y[:, None] - q, net.rung_k[0, ..., 0], net.rung_w[0, ..., 0])
+        ff = mmf(fluid, q, net.sheath_k[0, ..., 0], net.sheath_w[0, ..., 0])
         np.testing.assert_allclose(fs, ff, rtol=0, atol=1e-9 * c.coil_turns * cur)
         return net, y, q
 
@@ -315,25 +321,31 @@ def test_band_element_shares_its_mmf_between_steel_free_paths(y, perm, area):
     its MMF F carries perm·F + A·B_fluid(F/l) = |y| to 1e-10 on the fluid's own B–H, F is
     odd in y, dF/dy matches a central difference, and a warm start from any B (the last
     Newton iterate's) finds the same F; no fluid: F = y/perm; neither: 0."""
-    from magnetics.network.solve import _band
+    from magnetics.network.solve import _kernels, _tables
 
     fl = magnetic("mrf_132dg")
     length = 8e-3
-    arr = lambda v: np.array([v])  # noqa: E731
+    tab, inv, nseg = _tables(magnetic("steel_1018"), fl)
+    kernel = _kernels()["_band"]  # the compiled element
+
+    def _band(fl, y, perm, area, length, start=None):  # type: ignore[no-untyped-def]
+        return kernel(tab, inv, nseg, y, perm, area, length, start or 0.0, start is not None)
+
+    arr = float
     f, d, b = _band(fl, arr(y), arr(perm), arr(area), arr(length))
     fn, _, _ = _band(fl, arr(-y), arr(perm), arr(area), arr(length))
-    assert fn[0] == -f[0]
+    assert fn == -f
     if area == 0.0:
-        np.testing.assert_allclose(f[0], y / perm if perm else 0.0, rtol=1e-15)
+        np.testing.assert_allclose(f, y / perm if perm else 0.0, rtol=1e-15)
         return
-    carried = perm * f[0] + area * fl.b_of_h(f[0] / length)
+    carried = perm * f + area * fl.b_of_h(f / length)
     np.testing.assert_allclose(carried, y, rtol=1e-10)
     h = 1e-6 * y
     up, _, _ = _band(fl, arr(y + h), arr(perm), arr(area), arr(length))
     lo, _, _ = _band(fl, arr(y - h), arr(perm), arr(area), arr(length))
-    np.testing.assert_allclose(d[0], (up[0] - lo[0]) / (2 * h), rtol=1e-3)
+    np.testing.assert_allclose(d, (up - lo) / (2 * h), rtol=1e-3)
     # a warm start anywhere (the last iterate's B: below or far above) finds the same F
-    for start in (0.0, 0.5 * b[0], 3.0 * b[0] + 0.5):
+    for start in (0.0, 0.5 * b, 3.0 * b + 0.5):
         again, _, _ = _band(fl, arr(y), arr(perm), arr(area), arr(length), arr(start))
         np.testing.assert_allclose(again, f, rtol=1e-10)
 
@@ -391,13 +403,43 @@ def test_blocks_are_invisible_and_refusals_name_global_rows(monkeypatch):
         solve_network(net, ni, max_iter=1, start=start)
 
 
-def test_continuation_in_current_is_invisible_and_falls_back_to_the_linear_start(monkeypatch):
+_FALLBACK = """
+import json, sys
+import numpy as np
+from dataclasses import replace
+from geometry.params import broadcast_fields, preset
+from geometry.regions import evaluate
+import magnetics.network.solve as network
+from magnetics.network import network_from_regions, solve_network
+
+kernels = network._kernels()  # NUMBA_DISABLE_JIT=1: the kernels are the Python functions
+newton, cold = kernels["_newton"], []
+
+def warm_fails(p, off, m, npole, tab, inv, nseg, ni, start, warm, *rest):
+    conv = newton(p, off, m, npole, tab, inv, nseg, ni, start, warm, *rest)
+    if warm:  # pretend no continuation start converges
+        return False
+    cold.append(1)
+    return conv
+
+kernels["_newton"] = warm_fails
+f = {k: np.full(5, float(v)) for k, v in vars(replace(preset("paper"), n_drums=4)).items()}
+f["drum_thickness"] = np.linspace(0.1e-3, 0.6e-3, 5)
+net = network_from_regions(evaluate(broadcast_fields(f), 4))
+cur = np.array(json.loads(sys.argv[1]))
+x = solve_network(net, net.turns[:, None] * cur[None])
+print(json.dumps({"cold": len(cold), "x": x.tolist()}))
+"""
+
+
+def test_continuation_in_current_is_invisible_and_falls_back_to_the_linear_start():
     """solve_network takes the currents one after another, each started from the last
     one's solution: with the columns out of order the answer is each current solved alone
     from the linear start (to the Newton's tolerance); a row the continuation start does
-    not bring to convergence is solved again from the linear start, not refused."""
-    import magnetics.network.solve as network
-
+    not bring to convergence is solved again from the linear start, not refused. The
+    fallback is shown on the debug path (NUMBA_DISABLE_JIT=1: the kernel's own Python,
+    with its Newton replaced by one whose warm starts fail), which also gives the compiled
+    kernel's answers."""
     f = {k: np.full(5, float(v)) for k, v in vars(replace(PAPER, n_drums=4)).items()}
     f["drum_thickness"] = np.linspace(0.1e-3, 0.6e-3, 5)
     net = network_from_regions(evaluate(broadcast_fields(f), 4))
@@ -406,20 +448,12 @@ def test_continuation_in_current_is_invisible_and_falls_back_to_the_linear_start
     alone = np.stack([solve_network(net, net.turns[:, None] * c)[:, 0] for c in cur], axis=1)
     tol = 1e-8 * np.abs(alone).max()
     np.testing.assert_allclose(joint, alone, rtol=0, atol=tol)
-    newton = network._newton
-    cold = []
-
-    def warm_fails(net_, ni, mats, rtol, max_iter, start):  # type: ignore[no-untyped-def]
-        x, bad = newton(net_, ni, mats, rtol, max_iter, start)
-        if start is not None:  # pretend no continuation start converges
-            return x * 0.0, np.arange(ni.shape[0])
-        cold.append(ni.shape[0])
-        return x, bad
-
-    monkeypatch.setattr(network, "_newton", warm_fails)
-    again = solve_network(net, net.turns[:, None] * cur[None])
-    assert cold == [5] * 5  # the first current cold, the four others retried cold
-    np.testing.assert_allclose(again, alone, rtol=0, atol=tol)
+    env = {**os.environ, "NUMBA_DISABLE_JIT": "1", "PYTHONPATH": str(ROOT)}
+    run = subprocess.run([sys.executable, "-c", _FALLBACK, json.dumps(cur.tolist())], env=env,
+                         capture_output=True, text=True, check=True)  # fmt: skip
+    out = json.loads(run.stdout)
+    assert out["cold"] == 5 * 5  # each design: the first current cold, the four others again
+    np.testing.assert_allclose(np.array(out["x"]), alone, rtol=0, atol=tol)
 
 
 def test_fringe_decay_is_the_laminate_beside_the_film():
