@@ -71,6 +71,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -262,8 +263,8 @@ def current_rise(
     τ_a exactly in the linear regime. Gauss–Legendre, ``nodes`` points on [0, Φ(10 %)]
     and on [Φ(10 %), Φ(90 %)]; ``flux`` (S, 3): the gap flux at 0.1 I, 0.9 I and I if
     already known (the first two may be estimates: the times are corrected to first order
-    to 10 % and 90 % of I); None: solved. inf where V ≤ R·I (the amplifier cannot reach
-    the current)."""
+    to 10 % and 90 % of I); None: solved. t10 (t90) is inf where V ≤ 0.1 R·I (0.9 R·I):
+    the supply cannot push that current through the coil (``supply_current``)."""
     mats = MATERIALS if materials is None else materials
     size = path.turns.size
     cur = np.broadcast_to(np.asarray(current, float), (size,))
@@ -299,8 +300,25 @@ def current_rise(
     fix = (np.array([0.1, 0.9]) * cur[:, None] - i[:, -2:]) * np.where(np.isfinite(dt_di), dt_di, 0)
     t10 = np.sum(g[:, :n], axis=1) + fix[:, 0]
     t90 = np.sum(g, axis=1) + fix[:, 1]
-    short = v <= res * cur
-    return CurrentRise(np.where(short, np.inf, t10), np.where(short, np.inf, t90))
+    # the supply holds at most V/R: a fraction f of I is reached (in finite time) only
+    # where f·R·I < V; the voltage-limited tail then ends at V/R, below the target
+    return CurrentRise(np.where(v <= 0.1 * res * cur, np.inf, t10),
+                       np.where(v <= 0.9 * res * cur, np.inf, t90))  # fmt: skip
+
+
+def supply_current(
+    fields: Mapping[str, Any],
+    stations: Mapping[str, Any],
+    amplifier: Amplifier,
+    coil_temperature: ArrayLike = 20.0,
+) -> FloatArray:
+    """A: the largest current the amplifier holds through the coil, V/R (Ohm's law; R at
+    ``coil_temperature`` °C, ``thermal.coil_resistance``) from the design's fields and
+    stations (``geometry.regions.stations``; floats or arrays). Above it the voltage-limited
+    current tends to V/R and never reaches the command: a design's current limit is capped
+    here (``mrclutch.design.current_limit``)."""
+    res = coil_resistance(fields, stations["coil_in"], stations["coil_out"], coil_temperature)
+    return np.asarray(amplifier.supply_voltage / np.asarray(res, float))
 
 
 #: Fractions of the step's current where the rise solves the circuit (10 %, 90 %, 100 %).

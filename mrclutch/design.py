@@ -47,7 +47,6 @@ message naming the key.
 from __future__ import annotations
 
 import math
-import tomllib
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
@@ -56,14 +55,16 @@ from typing import Any
 
 import numpy as np
 
+from geometry import regions
 from geometry.materials import MRF
 from geometry.params import DrumClutch, preset
 from geometry.validation import ParameterError, check_choice, check_positive, check_range
 from magnetics.drag import ROOM_TEMPERATURE, Support
-from magnetics.dynamics import Amplifier, Laminations
+from magnetics.dynamics import Amplifier, Laminations, supply_current
 from magnetics.materials import FLUIDS
 from magnetics.thermal import adiabatic_current_density
 from mrclutch.haptics.actuator import MR_170, MR_DELAY, Transmission
+from mrclutch.inputs import read_toml
 
 #: Largest actuator delay accepted (s): beyond it no haptic loop renders anything.
 MAX_DELAY = 1.0
@@ -134,17 +135,28 @@ class ClutchDesign:
 
     @property
     def current_limit(self) -> float:
-        """The largest current allowed: max_current, capped by the current-density limit."""
-        return float(current_limit(self.operating, self.clutch.wire_diameter))
+        """The largest current allowed: max_current, capped by the current-density limit
+        and by what the amplifier's supply holds through the coil (``supply_current``)."""
+        return float(current_limit(self.operating, self.clutch.wire_diameter,
+                                   self.supply_current))  # fmt: skip
+
+    @property
+    def supply_current(self) -> float:
+        """A: V/R, the most the amplifier holds through the coil at the coil temperature."""
+        c = self.clutch
+        st = regions.stations(vars(c), c.n_drums)
+        return float(supply_current(vars(c), st, self.amplifier, self.operating.coil_temperature))
 
 
-def current_limit(operating: Operating, wire_diameter: Any) -> Any:
-    """max_current capped by the current-density limit in the copper (floats or arrays)."""
+def current_limit(operating: Operating, wire_diameter: Any, supply: Any = math.inf) -> Any:
+    """max_current capped by the current-density limit in the copper and by ``supply``
+    (A, the amplifier's V/R: ``magnetics.dynamics.supply_current``) (floats or arrays)."""
     # batches hold rows that valid() refused (a 1e150 m wire): their area may overflow to
     # inf, which caps nothing; those rows' currents are never used
     with np.errstate(over="ignore"):
         wire_area = math.pi * np.asarray(wire_diameter, dtype=float) ** 2 / 4
-        return np.minimum(operating.max_current, operating.current_density_limit * wire_area)
+        cap = np.minimum(operating.current_density_limit * wire_area, supply)
+        return np.minimum(operating.max_current, cap)
 
 
 #: Named designs. "paper": the paper's clutch on the paper's MR bench (170 mm lever).
@@ -233,6 +245,12 @@ def _file_key(
         raise ParameterError(f"{where}.{key} = {table[key]!r}: {exc}") from None
 
 
+def _short(v: Any) -> str:
+    """A value as the file gave it, cut to one short line."""
+    text = repr(v)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
 def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> ClutchDesign:
     """Build a design from a parsed design file (see the module docstring)."""
     known = {"clutch", "operating", "transmission", "support", "amplifier", "laminations",
@@ -246,8 +264,17 @@ def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> Clutc
             )
     if "clutch" not in data or not isinstance(data["clutch"], dict):
         raise ParameterError(f"{where}: missing the [clutch] table of dimensions")
+    for name in known - {"name"}:
+        if name in data and not isinstance(data[name], dict):
+            raise ParameterError(f"{where}: {name} = {_short(data[name])}: must be a table "
+                                 f"([{name}] with keys under it)")  # fmt: skip
+    if "name" in data and not isinstance(data["name"], str):
+        raise ParameterError(f"{where}: name = {_short(data['name'])}: must be a string")
     table = dict(data["clutch"])
     base_name = table.pop("base", None)
+    if base_name is not None and not isinstance(base_name, str):
+        raise ParameterError(f"{where}: clutch.base = {_short(base_name)}: must be a preset "
+                             "name (a string)")  # fmt: skip
     base = preset(base_name) if base_name is not None else None
     clutch = DrumClutch.from_mm(table, base=base, where=f"{where}: clutch")
     op_table = dict(data["operating"]) if "operating" in data else {}
@@ -294,45 +321,87 @@ def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> Clutc
 def load_design(path: str | Path) -> ClutchDesign:
     """Read a design file; every error names the key and the file."""
     p = Path(path)
-    try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ParameterError(f"design file {p}: not found") from None
-    except UnicodeDecodeError as exc:
-        raise ParameterError(f"design file {p}: not UTF-8 text ({exc.reason})") from None
-    except IsADirectoryError:
-        raise ParameterError(f"design file {p}: is a directory") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ParameterError(f"design file {p}: not valid TOML ({exc})") from None
+    data = read_toml(p, "design file")
     return design_from_mapping(data, str(p))
 
 
 def design_to_toml(design: ClutchDesign) -> str:
-    """A design file that ``load_design`` reads back to the same design."""
+    """A design file that ``load_design`` reads back to the same design: every number is
+    written as the decimal that converts back to the same float where one exists (else
+    the nearest, within 1 ulp), ``inf`` as TOML's inf, the name with its control
+    characters escaped."""
     op, tr = design.operating, design.transmission
     lines = [f"name = {_toml(design.name)}", "", "[clutch]"]
-    lines += [f"{k} = {_toml(v)}" for k, v in design.clutch.to_mm().items()]
+    mm = design.clutch.to_mm()
+    for key, v in mm.items():
+        if isinstance(v, int):
+            lines.append(f"{key} = {v}")
+        else:  # the file's mm back to metres is value / 1000 (DrumClutch.from_mm)
+            si = getattr(design.clutch, key[:-3])
+            lines.append(f"{key} = {_toml(_exact(si, si * 1000.0, lambda m: m / 1000.0))}")
     lines += ["", "[operating]"]
     for key, (name, factor) in _OPERATING_KEYS.items():
         raw = getattr(op, name)
-        if raw is not None and math.isfinite(raw / factor):
-            lines.append(f"{key} = {_toml(raw / factor)}")
+        if raw is not None:  # None: the default (computed) limit, written as no key
+            lines.append(f"{key} = {_toml(_si(raw, factor))}")
     lines.append(f"delay_source = {_toml(op.delay_source)}")
     for table, keys, obj in (("amplifier", _AMPLIFIER_KEYS, design.amplifier),
                              ("laminations", _LAMINATION_KEYS, design.laminations)):  # fmt: skip
         lines += ["", f"[{table}]"]
-        lines += [f"{k} = {_toml(getattr(obj, n) / f)}" for k, (n, f) in keys.items()]
+        lines += [f"{k} = {_toml(_si(getattr(obj, n), f))}" for k, (n, f) in keys.items()]
     lines += ["", "[transmission]"]
-    lines += [f"{k} = {_toml(getattr(tr, n) / f)}" for k, (n, f) in _TRANSMISSION_KEYS.items()]
+    lines += [f"{k} = {_toml(_si(getattr(tr, n), f))}" for k, (n, f) in _TRANSMISSION_KEYS.items()]
     sup = design.support
     lines += ["", "[support]", f"bearing = {_toml(sup.bearing)}"]
-    lines += [f"{k} = {_toml(getattr(sup, n) / f)}" for k, (n, f) in _SUPPORT_KEYS.items()]
+    lines += [f"{k} = {_toml(_si(getattr(sup, n), f))}" for k, (n, f) in _SUPPORT_KEYS.items()]
     return "\n".join(lines) + "\n"
+
+
+def _si(raw: float, factor: float) -> float:
+    """The file's value of an SI field read back as value × factor (``_read_table``)."""
+    if isinstance(raw, int) and not isinstance(raw, bool):
+        return raw
+    return _exact(float(raw), float(raw) / factor, lambda m: m * factor)
+
+
+def _exact(si: float, guess: float, to_si: Any) -> float:
+    """The float m nearest ``guess`` with to_si(m) == si (a few ulps around it), so the
+    file reads back bit for bit; ``guess`` itself where none is that close."""
+    if not math.isfinite(guess) or guess == 0.0:
+        return guess
+    lo = hi = guess
+    for _ in range(8):
+        for m in (lo, hi):
+            if float(to_si(m)) == si:
+                return m
+        lo, hi = math.nextafter(lo, -math.inf), math.nextafter(hi, math.inf)
+    return guess
+
+
+#: TOML basic-string escapes; other control characters as \uXXXX (TOML 1.0 §String).
+_ESCAPES = {"\\": "\\\\", '"': '\\"', "\b": "\\b", "\t": "\\t", "\n": "\\n",
+            "\f": "\\f", "\r": "\\r"}  # fmt: skip
 
 
 def _toml(v: Any) -> str:
     if isinstance(v, str):
-        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+        out = []
+        for ch in v:
+            code = ord(ch)
+            if ch in _ESCAPES:
+                out.append(_ESCAPES[ch])
+            elif code < 0x20 or code == 0x7F:
+                out.append(f"\\u{code:04X}")
+            elif 0xD800 <= code <= 0xDFFF:  # a lone surrogate (an undecodable file name)
+                out.append("\\uFFFD")
+            else:
+                out.append(ch)
+        return '"' + "".join(out) + '"'
+    if isinstance(v, bool):
+        return "true" if v else "false"
     if isinstance(v, int):
         return str(v)
-    return repr(float(v))
+    f = float(v)
+    if math.isinf(f):
+        return "inf" if f > 0 else "-inf"
+    return repr(f)

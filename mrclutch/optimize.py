@@ -31,6 +31,7 @@ and reports the first that passes there (docs/optimize.md).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 
@@ -256,7 +257,10 @@ def parse_bounds(specs: Sequence[str]) -> dict[str, tuple[float, float]]:
         if not name.endswith("_mm") or name[:-3] not in LENGTH_FIELDS or name in INTEGER_FIELDS:
             raise ParameterError(f"--vary {s!r}: give NAME_mm=LO:HI with a DrumClutch length")
         try:
-            out[name[:-3]] = (float(lo) * 1e-3, float(hi) * 1e-3)
+            a, b = float(lo), float(hi)
         except ValueError:
             raise ParameterError(f"--vary {s!r}: LO and HI must be numbers (mm)") from None
+        if not (math.isfinite(a) and math.isfinite(b) and 0 < a < b):
+            raise ParameterError(f"--vary {s!r}: need finite 0 < LO < HI (mm)")
+        out[name[:-3]] = (a * 1e-3, b * 1e-3)
     return out

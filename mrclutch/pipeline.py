@@ -30,11 +30,11 @@ from geometry.mass import MassReport, analytic_mass, brep_mass, region_mass
 from geometry.materials import MRF
 from geometry.params import broadcast_fields, preset, valid
 from geometry.section import build_section
-from geometry.validation import check_choice
+from geometry.validation import ParameterError, check_choice
 from magnetics import thermal
 from magnetics.circuit import path_from_regions, path_from_section, solve_flux
 from magnetics.drag import Drag, coupled_fluid_inertia, drag_terms, totals
-from magnetics.dynamics import torque_response
+from magnetics.dynamics import supply_current, torque_response
 from magnetics.error_map import error_bound
 from magnetics.materials import FLUIDS
 from magnetics.network import network_from_regions
@@ -193,7 +193,8 @@ def clutch_figures(
     thermal = thermal_figures(design, section.table, path_from_section(section), drag.torque,
                               float(curve.torque[0]))  # fmt: skip
     d, length = section.envelope
-    notes = tuple(mass.notes) + extra + drag.notes + _thermal_notes(design, thermal)
+    notes = (tuple(mass.notes) + extra + drag.notes + _thermal_notes(design, thermal)
+             + _supply_notes(design))  # fmt: skip
     return ClutchFigures(
         max_current=i_max,
         max_torque=float(curve.torque[0]),
@@ -256,6 +257,19 @@ def _thermal_notes(design: ClutchDesign, th: Mapping[str, float]) -> tuple[str, 
     return ()
 
 
+def _supply_notes(design: ClutchDesign) -> tuple[str, ...]:
+    """Say when the amplifier's supply, not max_current, sets the current limit."""
+    op, supply = design.operating, design.supply_current
+    if supply >= min(op.max_current, op.current_density_limit * math.pi
+                     * design.clutch.wire_diameter**2 / 4):  # fmt: skip
+        return ()
+    volts = design.amplifier.supply_voltage
+    return (f"the amplifier's {volts:g} V supply holds at most {supply:.3g} A through the "
+            f"coil ({volts / supply:.3g} Ω at {op.coil_temperature:g} °C): the current "
+            f"limit is {supply:.3g} A, below max_current_A = {op.max_current:g}; raise "
+            "[amplifier] supply_voltage_V to reach it",)  # fmt: skip
+
+
 def dynamic_range_db(max_torque: Any, off_torque: Any) -> Any:
     """Largest over smallest torque, in dB: 20 log10(T_max / T_off)."""
     return 20 * np.log10(np.asarray(max_torque) / np.asarray(off_torque))
@@ -295,8 +309,8 @@ class Evaluation:
     fidelity: str
     clutch: ClutchFigures
     mr: HapticParams
-    motor: HapticParams
-    motor_gearing: float
+    motor: HapticParams | None  # None: unavailable (``unavailable["motor"]`` says why)
+    motor_gearing: float | None
     haptic: Mapping[str, Any]  # metrics of the MR pair at K_max
     motor_metrics: Mapping[str, Any]  # metrics of the motor at the same K
     budget: Mapping[str, Any]  # b1 and m1 as named terms beside the paper's Table 2
@@ -304,24 +318,41 @@ class Evaluation:
     hand: Mapping[str, Any]  # side → ``hand.hand_figures``: coupled stability, transparency
     response: Mapping[str, Any] = field(default_factory=dict)  # ``response_figures``
     torque_response: Any = None  # its ``magnetics.dynamics.TorqueResponse`` (step, lags)
+    #: secondary figures that could not be computed → why (the motor comparison, the
+    #: torque response's delay); the rest of the evaluation stands
+    unavailable: Mapping[str, str] = field(default_factory=dict)
 
     def as_json(self) -> dict[str, Any]:
         mr_m, em_m = dict(self.haptic), dict(self.motor_metrics)
+        zw = {k: dict(v) for k, v in self.zwidth.items()}
+        hand = {k: dict(v) for k, v in self.hand.items()}
+        motor = {**em_m, "actuator": MOTOR, "gearing": self.motor_gearing}
+        if self.motor is None:  # every figure of the motor's side None, and why
+            why = self.unavailable["motor"]
+            motor = {**dict.fromkeys(mr_m), "actuator": MOTOR, "gearing": None, "note": why}
+            zw["motor"] = {**dict.fromkeys(zw["mr"]), "note": why}
+            hand["motor"] = {**_nones(hand["mr"]), "note": why}
         return {
             "design": self.design.name,
             "fidelity": self.fidelity,
             "clutch": self.clutch.as_json(),
             "haptic": mr_m,
             "budget": dict(self.budget),
-            "motor": {**em_m, "actuator": MOTOR, "gearing": self.motor_gearing},
-            "bandwidth_gain": _gain(mr_m["bandwidth_hz"], em_m["bandwidth_hz"]),
+            "motor": motor,
+            "bandwidth_gain": _gain(mr_m["bandwidth_hz"], motor["bandwidth_hz"]),
             "bandwidth_gain_lumped": _gain(
-                mr_m["bandwidth_lumped_hz"], em_m["bandwidth_lumped_hz"]
+                mr_m["bandwidth_lumped_hz"], motor["bandwidth_lumped_hz"]
             ),
-            "zwidth": {k: dict(v) for k, v in self.zwidth.items()},
-            "hand": {k: dict(v) for k, v in self.hand.items()},
+            "zwidth": zw,
+            "hand": hand,
             "response": dict(self.response),
+            "unavailable": dict(self.unavailable),
         }
+
+
+def _nones(d: Mapping[str, Any]) -> dict[str, Any]:
+    """The same keys (nested), every value None: a side whose figures are unavailable."""
+    return {k: _nones(v) if isinstance(v, Mapping) else None for k, v in d.items()}
 
 
 def _gain(a: float | None, b: float | None) -> float | None:
@@ -349,29 +380,50 @@ def evaluate(
     mr = mr_at_hand(design, fig.moving_inertia, fig.drag_damping, fig.max_torque,
                     fig.clutch_mass, float(resp.equivalent_delay[0]))  # fmt: skip
     motor = actuator(MOTOR)
-    em_tr = motor_transmission(mr, design.transmission, motor)
-    em = reflect(motor, em_tr)
+    unavailable: dict[str, str] = {}
+    try:  # a secondary figure: a motor that cannot be geared to the force is left out
+        em_tr: Transmission | None = motor_transmission(mr, design.transmission, motor)
+        em: HapticParams | None = reflect(motor, em_tr)
+    except ParameterError as exc:
+        em_tr = em = None
+        unavailable["motor"] = (f"the equal-force {MOTOR} is left out: matching the MR pair's "
+                                f"{float(mr.f_max):.4g} N would need {exc}")  # fmt: skip
     k = float(mr.k_max)
     table2 = replace(mr, b1=TABLE2_MR.b1)  # the same pair with the paper's identified b1
-    mr_m, em_m, t2_m = metrics_of([mr, em, table2], [k, k, k])  # all at the MR pair's K_max
+    sides = [mr] if em is None else [mr, em]
+    *side_m, t2_m = metrics_of([*sides, table2], [k] * (len(sides) + 1))  # at the MR K_max
+    mr_m, em_m = side_m[0], (side_m[1] if em is not None else {})
     budget = hand_budget(design, fig, mr, t2_m)
-    zw = zwidth_of(HapticParams.stack([mr, em]))
+    zw = zwidth_of(HapticParams.stack(sides))
+    names = ZWIDTH_SIDES[: len(sides)]
     zws = {side: {key: zw[key][i] if np.ndim(zw[key]) > 1 else float(zw[key][i])
-                  for key in ZWIDTH_KEYS} for i, side in enumerate(ZWIDTH_SIDES)}  # fmt: skip
-    hand = {side: hand_figures(p, k) for side, p in zip(ZWIDTH_SIDES, (mr, em), strict=True)}
-    return Evaluation(design, fidelity, fig, mr, em, em_tr.gearing, mr_m, em_m, budget, zws, hand,
-                      response_figures(design, resp, mr), resp)  # fmt: skip
+                  for key in ZWIDTH_KEYS} for i, side in enumerate(names)}  # fmt: skip
+    hand = {side: hand_figures(p, k) for side, p in zip(names, sides, strict=True)}
+    gearing = em_tr.gearing if em_tr is not None else None
+    return Evaluation(design, fidelity, fig, mr, em, gearing, mr_m, em_m, budget, zws, hand,
+                      response_figures(design, resp, mr, unavailable), resp,
+                      MappingProxyType(unavailable))  # fmt: skip
 
 
-def response_figures(design: ClutchDesign, resp: Any, mr: HapticParams) -> dict[str, Any]:
+def response_figures(design: ClutchDesign, resp: Any, mr: HapticParams,
+                     unavailable: dict[str, str] | None = None) -> dict[str, Any]:  # fmt: skip
     """The torque response of one design (``magnetics.dynamics.TorqueResponse``) and what it
     does to the haptic loop: the largest stable K with the typed delay, with the
-    equivalent delay τ_eq, and with the lags themselves (the reference τ_eq approximates)."""
+    equivalent delay τ_eq, and with the lags themselves (the reference τ_eq approximates).
+    Where the lags are not finite those two K are None and ``unavailable`` (filled in
+    place) says why."""
     op = design.operating
     tau_eq = float(resp.equivalent_delay[0])
     k_typed = max_stable_stiffness(replace(mr, delay=op.delay))
-    k_eq = max_stable_stiffness(replace(mr, delay=tau_eq))
-    k_lags = lag_stable_stiffness(replace(mr, delay=0.0), resp.lags[0])
+    k_eq = k_lags = None
+    if np.all(np.isfinite(resp.lags[0])):
+        k_eq = max_stable_stiffness(replace(mr, delay=tau_eq))
+        k_lags = lag_stable_stiffness(replace(mr, delay=0.0), resp.lags[0])
+    elif unavailable is not None:
+        unavailable["torque_response"] = (
+            f"the current does not reach 90 % of {float(resp.current[0]):.3g} A on the "
+            f"{design.amplifier.supply_voltage:g} V supply: no equivalent delay, and no "
+            "stable K with it")  # fmt: skip
     return {
         **resp.item(0),
         "delay_source": op.delay_source,
@@ -499,9 +551,13 @@ def evaluate_batch(
     p = broadcast_fields(fields, base.clutch)
     ok = valid(p)
     op = base.operating
-    current = current_limit(op, p["wire_diameter"])
+    current = np.array(np.broadcast_to(current_limit(op, p["wire_diameter"]), ok.shape), float)
 
     def clutch(rg: regions.Regions, rows: np.ndarray) -> dict[str, Any]:
+        # the amplifier's V/R caps the current as in ClutchDesign.current_limit
+        with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+            supply = supply_current(rg.fields, rg.at, base.amplifier, op.coil_temperature)
+        current[rows] = np.minimum(current[rows], np.nan_to_num(supply, nan=np.inf))
         out = region_mass(rg)
         terms = drag_terms(rg, op.input_speed, op.fluid_temperature, base.support)
         out["off_torque"], out["damping"] = totals(terms)

@@ -22,7 +22,6 @@ import os
 import re
 import signal
 import threading
-import tomllib
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import Executor, Future
 from contextlib import contextmanager
@@ -34,6 +33,7 @@ import numpy as np
 
 from geometry.params import INT_RANGES, INTEGER_FIELDS, LENGTH_FIELDS, DrumClutch, preset
 from geometry.validation import ParameterError, check_int
+from mrclutch.inputs import read_toml
 from mrclutch.outputs import OUTPUTS, describe
 
 Evaluator = Callable[[dict[str, np.ndarray]], dict[str, np.ndarray]]
@@ -221,16 +221,7 @@ def load_spec(path: str | Path) -> tuple[SweepSpec, dict[str, Any]]:
     ``[parameters]``; the other tables (``[operating]``, ``[transmission]``) are returned
     for the design layer to read."""
     p = Path(path)
-    try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ParameterError(f"sweep spec {p}: not found") from None
-    except IsADirectoryError:
-        raise ParameterError(f"sweep spec {p}: is a directory") from None
-    except UnicodeDecodeError as exc:
-        raise ParameterError(f"sweep spec {p}: not UTF-8 text ({exc.reason})") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ParameterError(f"sweep spec {p}: not valid TOML ({exc})") from None
+    data = read_toml(p, "sweep spec")
     for table in ("sweep", "parameters"):
         if table not in data or not isinstance(data[table], dict):
             raise ParameterError(f"sweep spec {p}: missing the [{table}] table")

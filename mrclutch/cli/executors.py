@@ -7,12 +7,38 @@
 from __future__ import annotations
 
 import logging
-from collections.abc import Iterator
+import math
+import os
+import sys
+from collections.abc import Callable, Iterator
 from concurrent.futures import Executor, ProcessPoolExecutor
 from contextlib import contextmanager
 from typing import Any
 
 from mrclutch.cli.errors import CLIError
+
+#: s: the longest wait for a scheduler (a day); inf would hang a mistyped address forever.
+MAX_CONNECT_TIMEOUT = 86400.0
+
+
+def usable_cpus() -> int:
+    """CPUs this process may run on (its affinity mask; the machine's count elsewhere)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):
+        return max(1, os.cpu_count() or 1)
+
+
+def capped(option: str, n: int, say: Callable[[str], None] | None = None) -> int:
+    """``n`` worker processes, at most ``usable_cpus()``: more only queue for the same
+    CPUs and can exhaust the process limit (``--workers 10000`` forked them all). Says so
+    on stderr when it caps."""
+    most = usable_cpus()
+    if n <= most:
+        return n
+    msg = f"{option} {n}: capped at {most}, the CPUs this process may use"
+    (say or (lambda m: print(f"mrclutch: {m}", file=sys.stderr)))(msg)
+    return most
 
 
 @contextmanager
@@ -36,8 +62,11 @@ def sweep_executor(
         raise CLIError(f"--workers = {workers}: must be >= 0")
     if dask_local is not None and dask_local < 1:
         raise CLIError(f"--dask-local = {dask_local}: must be >= 1")
-    if not connect_timeout > 0:
-        raise CLIError(f"--connect-timeout = {connect_timeout}: must be > 0 s")
+    if not (math.isfinite(connect_timeout) and 0 < connect_timeout <= MAX_CONNECT_TIMEOUT):
+        raise CLIError(f"--connect-timeout = {connect_timeout}: must be in (0, "
+                       f"{MAX_CONNECT_TIMEOUT:g}] s")  # fmt: skip
+    workers = capped("--workers", workers)
+    dask_local = capped("--dask-local", dask_local) if dask_local else dask_local
     if scheduler is None and dask_local is None:
         if not workers:
             yield None, 1
@@ -109,4 +138,4 @@ def _line(exc: BaseException) -> str:
     return text.splitlines()[0]
 
 
-__all__ = ["local_cluster", "sweep_executor"]
+__all__ = ["capped", "local_cluster", "sweep_executor", "usable_cpus"]

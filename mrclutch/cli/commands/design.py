@@ -257,13 +257,19 @@ def format_evaluation(data: dict) -> str:
     for key in HAND_ROWS:
         o = output(key)
         lines.append(f"  {row_label(key):<30}{o.display(h[key]):>14}{o.display(m[key]):>14}")
-    lines.append(f"  (motor geared ×{m['gearing']:.3g} to the MR pair's force)")
+    if m["gearing"] is None:
+        lines.append(f"  (motor unavailable: {m['note']})")
+    else:
+        lines.append(f"  (motor geared ×{m['gearing']:.3g} to the MR pair's force)")
     g, gl = data["bandwidth_gain"], data["bandwidth_gain_lumped"]
     lines.append(f"bandwidth gain MR over motor: {_pct(gl)} lumped, {_pct(g)} on the full response")
     lines += format_zwidth(data["zwidth"])
     lines += format_hand(data["hand"])
     lines += format_budget(data["budget"])
     lines += format_response(data["response"])
+    lines += [
+        f"unavailable: {k}: {why}" for k, why in data.get("unavailable", {}).items() if k != "motor"
+    ]  # the motor's reason is printed under its column
     return "\n".join(lines)
 
 
@@ -286,14 +292,22 @@ def format_response(r: dict) -> list[str]:
         f"  {'equivalent delay Σ T':<30}{ms(r['torque_delay_s']):>10} ms  (typed: "
         f"{ms(r['typed_delay_s'])} ms); −3 dB at {r['torque_bandwidth_hz']:.3g} Hz",
         f"  largest stable K: {r['max_stable_K_typed_delay_N_per_m']:.4g} N/m with the typed "
-        f"delay, {r['max_stable_K_torque_delay_N_per_m']:.4g} with Σ T, "
-        f"{r['max_stable_K_lags_N_per_m']:.4g} with the lags themselves",
+        f"delay, {_g(r['max_stable_K_torque_delay_N_per_m'])} with Σ T, "
+        f"{_g(r['max_stable_K_lags_N_per_m'])} with the lags themselves",
     ]
     return lines
 
 
-def _bounded(v: float | None) -> str:
-    """A Z-width figure; inf (or None, its JSON form) where the set is unbounded."""
+def _g(v: float | None, spec: str = ".4g") -> str:
+    """A figure, or — where it is unavailable (None; the output says why)."""
+    return "—" if v is None else format(v, spec)
+
+
+def _bounded(v: float | None, side: dict | None = None) -> str:
+    """A Z-width figure; inf (or None, its JSON form) where the set is unbounded; — where
+    the side is unavailable (its ``note`` says why)."""
+    if side is not None and "note" in side:
+        return "—"
     return f"{v:.4g}" if v is not None and math.isfinite(v) else "unbounded"
 
 
@@ -304,7 +318,7 @@ def format_zwidth(zw: dict) -> list[str]:
     for key, label in (("K_max_at_B0_N_per_m", "largest K at B = 0 (N/m)"),
                        ("B_max_at_K0_N_s_per_m", "largest B at K = 0 (N·s/m)"),
                        ("zwidth_area_N2_s_per_m2", "area ∫ΔK dB (N²·s/m²)")):  # fmt: skip
-        a, b = (_bounded(zw[side][key]) for side in ("mr", "motor"))
+        a, b = (_bounded(zw[side][key], zw[side]) for side in ("mr", "motor"))
         lines.append(f"  {label:<30}{a:>14}{b:>14}")
     return lines
 
@@ -314,23 +328,27 @@ def format_hand(hand: dict) -> list[str]:
     mr, em = hand["mr"], hand["motor"]
     mo = mr["motion"]
     h = mr["worst_hand"]
-    yes = {True: "yes", False: "no"}
+    yes = {True: "yes", False: "no", None: "—"}
+
+    def col(side: dict, key: str, scale: float = 1.0) -> str:
+        return f"{_g(None if side[key] is None else side[key] * scale):>14}"
+
     return [
         "With a hand on the lever (mrclutch.haptics.hand; hand range in docs/hand.md)",
         f"  {'':<30}{'MR pair':>14}{'Maxon 136206':>14}",
         f"  {'stable at K, any hand':<30}{yes[mr['coupled_stable']]:>14}"
         f"{yes[em['coupled_stable']]:>14}",
-        f"  {'largest K stable, any hand':<30}{mr['max_stable_K_all_hands_N_per_m']:>14.4g}"
-        f"{em['max_stable_K_all_hands_N_per_m']:>14.4g}  N/m",
-        f"  {'largest K stable, hands off':<30}{mr['max_stable_K_hands_off_N_per_m']:>14.4g}"
-        f"{em['max_stable_K_hands_off_N_per_m']:>14.4g}  N/m",
-        f"  {'backdrive force (K = 0)':<30}{mr['backdrive_force_N'] * 1e3:>14.4g}"
-        f"{em['backdrive_force_N'] * 1e3:>14.4g}  mN at ±{mo['amplitude_m'] * 1e3:g} mm, "
+        f"  {'largest K stable, any hand':<30}{col(mr, 'max_stable_K_all_hands_N_per_m')}"
+        f"{col(em, 'max_stable_K_all_hands_N_per_m')}  N/m",
+        f"  {'largest K stable, hands off':<30}{col(mr, 'max_stable_K_hands_off_N_per_m')}"
+        f"{col(em, 'max_stable_K_hands_off_N_per_m')}  N/m",
+        f"  {'backdrive force (K = 0)':<30}{col(mr, 'backdrive_force_N', 1e3)}"
+        f"{col(em, 'backdrive_force_N', 1e3)}  mN at ±{mo['amplitude_m'] * 1e3:g} mm, "
         f"{mo['frequency_hz']:g} Hz",
-        f"  {'felt mass (K = 0)':<30}{mr['felt_mass_kg'] * 1e3:>14.4g}"
-        f"{em['felt_mass_kg'] * 1e3:>14.4g}  g",
-        f"  {'felt damping (K = 0)':<30}{mr['felt_damping_N_s_per_m']:>14.4g}"
-        f"{em['felt_damping_N_s_per_m']:>14.4g}  N·s/m",
+        f"  {'felt mass (K = 0)':<30}{col(mr, 'felt_mass_kg', 1e3)}"
+        f"{col(em, 'felt_mass_kg', 1e3)}  g",
+        f"  {'felt damping (K = 0)':<30}{col(mr, 'felt_damping_N_s_per_m')}"
+        f"{col(em, 'felt_damping_N_s_per_m')}  N·s/m",
         f"  worst hand for the MR pair: {h['m_kg']:g} kg, {h['b_N_s_per_m']:g} N·s/m, "
         f"{h['k_N_per_m']:g} N/m ({mr['hands_checked']} hands checked)",
     ]
@@ -493,6 +511,9 @@ def format_verified(rows: list, key: str, fem_size: float, workers: int, seconds
     return "\n".join(lines)
 
 
+#: The largest --seed (numpy's legacy seeds and scipy's take 32 bits).
+MAX_SEED = 2**32 - 1
+
 #: exit status of ``optimize`` when the reference re-check violates a requirement.
 EXIT_REQUIREMENT_VIOLATED = 3
 
@@ -512,6 +533,7 @@ def _optimize(args: argparse.Namespace) -> int:
         stable=not args.allow_unstable,
     )
     check_int("--tries", args.tries, 1, MAX_CANDIDATES)
+    check_int("--seed", args.seed, 0, MAX_SEED)
     t0 = time.perf_counter()
     opt = optimize(
         base,

@@ -1,0 +1,214 @@
+"""Issue 32 (inputs): a valid design is never refused for a secondary figure, the supply
+caps the current (the many-drum delay), and design files round-trip."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import strategies as st
+
+from geometry import regions
+from geometry.params import LENGTH_RANGES
+from geometry.validation import ParameterError
+from magnetics.thermal import coil_resistance
+from mrclutch.design import design_from_mapping, design_preset, design_to_toml
+from mrclutch.pipeline import evaluate, evaluate_batch
+
+
+def _drums(n: int):
+    d = design_preset("paper")
+    return dataclasses.replace(d, clutch=dataclasses.replace(d.clutch, n_drums=n))
+
+
+def test_one_to_twenty_drums_on_the_paper_base_all_give_a_finite_delay_and_valid_rows():
+    base = design_preset("paper")
+    out = evaluate_batch({"n_drums": np.arange(1, 21)}, base)
+    assert out["valid"].tolist() == [1.0] * 20
+    assert np.all(np.isfinite(out["torque_delay_s"]))
+    # more drums lengthen the coil's mean turn: the delay grows past the supply's cap
+    assert np.all(np.diff(out["torque_delay_s"][6:]) > 0)
+
+
+@pytest.mark.parametrize("n", [1, 7, 8, 20])
+def test_many_drum_designs_evaluate_with_the_supply_capped_current(n):
+    d = _drums(n)
+    st_ = regions.stations(vars(d.clutch), n)
+    r = coil_resistance(vars(d.clutch), st_["coil_in"], st_["coil_out"], 20.0)
+    expected = min(7.0, 24.0 / float(r))  # Ohm's law on the 24 V supply
+    ev = evaluate(d)
+    assert ev.clutch.max_current == pytest.approx(expected, rel=1e-12)
+    assert math.isfinite(ev.response["torque_delay_s"])
+    capped = any("supply" in note for note in ev.clutch.notes)
+    assert capped == (24.0 / float(r) < 7.0)
+    row = evaluate_batch({"n_drums": [n]}, design_preset("paper"))
+    assert row["torque_delay_s"][0] == pytest.approx(ev.response["torque_delay_s"], rel=1e-6)
+
+
+def test_a_motor_that_cannot_be_geared_to_the_force_is_unavailable_not_a_refusal():
+    d = design_preset("paper")
+    d = dataclasses.replace(d, clutch=dataclasses.replace(d.clutch, drum_inner_diameter=0.25))
+    ev = evaluate(d)
+    assert ev.motor is None and "gearing" in ev.unavailable["motor"]
+    data = ev.as_json()
+    assert data["motor"]["gearing"] is None and data["motor"]["note"] == ev.unavailable["motor"]
+    assert data["bandwidth_gain"] is None
+    assert data["haptic"]["bandwidth_hz"] > 0  # the MR side is answered
+    assert data["zwidth"]["motor"]["note"] and data["hand"]["motor"]["note"]
+
+
+LENGTHS = {name: (lo, hi) for name, lo, hi, _ in LENGTH_RANGES}
+NAMES = st.text(st.characters(blacklist_categories=("Cs",)), max_size=12)
+
+
+def _design(name, gap, zone, density, speed, delay, lever, drums):
+    d = design_preset("paper")
+    return dataclasses.replace(
+        d,
+        name=name,
+        clutch=dataclasses.replace(d.clutch, gap=gap, zone_length=zone, n_drums=drums),
+        operating=dataclasses.replace(d.operating, max_current_density=density,
+                                      input_speed=speed, delay=delay),
+        transmission=dataclasses.replace(d.transmission, lever=lever),
+    )  # fmt: skip
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    name=NAMES,
+    gap=st.floats(*LENGTHS["gap"]),
+    zone=st.floats(*LENGTHS["zone_length"]),
+    density=st.one_of(st.none(), st.just(math.inf), st.floats(1e6, 1e8)),
+    speed=st.floats(1.0, 1e4),
+    delay=st.floats(0.0, 1.0),
+    lever=st.floats(1e-3, 2.0),
+    drums=st.integers(1, 20),
+)
+def test_a_design_file_written_loads_back_to_the_same_design(
+    name, gap, zone, density, speed, delay, lever, drums
+):
+    try:
+        d = _design(name, gap, zone, density, speed, delay, lever, drums)
+    except ParameterError:
+        assume(False)
+    text = design_to_toml(d)
+    back = design_from_mapping(tomllib.loads(text))
+    assert back.name == d.name
+    for f in dataclasses.fields(d):
+        if f.name != "name":
+            a, b = getattr(back, f.name), getattr(d, f.name)
+            for g in dataclasses.fields(a):
+                x, y = getattr(a, g.name), getattr(b, g.name)
+                if isinstance(y, float) and math.isfinite(y):  # within an ulp: the file's
+                    # decimal × its unit factor cannot reach every float exactly
+                    assert x == pytest.approx(y, rel=4e-16, abs=0), (f.name, g.name)
+                else:
+                    assert x == y, (f.name, g.name)
+    assert design_to_toml(back) == text  # and writing it again changes nothing
+
+
+def test_a_control_character_name_and_an_unlimited_density_survive_the_round_trip():
+    d = _design('a\x01\tb"\\\x7f', 0.7e-3, 6e-3, math.inf, 55.5, 1e-3, 0.17, 2)
+    back = design_from_mapping(tomllib.loads(design_to_toml(d)))
+    assert back.name == d.name
+    assert back.operating.max_current_density == math.inf
+    assert back.current_limit == d.current_limit == 7.0
+
+
+# ---- input files (item 4) and options at the edge (item 5) ---------------------------------
+
+
+def _cli(argv, capsys):
+    from mrclutch.cli.main import main
+
+    code = main(argv)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.mark.parametrize(
+    ("text", "key"),
+    [
+        ('[clutch]\nbase = ["paper"]\n', "clutch.base"),
+        ("[clutch]\nbase = {a = 1}\n", "clutch.base"),
+        ('operating = "x"\n[clutch]\nbase = "paper"\n', "operating"),
+        ('transmission = [1]\n[clutch]\nbase = "paper"\n', "transmission"),
+        ('name = {a = 1}\n[clutch]\nbase = "paper"\n', "name"),
+        ('[clutch]\nbase = "paper"\ngap_mm = ' + "[" * 12 + "1" + "]" * 12 + "\n", "gap_mm"),
+        ('[clutch]\nbase = "paper"\ngap_mm = ' + "[" * 50000 + "]" * 50000 + "\n", "nested"),
+    ],
+)
+def test_a_structural_mismatch_in_a_design_file_is_one_line_naming_the_key(
+    tmp_path, capsys, text, key
+):
+    f = tmp_path / "d.toml"
+    f.write_text(text)
+    code, out, err = _cli(["evaluate", str(f)], capsys)
+    assert code == 2 and out == ""
+    assert len(err.strip().splitlines()) == 1 and key in err
+
+
+def test_a_fifo_a_device_and_a_huge_file_are_refused_at_once(tmp_path, capsys):
+    import os
+    import time
+
+    fifo = tmp_path / "fifo.toml"
+    os.mkfifo(fifo)
+    huge = tmp_path / "huge.toml"
+    huge.write_bytes(b" " * (2 << 20))
+    for path, why in ((fifo, "FIFO"), ("/dev/zero", "device"), (huge, "bytes")):
+        t = time.perf_counter()
+        code, _, err = _cli(["evaluate", str(path)], capsys)
+        assert code == 2 and why in err and time.perf_counter() - t < 5
+    spec = tmp_path / "spec.toml"
+    os.mkfifo(spec)
+    code, _, err = _cli(["sweep", str(spec), "--out", str(tmp_path / "r.csv")], capsys)
+    assert code == 2 and "FIFO" in err
+
+
+@pytest.mark.parametrize(
+    ("argv", "words"),
+    [
+        (["optimize", "--vary", "gap_mm=0.2:inf"], "finite"),
+        (["optimize", "--vary", "gap_mm=nan:1"], "finite"),
+        (["optimize", "--seed", "-1"], "--seed"),
+        (["optimize", "--seed", str(10**23)], "--seed"),
+        (
+            [
+                "sweep",
+                "SPEC",
+                "--out",
+                "OUT",
+                "--connect-timeout",
+                "inf",
+                "--scheduler",
+                "tcp://127.0.0.1:9",
+            ],
+            "--connect-timeout",
+        ),
+    ],
+)
+def test_options_are_refused_at_the_edge_before_any_library_sees_them(
+    tmp_path, capsys, argv, words
+):
+    spec = tmp_path / "s.toml"
+    spec.write_text(
+        '[sweep]\nmode = "grid"\n[parameters]\ngap_mm = {min = 0.5, max = 0.7, count = 2}\n'
+    )
+    argv = [str(spec) if a == "SPEC" else str(tmp_path / "r.csv") if a == "OUT" else a
+            for a in argv]  # fmt: skip
+    code, _out, err = _cli(argv, capsys)
+    assert code == 2 and words in err and len(err.strip().splitlines()) == 1
+
+
+def test_workers_beyond_the_cpus_are_capped_and_said(capsys):
+    from mrclutch.cli.executors import capped, usable_cpus
+
+    said = []
+    assert capped("--workers", 10_000, said.append) == usable_cpus()
+    assert said and "capped" in said[0]
+    assert capped("--workers", 1, said.append) == 1 and len(said) == 1
