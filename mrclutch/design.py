@@ -225,7 +225,10 @@ def _read_table(
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ParameterError(f"{where}.{key} = {value!r}: must be a number")
         name, factor = keys[key]
-        out[name] = float(value) * factor
+        inv = round(1.0 / factor)
+        # a decimal prefix (mm, mN) divides: 110 mm²/s / 1e6 is the float 1.1e-4, × 1e-6 is not
+        exact = factor < 1 and inv * factor == 1
+        out[name] = float(value) / inv if exact else float(value) * factor
     return out
 
 
@@ -361,6 +364,9 @@ def _si(raw: float, factor: float) -> float:
     """The file's value of an SI field read back as value × factor (``_read_table``)."""
     if isinstance(raw, int) and not isinstance(raw, bool):
         return raw
+    inv = round(1.0 / factor)
+    if factor < 1 and inv * factor == 1:  # as _read_table reads it
+        return _exact(float(raw), float(raw) * inv, lambda m: m / inv)
     return _exact(float(raw), float(raw) / factor, lambda m: m * factor)
 
 
@@ -369,6 +375,10 @@ def _exact(si: float, guess: float, to_si: Any) -> float:
     file reads back bit for bit; ``guess`` itself where none is that close."""
     if not math.isfinite(guess) or guess == 0.0:
         return guess
+    for digits in range(1, 18):  # the shortest decimal that reads back exactly
+        m = float(f"{guess:.{digits}g}")
+        if float(to_si(m)) == si:
+            return m
     lo = hi = guess
     for _ in range(8):
         for m in (lo, hi):
