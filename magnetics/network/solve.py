@@ -382,10 +382,12 @@ def _solve_ladder(m, jac, o_off, o_tail, u, work):  # type: ignore[no-untyped-de
 def _newton(p, off, m, npole, tab, inv, nseg, ni, start, warm_start, rtol, max_iter, x_out, ws):  # type: ignore[no-untyped-def]
     """Damped Newton on one design at ampere-turns ``ni``, from ``start`` if
     ``warm_start``, else from the linear network's solution; the answer in ``x_out``.
-    True if it converged. ``ws``: the workspace (``_workspace``)."""
+    (True if it converged, the workspace's row that holds the Jacobian at the answer).
+    ``ws``: the workspace (``_workspace``)."""
     nx = 3 * m + 5
     x, xn, step, res, rn = ws[0], ws[1], ws[2], ws[3], ws[4]
-    jac, jn, work = ws[5], ws[6], ws[7:]
+    jac, jn, work = ws[5], ws[6], ws[7:15]
+    jrow, jnrow = 5, 6
     if warm_start:
         for i in range(nx):
             x[i] = start[i]
@@ -409,7 +411,7 @@ def _newton(p, off, m, npole, tab, inv, nseg, ni, start, warm_start, rtol, max_i
         if err <= rtol or stalled:
             for i in range(nx):
                 x_out[i] = x[i]
-            return True
+            return True, jrow
         for i in range(nx):
             rn[i] = -res[i]
         _solve(m, jac, rn, step, work)
@@ -438,13 +440,15 @@ def _newton(p, off, m, npole, tab, inv, nseg, ni, start, warm_start, rtol, max_i
         x, xn = xn, x
         res, rn = rn, res
         jac, jn = jn, jac
-    return False
+        jrow, jnrow = jnrow, jrow
+    return False, jrow
 
 
 def _workspace(m):  # type: ignore[no-untyped-def]
     """Scratch rows for ``_newton`` (x, trial x, step, two residuals, two Jacobians, and
-    the residual's and the solve's work rows), each long enough for any of them."""
-    return np.zeros((7 + 8, max(_jac_layout(m)[-1], 3 * m + 5)))
+    the residual's and the solve's work rows, the continuation's source and predicted start),
+    each long enough for any of them."""
+    return np.zeros((7 + 8 + 2, max(_jac_layout(m)[-1], 3 * m + 5)))
 
 
 def _solve_rows(pk, off, m, npole, tab, inv, nseg, ni, order, start, has_start, rtol,
@@ -454,22 +458,30 @@ def _solve_rows(pk, off, m, npole, tab, inv, nseg, ni, order, start, has_start, 
     solution, the first (and a continuation that fails) from the linear network's; the
     loop fluxes in ``out`` (S, C, 3m + 5), ``ok[s]`` False where one did not converge."""
     ws = _workspace(m)
+    src, guess = ws[15], ws[16]
+    for i in range(src.size):
+        src[i] = 0.0
+    src[m - 1] = src[m] = 1.0  # the coil's ampere-turns drive loop m − 1 and the window
     for s in range(pk.shape[0]):
         p = pk[s]
-        prev = -1
+        prev, jrow = -1, 5
         for ci in range(ni.shape[1]):
             c = order[s, ci]
             if has_start:
-                conv = _newton(p, off, m, npole, tab, inv, nseg, ni[s, c], start[s, c], True,
-                               rtol, max_iter, out[s, c], ws)  # fmt: skip
+                conv, jrow = _newton(p, off, m, npole, tab, inv, nseg, ni[s, c], start[s, c],
+                                     True, rtol, max_iter, out[s, c], ws)  # fmt: skip
             else:
                 warm = prev >= 0
-                first = out[s, max(prev, 0)]
-                conv = _newton(p, off, m, npole, tab, inv, nseg, ni[s, c], first, warm, rtol,
-                               max_iter, out[s, c], ws)  # fmt: skip
+                if warm:  # Euler predictor: x + (dx/dNI)·ΔNI, J·dx/dNI = s at the last answer
+                    _solve(m, ws[jrow], src, guess, ws[7:15])
+                    step = ni[s, c] - ni[s, prev]
+                    for i in range(3 * m + 5):
+                        guess[i] = out[s, prev, i] + guess[i] * step
+                conv, jrow = _newton(p, off, m, npole, tab, inv, nseg, ni[s, c], guess, warm,
+                                     rtol, max_iter, out[s, c], ws)  # fmt: skip
                 if not conv and warm:  # again from the linear start
-                    conv = _newton(p, off, m, npole, tab, inv, nseg, ni[s, c], out[s, c],
-                                   False, rtol, max_iter, out[s, c], ws)  # fmt: skip
+                    conv, jrow = _newton(p, off, m, npole, tab, inv, nseg, ni[s, c], guess,
+                                         False, rtol, max_iter, out[s, c], ws)  # fmt: skip
             if not conv:
                 ok[s] = False
             prev = c
@@ -478,7 +490,7 @@ def _solve_rows(pk, off, m, npole, tab, inv, nseg, ni, order, start, has_start, 
 def _tangent_rows(pk, off, m, npole, tab, inv, nseg, x, ni, source, v):  # type: ignore[no-untyped-def]
     """``flux_linkage``'s kernel: v = J⁻¹·source at the loop fluxes x (S, C, 3m + 5)."""
     ws = _workspace(m)
-    res, jac, work = ws[3], ws[5], ws[7:]
+    res, jac, work = ws[3], ws[5], ws[7:15]
     for s in range(pk.shape[0]):
         for c in range(x.shape[1]):
             _residual(pk[s], off, m, npole, tab, inv, nseg, x[s, c], ni[s, c], jac, False, res,

@@ -8,6 +8,9 @@ thickness is the convention (``CONVENTIONS``, docs/magnetics.md).
 
 from __future__ import annotations
 
+import functools
+import math
+import threading
 from collections.abc import Mapping
 from typing import Any
 
@@ -16,10 +19,21 @@ from numpy.typing import ArrayLike, NDArray
 
 from geometry.params import broadcast_fields, valid
 from geometry.regions import Regions, per_topology
-from geometry.validation import check_choice
-from magnetics.materials import FLUIDS, MATERIALS, Magnetic, MRFluid, magnetic
+from geometry.validation import ParameterError, check_choice
+from magnetics.materials import (
+    _CARLSON_K,
+    _S_LO,
+    _S_N,
+    _S_STEP,
+    FLUIDS,
+    MATERIALS,
+    Magnetic,
+    MRFluid,
+    _carlson_s_table,
+    magnetic,
+)
 from magnetics.network.build import Network, network_from_regions
-from magnetics.network.solve import solve_network
+from magnetics.network.solve import _COMPILE_NOTICE_S, _notice, _tables, solve_network
 
 FloatArray = NDArray[np.float64]
 #: How a gap's torque reads its field across the gap's thickness (``network_film_torque``,
@@ -142,26 +156,98 @@ def network_film_torque(
     band_end = np.zeros((2 * net.m, 2))  # which end of each overlap faces the band
     band_end[: net.m, 1] = band_end[net.m :, 0] = 1.0
 
-    def h_r(b_r: FloatArray, b_z: FloatArray) -> FloatArray:
-        """H_r = B_r·H(|B|)/|B|: one isotropic fluid, its permeability set by |B|."""
-        b = np.maximum(np.hypot(b_r, b_z), 1e-300)
-        return b_r * bh.h_dh(b)[0] / b
+    tab, inv, nseg = _tables(magnetic(net.steel, mats), bh)
+    q_inf, s_at, d_at = _carlson_s_table()
+    law = (fl.tau_y_max, _CARLSON_K, q_inf, s_at, d_at, _S_LO, _S_STEP, float(_S_N))
+    if type(fl).tau_y is not MRFluid.tau_y or type(fl).tau_y_decay is not MRFluid.tau_y_decay:
+        raise ParameterError(f"fluid {fl.name!r}: the network's torque reads Carlson's law only")
+    read = _reader()
+    w_end, scale = np.ascontiguousarray(w_end[:, 0]), np.ascontiguousarray(scale[:, 0])
+    phi, length = np.ascontiguousarray(phi), np.ascontiguousarray(length, dtype=float)
 
     def per_length(r: FloatArray, b_z: FloatArray) -> FloatArray:
         """r²·(τy over the overlap · L + ∫ τy over both fringes) at radius r (S, K),
-        B_z at the zone's band end ``b_z`` (S, C, K)."""
-        r = r[:, None, :]
-        b_r = phi / (2 * np.pi * r)  # (S, C, K)
-        over = sum(wk * fl.tau_y(h_r(b_r, tk * b_z)) for tk, wk in zip(t, tw, strict=True))
-        h_e = h_r(b_r[..., None], b_z[..., None] * band_end)  # at each end (S, C, K, 2)
-        fringe = (fl.tau_y_decay(h_e, w_end) * scale).sum(axis=-1)
-        return r**2 * (over * length[:, None, :] + fringe)
+        B_z at the zone's band end ``b_z`` (S, C, K) (``_read_rows``)."""
+        out = np.zeros(phi.shape)
+        read(phi, np.ascontiguousarray(b_z), np.ascontiguousarray(r), length, w_end, scale,
+             band_end, t, tw, tab, inv, nseg, *law, out)  # fmt: skip
+        return out
 
     if convention == "mid-line":
         tau = per_length(0.5 * (r0 + r1), 0.5 * (bz_in + bz_out))
     else:
         tau = np.minimum(per_length(r0, bz_in), per_length(r1, bz_out))
     return np.where(ok[:, None, :], 2 * np.pi * tau, 0.0)
+
+
+def _read_rows(phi, bz, r, length, w_end, scale, band_end, gt, gw, tab, inv, nseg, tau_max,
+               kc, q_inf, s_at, d_at, s_lo, s_step, s_n, out):  # type: ignore[no-untyped-def]  # fmt: skip
+    """``network_film_torque``'s kernel (compiled by ``_reader``): out (S, C, K) = r²·(L·Σ_j
+    w_j·τy(H_r(B_r, t_j·B_z)) + Σ_ends (g/cπ)·``tau_y_decay``(H_r at the end, W)) for the
+    films with an overlap (L > 0), B_r = Φ/(2πr); H_r = B_r·H(|B|)/|B| on the fluid's
+    table (``solve._tables``, row 1); τy Carlson's, τ_max·tanh(k·|H|), and its decay's closed
+    form ``MRFluid.tau_y_decay`` with S(v) from ``materials._carlson_s``'s table."""
+    top = nseg[1] - 1
+    for s in range(phi.shape[0]):
+        for k in range(phi.shape[2]):
+            if length[s, k] <= 0:
+                continue
+            rr = r[s, k]
+            for c in range(phi.shape[1]):
+                b_r = phi[s, c, k] / (2 * math.pi * rr)
+                over, fringe = 0.0, 0.0
+                for j in range(gt.size + 2):
+                    b_z = bz[s, c, k] * (gt[j] if j < gt.size else band_end[k, j - gt.size])
+                    b = max(math.hypot(b_r, b_z), 1e-300)
+                    i = int(min(b * inv[1], top))
+                    h = b_r * (tab[1, i, 1] + tab[1, i, 0] * b) / b  # H_r
+                    a = kc * abs(h)
+                    if j < gt.size:
+                        over += gw[j] * (tau_max * math.tanh(a))
+                        continue
+                    # the fringe at this end: τ_max·[e^W·S(ln a − W) − S(ln a)]
+                    e = j - gt.size
+                    a = min(a, 1e200)
+                    w = w_end[s, k, e]
+                    v = math.log(max(a, 1e-300))
+                    f = 0.0
+                    for sign, u in ((1.0, v - w), (-1.0, v)):
+                        if u < s_lo:
+                            sv = math.exp(u) * (q_inf - u)
+                        else:
+                            t = min(max((u - s_lo) / s_step, 0.0), s_n - 1.000001)
+                            n = int(t)
+                            t -= n
+                            s0, s1 = s_at[n], s_at[n + 1]
+                            d0, d1 = d_at[n] * s_step, d_at[n + 1] * s_step
+                            sv = s0 + t * (d0 + t * (3 * (s1 - s0) - 2 * d0 - d1
+                                                     + t * (2 * (s0 - s1) + d0 + d1)))  # fmt: skip
+                        f += math.exp(w) * sv if sign > 0 else -sv
+                    fringe += tau_max * (f if a > 0 else 0.0) * scale[s, k, e]
+                out[s, c, k] = rr**2 * (over * length[s, k] + fringe)
+
+
+@functools.cache
+def _reader():  # type: ignore[no-untyped-def]
+    """``_read_rows`` compiled (numba, cached on disk as the solve's kernels), compiled or
+    loaded here by a call on no design; a compile that runs past a second says so on
+    stderr (``solve._notice``)."""
+    import numba
+
+    read = numba.njit(cache=True)(_read_rows)
+    timer = threading.Timer(_COMPILE_NOTICE_S, _notice)
+    timer.daemon = True
+    timer.start()
+    try:
+        e2, e3, ends = np.zeros((0, 1)), np.zeros((0, 1, 1)), np.zeros((0, 1, 2))
+        g = np.zeros(_AXIAL_POINTS)
+        tab, inv, nseg = _tables(MATERIALS["steel_1018"], MATERIALS["mrf_132dg"])
+        q_inf, s_at, d_at = _carlson_s_table()
+        read(e3, e3, e2, e2, ends, ends, np.zeros((1, 2)), g, g, tab, inv, nseg, 1.0, 1.0,
+             q_inf, s_at, d_at, 0.0, 1.0, 2.0, e3)  # fmt: skip
+    finally:
+        timer.cancel()
+    return read
 
 
 _AXIAL_POINTS = 4  # Gauss–Legendre points along the zone, where the film's B_z builds up

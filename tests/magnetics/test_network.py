@@ -416,11 +416,11 @@ kernels = network._kernels()  # NUMBA_DISABLE_JIT=1: the kernels are the Python 
 newton, cold = kernels["_newton"], []
 
 def warm_fails(p, off, m, npole, tab, inv, nseg, ni, start, warm, *rest):
-    conv = newton(p, off, m, npole, tab, inv, nseg, ni, start, warm, *rest)
+    conv, row = newton(p, off, m, npole, tab, inv, nseg, ni, start, warm, *rest)
     if warm:  # pretend no continuation start converges
-        return False
+        return False, row
     cold.append(1)
-    return conv
+    return conv, row
 
 kernels["_newton"] = warm_fails
 f = {k: np.full(5, float(v)) for k, v in vars(replace(preset("paper"), n_drums=4)).items()}

@@ -83,11 +83,13 @@ import numpy as np
 from geometry.params import preset
 from magnetics.torque import torque_curve
 import magnetics.network.solve as solve
+from magnetics.network.torque import _reader
 
 t = torque_curve(preset("paper"), [2.0, 7.0]).yield_torque
 k = solve._kernels()
-misses = sum(len(k[n].stats.cache_misses) for n in solve._KERNELS)
-hits = sum(len(k[n].stats.cache_hits) for n in solve._KERNELS)
+kernels = [k[n] for n in solve._KERNELS] + [_reader()]
+misses = sum(len(d.stats.cache_misses) for d in kernels)
+hits = sum(len(d.stats.cache_hits) for d in kernels)
 print(json.dumps({"misses": misses, "hits": hits, "t": list(t)}))
 """
 
@@ -99,6 +101,6 @@ def test_a_later_process_compiles_nothing():
     runs = [subprocess.run([sys.executable, "-c", _LOADS], env=ENV, capture_output=True,
                            text=True, timeout=600, check=True) for _ in range(2)]  # fmt: skip
     first, second = (json.loads(r.stdout) for r in runs)
-    assert second["misses"] == 0 and second["hits"] >= 2, second
+    assert second["misses"] == 0 and second["hits"] >= 3, second
     assert runs[1].stderr == ""
     assert second["t"] == first["t"] and all(t > 0 for t in first["t"])
