@@ -15,11 +15,6 @@ REGISTRY = df.load_registry()
 SPANS = df.find_spans()
 
 
-@pytest.fixture(scope="module")
-def runner(tmp_path_factory):
-    return df.Runner(tmp_path_factory.mktemp("figures"))
-
-
 def test_every_span_is_registered_and_every_entry_quoted():
     assert SPANS, "no marked figures found in README.md / docs"
     problems = df.check(REGISTRY, SPANS, df.Runner(Path(".")), keys=set())
@@ -47,8 +42,8 @@ def _params():
 
 
 @pytest.mark.parametrize("key", _params())
-def test_quoted_figure_matches_its_command(key, runner):
-    problems = df.check(REGISTRY, SPANS, runner, keys={key})
+def test_quoted_figure_matches_its_command(key, figures_runner):
+    problems = df.check(REGISTRY, SPANS, figures_runner, keys={key})
     assert problems == [], "\n".join(problems) + "\n(run: python -m mrclutch.docs_figures)"
 
 

@@ -38,7 +38,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
                  "equal-force motor"),
     "report": (_DESIGN, "the full report of one design: CAD, views, torque curve, haptic "
                "plots, HTML"),
-    "sweep": (_DESIGN, "evaluate a grid or random sample of designs on the fast path (CSV)"),
+    "sweep": (_DESIGN, "evaluate a grid or random sample of designs on the fast path (CSV or "
+              "Parquet)"),
     "optimize": (_DESIGN, "maximise rendering bandwidth (area, Z-width or transparency) "
                  "under torque, mass, envelope and stability/passivity limits"),
     "scale": ("mrclutch.cli.commands.scaling", "reach k× torque by more drums, longer drums "

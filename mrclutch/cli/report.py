@@ -133,7 +133,7 @@ def _build(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[str],
         _view(design, tmp / "view.png")
         tick("section drawing")
         section_figure(build_section(design.clutch), tmp / "section.png")
-        tick("torque–current curve (circuit and FEM)")
+        tick("torque–current curve (network, circuit and FEM)")
         curve = _torque(design, tmp / "torque.png")
         tick("haptic plots")
 

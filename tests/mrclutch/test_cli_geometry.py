@@ -139,3 +139,21 @@ def test_view_screenshot_subprocess(tmp_path):
     )
     assert r.returncode == 0, r.stderr
     assert png.stat().st_size > 10_000
+
+
+def test_stl_without_density_names_the_materials_file_beside_it(exported, tmp_path, capsys):
+    """Issue 34: the hint points at the export's clutch.materials.json beside the STL and
+    what it lists for that part (the rotor mixes two materials: weigh the STEP)."""
+    import shutil
+
+    assert main(["inertia", str(exported / "rotor.stl")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "clutch.materials.json beside it lists rotor" in err and "\n" not in err
+    assert "stainless_304 8000 kg/m³" in err and "steel_1018 7870 kg/m³" in err
+    assert "mrclutch inertia clutch.step" in err
+    assert main(["inertia", str(exported / "shaft.stl")]) == 2
+    err = capsys.readouterr().err
+    assert "lists shaft: stainless_304 8000 kg/m³)" in err and "mixes" not in err
+    alone = shutil.copy(exported / "coil.stl", tmp_path / "coil.stl")  # no sidecar here
+    assert main(["inertia", str(alone)]) == 2
+    assert "an STL carries no material" in capsys.readouterr().err

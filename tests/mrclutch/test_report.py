@@ -251,3 +251,17 @@ def test_html_is_responsive_without_a_browser(report_dir):
     assert "@media (max-width:700px){.grid{grid-template-columns:1fr}" in page
     assert page.count("<table>") == page.count("<div class=scroll><table>") > 0
     assert "img{max-width:100%" in page
+
+
+def test_every_report_file_is_in_help_and_readme(report_dir):
+    """Issue 34: `report --help` and the README name every file the report writes."""
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    helped = subprocess.run([sys.executable, "-m", "mrclutch", "report", "--help"],
+                            capture_output=True, text=True, check=True).stdout  # fmt: skip
+    helped = " ".join(helped.split())
+    for p in report_dir.iterdir():
+        name = "<part>.stl" if p.suffix == ".stl" else p.name
+        assert name in helped, f"report --help does not name {name}"
+        assert name in readme, f"README does not name {name}"

@@ -56,7 +56,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--fidelity",
         default="fast",
-        help="fast (analytic inertia, magnetic circuit) or reference (exact B-rep, FEM); "
+        help="fast (analytic inertia, reluctance network) or reference (exact B-rep, FEM); "
         "default fast",
     )
     p.add_argument(
@@ -73,9 +73,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "report",
         help="the full report of one design: CAD, views, torque curve, haptic plots, HTML",
-        description="Write clutch.step, <part>.stl, view.png, section.png, torque.png, "
-        "haptic.png, metrics.json and report.html into --out (built aside and moved in "
-        "only when complete).",
+        description="Write report.html (read it first), clutch.step, clutch.materials.json "
+        "(each solid's material and density), <part>.stl, view.png, section.png, torque.png, "
+        "haptic.png, zwidth.png, response.png and metrics.json into --out (built aside and "
+        "moved in only when complete).",
     )
     add_design_args(p)
     p.add_argument("--out", required=True, metavar="DIR", help="folder to write")
@@ -87,7 +88,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser(
         "sweep",
-        help="evaluate a grid or random sample of designs on the fast path (CSV)",
+        help="evaluate a grid or random sample of designs on the fast path (CSV or Parquet)",
         description="Sweep DrumClutch parameters given in SPEC.toml (ranges in mm); rows are "
         "written as they come, so an interrupted sweep loses nothing and --resume carries on.",
     )
@@ -98,7 +99,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         required=True,
         metavar="RESULTS.csv|RESULTS.parquet",
         help="CSV file to write, or a Parquet dataset (a folder of one part file a chunk) "
-        "when the name ends in .parquet",
+        "when the name ends in .parquet; beside it RESULTS.csv.meta.json records the spec's "
+        "fingerprint (for --resume) and each column's unit and meaning",
     )
     p.add_argument("--resume", action="store_true", help="continue an interrupted sweep")
     p.add_argument("--overwrite", action="store_true", help="replace an existing results file")
@@ -138,8 +140,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         type=int,
         metavar="N",
         help="after the sweep, re-solve the N best rows (by --objective) with the FEM at the "
-        "error map's reference size, on the same workers, print the circuit's error on each "
-        "and write it to <RESULTS>.verified.csv",
+        "error map's reference size, on the same workers, print the network's and the "
+        "single-loop circuit's error on each and write them to RESULTS.csv.verified.csv",
     )
     p.add_argument(
         "--objective",

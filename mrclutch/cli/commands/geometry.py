@@ -32,7 +32,13 @@ DEFAULT_TOLERANCE_MM = 0.01
 
 
 def register(sub: Any) -> None:
-    p = sub.add_parser("export", help="write clutch.step and one STL per part")
+    p = sub.add_parser(
+        "export",
+        help="write clutch.step and one STL per part",
+        description="Write DIR/clutch.step (the assembly, one solid per material), "
+        "DIR/clutch.materials.json (each solid's material and density: `mrclutch inertia "
+        "DIR/clutch.step` weighs it) and DIR/<part>.stl (one mesh per part, mm).",
+    )
     add_design_args(p)
     p.add_argument("--out", required=True, metavar="DIR", help="output directory")
     _tol(p)
@@ -144,7 +150,7 @@ def cmd_inertia(args: argparse.Namespace) -> int:
 
 
 def _densities(
-    args: argparse.Namespace, names: list[str], optional: bool = False
+    args: argparse.Namespace, names: list[str], optional: bool = False, hint: str = ""
 ) -> dict[str, float]:
     """Density of each part named on the command line (``--part-density``, else
     ``--density``); with ``optional`` (a sidecar has the rest) a part without one is left
@@ -175,7 +181,7 @@ def _densities(
         else:
             raise ParameterError(
                 f"part {n}: no density; give --density or --part-density {n}=… "
-                "(or keep the export's <stem>.materials.json beside the STEP)"
+                + (hint or "(or keep the export's <stem>.materials.json beside the STEP)")
             )
     return out
 
@@ -218,6 +224,26 @@ def _weigh_step(args: argparse.Namespace, path: Path) -> dict[str, dict[str, Any
     return results
 
 
+def _stl_hint(stl: Path) -> str:
+    """What the export's materials file beside an STL says about its part (an STL has no
+    material): the densities to give, or the STEP that weighs the exact mix."""
+    suffix = ".materials.json"
+    for side in sorted(stl.parent.glob(f"*{suffix}")):
+        step = side.name[: -len(suffix)] + ".step"
+        try:
+            info = read_materials(side.with_name(step)) or {}
+        except ParameterError:
+            continue
+        mats = sorted({(v["material"], v["density_kg_m3"]) for v in info.values()
+                       if v.get("part") == stl.stem})  # fmt: skip
+        if mats:
+            listed = ", ".join(f"{m} {rho:g} kg/m³" for m, rho in mats)
+            mixed = (f"; it mixes materials, so one density is approximate: "
+                     f"`mrclutch inertia {step}` weighs each" if len(mats) > 1 else "")  # fmt: skip
+            return f"({side.name} beside it lists {stl.stem}: {listed}{mixed})"
+    return "(an STL carries no material; the export's <stem>.materials.json lists each part's)"
+
+
 def _weigh_file(args: argparse.Namespace) -> int:
     path = Path(args.design)
     if args.preset is not None:
@@ -233,7 +259,7 @@ def _weigh_file(args: argparse.Namespace) -> int:
         except Exception as exc:  # trimesh raises assorted errors on bad files
             raise ParameterError(f"{path}: not a readable STL ({exc})") from None
         name = path.stem
-        rho = _densities(args, [name])[name]
+        rho = _densities(args, [name], hint=_stl_hint(path))[name]
         check_mesh(mesh, name)
         pm = weigh_mesh(mesh, rho, args.axis)
         results[name] = {"mass_kg": pm.mass, "inertia_kg_m2": pm.inertia, "density_kg_m3": rho}
