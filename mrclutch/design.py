@@ -40,6 +40,12 @@ the key name too::
     gearing = 1.0
     workspace_mm = 50
 
+    [uncertainty]            # optional: ranges of the least certain inputs (defaults and
+    gap_tolerance_mm = 0.02  # sources in mrclutch/uncertainty.py, docs/verdicts.md)
+
+    [measured]               # optional: what a bench measured (mrclutch/uncertainty.py)
+    m1_g = 1.5
+
 Every key is checked: unknown keys, unit-less keys and wrong types are refused with a
 message naming the key.
 """
@@ -65,6 +71,16 @@ from magnetics.materials import FLUIDS
 from magnetics.thermal import adiabatic_current_density
 from mrclutch.haptics.actuator import MR_170, MR_DELAY, Transmission
 from mrclutch.inputs import read_toml
+from mrclutch.uncertainty import (
+    PAPER_BENCH,
+    Measured,
+    Uncertainty,
+    default_uncertainty,
+    measured_from_mapping,
+    measured_to_toml,
+    uncertainty_from_mapping,
+    uncertainty_to_toml,
+)
 
 #: Largest actuator delay accepted (s): beyond it no haptic loop renders anything.
 MAX_DELAY = 1.0
@@ -132,6 +148,15 @@ class ClutchDesign:
     support: Support = field(default_factory=Support)
     amplifier: Amplifier = field(default_factory=Amplifier)
     laminations: Laminations = field(default_factory=Laminations)
+    #: the ranges of the least certain inputs (None: ``default_uncertainty(design)``)
+    uncertainty: Uncertainty | None = None
+    #: what a bench measured (None: nothing)
+    measured: Measured | None = None
+
+    @property
+    def ranges(self) -> Uncertainty:
+        """The declared uncertainty, or the documented defaults for this design."""
+        return self.uncertainty if self.uncertainty is not None else default_uncertainty(self)
 
     @property
     def current_limit(self) -> float:
@@ -161,7 +186,7 @@ def current_limit(operating: Operating, wire_diameter: Any, supply: Any = math.i
 
 #: Named designs. "paper": the paper's clutch on the paper's MR bench (170 mm lever).
 DESIGNS: dict[str, ClutchDesign] = {
-    "paper": ClutchDesign(clutch=preset("paper"), name="paper"),
+    "paper": ClutchDesign(clutch=preset("paper"), name="paper", measured=PAPER_BENCH),
 }
 
 
@@ -257,7 +282,7 @@ def _short(v: Any) -> str:
 def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> ClutchDesign:
     """Build a design from a parsed design file (see the module docstring)."""
     known = {"clutch", "operating", "transmission", "support", "amplifier", "laminations",
-             "name"}  # fmt: skip
+             "uncertainty", "measured", "name"}  # fmt: skip
     for key in data:
         if key not in known and not isinstance(data[key], dict):
             raise ParameterError(f"{where}: {key}: not in a table; dimensions go under [clutch]")
@@ -317,8 +342,16 @@ def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> Clutc
     with _file_key(sup_table, _SUPPORT_KEYS, f"{where}: support"):
         support = Support(bearing=bearing, **sup)  # type: ignore[arg-type]
     name = data["name"] if "name" in data else Path(where).stem
-    return ClutchDesign(clutch, operating, transmission, str(name), support, amplifier,
-                        laminations)  # fmt: skip
+    design = ClutchDesign(clutch, operating, transmission, str(name), support, amplifier,
+                          laminations)  # fmt: skip
+    if "uncertainty" in data:
+        unc = uncertainty_from_mapping(data["uncertainty"], f"{where}: uncertainty",
+                                       base=default_uncertainty(design))  # fmt: skip
+        design = replace(design, uncertainty=unc)
+    if "measured" in data:
+        meas = measured_from_mapping(data["measured"], f"{where}: measured", source=str(where))
+        design = replace(design, measured=meas)
+    return design
 
 
 def load_design(path: str | Path) -> ClutchDesign:
@@ -357,6 +390,10 @@ def design_to_toml(design: ClutchDesign) -> str:
     sup = design.support
     lines += ["", "[support]", f"bearing = {_toml(sup.bearing)}"]
     lines += [f"{k} = {_toml(_si(getattr(sup, n), f))}" for k, (n, f) in _SUPPORT_KEYS.items()]
+    if design.uncertainty is not None:
+        lines += ["", "[uncertainty]", *uncertainty_to_toml(design.uncertainty)]
+    if design.measured is not None:
+        lines += ["", "[measured]", *measured_to_toml(design.measured)]
     return "\n".join(lines) + "\n"
 
 

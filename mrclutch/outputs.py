@@ -214,6 +214,13 @@ def output(key: str) -> Output:
         raise KeyError(f"no output named {key!r}; known: {', '.join(OUTPUTS)}") from None
 
 
+def format_kmax(value: float, source: str) -> str:
+    """K_max as every command prints it: the value and, in brackets, where it comes from
+    (Table 2 / Table 1 catalogue / fast model / reference model / measured), so two
+    commands that differ say why."""
+    return f"K_max {value:.4g} N/m [{source}]"
+
+
 def row_label(key: str) -> str:
     """``label (display unit)`` for a table row."""
     o = output(key)

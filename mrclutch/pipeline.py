@@ -321,6 +321,8 @@ class Evaluation:
     #: secondary figures that could not be computed → why (the motor comparison, the
     #: torque response's delay); the rest of the evaluation stands
     unavailable: Mapping[str, str] = field(default_factory=dict)
+    source: str = "fast model"  # where the pair's figures at the hand come from
+    model_mr: HapticParams | None = None  # the model's pair where measured values replace it
 
     def as_json(self) -> dict[str, Any]:
         mr_m, em_m = dict(self.haptic), dict(self.motor_metrics)
@@ -347,6 +349,7 @@ class Evaluation:
             "hand": hand,
             "response": dict(self.response),
             "unavailable": dict(self.unavailable),
+            "source": self.source,
         }
 
 
@@ -379,6 +382,8 @@ def evaluate(
     )
     mr = mr_at_hand(design, fig.moving_inertia, fig.drag_damping, fig.max_torque,
                     fig.clutch_mass, float(resp.equivalent_delay[0]))  # fmt: skip
+    model_mr = mr
+    mr, source = with_measured(design, mr, fig.max_current, source_label(fidelity))
     motor = actuator(MOTOR)
     unavailable: dict[str, str] = {}
     try:  # a secondary figure: a motor that cannot be geared to the force is left out
@@ -402,7 +407,40 @@ def evaluate(
     gearing = em_tr.gearing if em_tr is not None else None
     return Evaluation(design, fidelity, fig, mr, em, gearing, mr_m, em_m, budget, zws, hand,
                       response_figures(design, resp, mr, unavailable), resp,
-                      MappingProxyType(unavailable))  # fmt: skip
+                      MappingProxyType(unavailable), source, model_mr)  # fmt: skip
+
+
+#: The label beside a figure at the hand: where its torque, mass and damping come from.
+SOURCE_LABELS = {"fast": "fast model", "reference": "reference model"}
+
+
+def source_label(fidelity: str) -> str:
+    """"fast model", "reference model", or the accuracy target's label."""
+    return SOURCE_LABELS.get(fidelity, f"model, {fidelity}")
+
+
+def with_measured(design: ClutchDesign, mr: HapticParams, current: float, source: str
+                  ) -> tuple[HapticParams, str]:  # fmt: skip
+    """The pair at the hand with what the bench measured put in (``[measured]`` with
+    ``use_in_model``): m1, b1, the step delay and, measured at the current limit, the
+    torque (F_max through Eq. 4's reduction); the label then names them as measured."""
+    meas = design.measured
+    if meas is None or not meas.use_in_model:
+        return mr, source
+    new: dict[str, float] = {}
+    if meas.m1 is not None:
+        new["m1"] = meas.m1
+    if meas.b1 is not None:
+        new["b1"] = meas.b1
+    if meas.step_delay is not None:
+        new["delay"] = meas.step_delay
+    at_limit = [p.torque for p in meas.torque if math.isclose(p.current, current, rel_tol=1e-9)]
+    if at_limit:
+        new["f_max"] = at_limit[0] * design.transmission.reduction  # Eq. 4: F = T nG/l
+    if not new:
+        return mr, source
+    names = {"m1": "m1", "b1": "b1", "delay": "delay", "f_max": "torque"}
+    return replace(mr, **new), f"measured ({', '.join(names[k] for k in new)}) + {source}"
 
 
 def response_figures(design: ClutchDesign, resp: Any, mr: HapticParams,

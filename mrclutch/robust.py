@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -39,13 +39,16 @@ from geometry import regions
 from geometry.numerics import illinois
 from geometry.params import broadcast_fields
 from magnetics.drag import drag_terms, totals
+from magnetics.torque import torque_curve
 from mrclutch.design import ClutchDesign
 from mrclutch.haptics.actuator import HapticParams
 from mrclutch.haptics.model import (
     bandwidth,
     max_passive_stiffness,
     max_stable_stiffness,
+    rendering_area,
 )
+from mrclutch.haptics.zwidth import zwidth as zwidth_of
 from mrclutch.pipeline import evaluate_batch, mr_at_hand
 from mrclutch.uncertainty import Uncertainty, default_uncertainty
 
@@ -400,3 +403,229 @@ def robust_columns_batch(
         "max_passive_K_worst_N_per_m": lim["max_passive_K_worst"],
         "bandwidth_worst_hz": lim["bandwidth_worst"],
     }
+
+
+# ---- one design: the robust read-out of an Evaluation ----------------------------------
+
+#: Inputs whose one-at-a-time threshold is root-found (others nominal): HapticParams field,
+#: label, unit, display scale.
+THRESHOLD_INPUTS: tuple[tuple[str, str, str, float], ...] = (
+    ("b1", "b1", "N·s/m", 1.0),
+    ("delay", "the delay", "ms", 1e3),
+)
+#: The verdicts at K that a threshold decides, and the exact kernel of each limit.
+_LIMITS: dict[str, Callable[[HapticParams], Any]] = {
+    "stable": max_stable_stiffness,
+    "passive": max_passive_stiffness,
+}
+
+
+def _holds(worst: float, best: float, K: float) -> str:
+    """"always" (K within the limit at every value of the ranges), "never", or "depends"."""
+    if K <= worst:
+        return "always"
+    if K > best:
+        return "never"
+    return "depends"
+
+
+def threshold(p: HapticParams, K: float, verdict: str, field: str) -> dict[str, Any] | None:
+    """The value x* of ``field`` (others as in ``p``) at which ``verdict`` ("stable" or
+    "passive") at K flips: the limit's exact kernel equals K there (Brent's root-find on
+    log x over 10⁻³–10³ × the value in ``p``, the delay up to 1 s). ``sense`` "≥" when the
+    verdict holds above x*, "≤" below. None where no value of this input alone flips it."""
+    from scipy.optimize import brentq
+
+    limit = _LIMITS[verdict]
+    x0 = float(getattr(p, field))
+    if x0 <= 0:
+        return None
+
+    def g(u: float) -> float:
+        v = float(limit(replace(p, **{field: math.exp(u)})))
+        return math.log(min(v, 1e12) / K)
+
+    lo, hi = math.log(x0 * 1e-3), math.log(min(x0 * 1e3, 1.0) if field == "delay" else x0 * 1e3)
+    us = np.linspace(lo, hi, 13)
+    gs = [g(u) for u in us]
+    # the crossing nearest the value in p
+    u0 = math.log(x0)
+    best = None
+    for a, b, ga, gb in zip(us[:-1], us[1:], gs[:-1], gs[1:], strict=True):
+        if ga == 0 or ga * gb < 0:
+            r = a if ga == 0 else brentq(g, a, b, xtol=1e-12, rtol=1e-10)
+            if best is None or abs(r - u0) < abs(best[0] - u0):
+                best = (r, ga, gb)
+    if best is None:
+        return None
+    r, ga, gb = best
+    return {"value": math.exp(r), "sense": "≥" if gb > ga else "≤"}
+
+
+def _rescaled(box: HandBox, p: HapticParams, K: float, bench: tuple[float, float]) -> HandBox:
+    """The box of the fast path moved onto the evaluated pair ``p`` (another fidelity, or
+    measured values): each range keeps its ratio to the nominal; the bench damping is
+    additive. Measured quantities (a range of one value) stay as they are."""
+    def scale(t: tuple[np.ndarray, ...], v: float, add: tuple[float, float] = (0.0, 0.0)
+              ) -> tuple[np.ndarray, ...]:  # fmt: skip
+        nom, lo, hi = (float(x[0]) for x in t)
+        r_lo, r_hi = (lo - add[0]) / nom, (hi - add[1]) / nom
+        return tuple(np.array([x]) for x in (v, v * r_lo + add[0], v * r_hi + add[1]))
+
+    return replace(box, m1=scale(box.m1, float(p.m1)), b1=scale(box.b1, float(p.b1), bench),
+                   delay=scale(box.delay, float(p.delay)), K=scale(box.K, K))  # fmt: skip
+
+
+def robust_verdicts(ev: Any, uncertainty: Uncertainty | None = None) -> dict[str, Any]:
+    """The robust read-out of an ``Evaluation`` (docs/verdicts.md): per verdict nominal,
+    worst and best over ``uncertainty`` (None: the design's ``ranges``), whether each
+    verdict at K holds always / never / depending on the inputs, the thresholds of b1 and
+    the delay that decide it (one at a time, the others nominal), the box and a one-
+    sentence headline. Quantities a bench measured and the model uses are not varied."""
+    design = ev.design
+    unc = uncertainty if uncertainty is not None else design.ranges
+    fields = {f: np.array([v]) for f, v in vars(design.clutch).items()}
+    box = hand_box_batch(fields, design, unc)
+    K = float(ev.haptic["K_N_per_m"])
+    mr = ev.mr
+    box = _rescaled(box, mr, float(mr.k_max), unc.bench_damping)
+    meas = design.measured
+    if meas is not None and meas.use_in_model:  # measured: no range
+        fix = {"m1": meas.m1, "b1": meas.b1, "delay": meas.step_delay}
+        box = replace(box, **{f: tuple(np.array([float(getattr(mr, f))]) for _ in range(3))
+                              for f, v in fix.items() if v is not None})  # fmt: skip
+    lim = robust_limits(box)
+    out: dict[str, Any] = {"K_N_per_m": K}
+    for q, key in (("max_stable_K", "max_stable_K_N_per_m"),
+                   ("max_passive_K", "max_passive_K_N_per_m"), ("bandwidth", "bandwidth_hz")):  # fmt: skip
+        out[key] = {c: float(lim[f"{q}_{c}"][0]) for c in CASES}
+    # the rendering area at K and the Z-width area: searched (3⁴ / 3³ grids, two zooms)
+    lo3 = np.array([[box.m1[1][0], box.b1[1][0], box.delay[1][0]]])
+    hi3 = np.array([[box.m1[2][0], box.b1[2][0], box.delay[2][0]]])
+
+    def area(x: np.ndarray) -> np.ndarray:
+        return rendering_area(box.params(x[..., 0], x[..., 1], x[..., 2]), K)
+
+    def zw(x: np.ndarray) -> np.ndarray:
+        return zwidth_of(box.params(x[..., 0], x[..., 1], x[..., 2]))["zwidth_area_N2_s_per_m2"]
+
+    nom = box.nominal
+    for key, fn, nominal in (
+        ("rendering_area_dB_decade", area, rendering_area(nom, K)),
+        ("zwidth_area_N2_s_per_m2", zw, zwidth_of(nom)["zwidth_area_N2_s_per_m2"]),
+    ):
+        w, _ = box_search(fn, lo3, hi3, sense=-1, points=3, zooms=2)
+        b, _ = box_search(fn, lo3, hi3, sense=1, points=3, zooms=2)
+        out[key] = {"nominal": float(np.ravel(nominal)[0]), "worst": float(w[0]),
+                    "best": float(b[0])}  # fmt: skip
+    verdicts: dict[str, Any] = {}
+    for verdict, key in (("stable", "max_stable_K_N_per_m"), ("passive", "max_passive_K_N_per_m")):
+        v = out[key]
+        holds = _holds(v["worst"], v["best"], K)
+        th = {}
+        if holds == "depends":
+            for field, *_ in THRESHOLD_INPUTS:
+                if meas is not None and meas.use_in_model and field in ("m1", "b1", "delay"):
+                    if getattr(meas, "step_delay" if field == "delay" else field) is not None:
+                        continue
+                t = threshold(mr, K, verdict, field)
+                if t is not None:
+                    i = 0 if field == "b1" else 1
+                    rng = (box.b1, box.delay)[i]
+                    t["range"] = [float(rng[1][0]), float(rng[2][0])]
+                    t["at_nominal_of_others"] = True
+                    th[field] = t
+        verdicts[verdict] = {"nominal": bool(K <= v["nominal"] * (1 + 1e-9)), "holds": holds,
+                             "thresholds": th}  # fmt: skip
+    out["verdicts"] = verdicts
+    out["ranges"] = {
+        "m1_kg": [float(box.m1[1][0]), float(box.m1[2][0])],
+        "b1_N_s_per_m": [float(box.b1[1][0]), float(box.b1[2][0])],
+        "delay_s": [float(box.delay[1][0]), float(box.delay[2][0])],
+        "K_max_N_per_m": [float(box.K[1][0]), float(box.K[2][0])],
+    }
+    out["nominal"] = {"m1_kg": float(mr.m1), "b1_N_s_per_m": float(mr.b1),
+                      "delay_s": float(mr.delay)}  # fmt: skip
+    out["uncertainty"] = {k: v for k, v in vars(unc).items()}
+    out["headline"] = headline(out)
+    return out
+
+
+def _fmt_threshold(field: str, t: dict[str, Any]) -> str:
+    label, unit, scale = next((lb, u, s) for f, lb, u, s in THRESHOLD_INPUTS if f == field)
+    lo, hi = (x * scale for x in t["range"])
+    inside = t["range"][0] <= t["value"] <= t["range"][1]
+    where = "range" if inside else "outside its range"
+    return f"{label} {t['sense']} {t['value'] * scale:.3g} {unit} ({where} {lo:.3g}–{hi:.3g} {unit})"
+
+
+def headline(r: dict[str, Any]) -> str:
+    """The robust verdict of ``robust_verdicts`` in one sentence."""
+    K = r["K_N_per_m"]
+    v = r["verdicts"]
+    ks, kp = r["max_stable_K_N_per_m"], r["max_passive_K_N_per_m"]
+    words = {"stable": ("stable", "unstable"), "passive": ("passive", "not passive")}
+    always = [n for n in ("stable", "passive") if v[n]["holds"] == "always"]
+    never = [n for n in ("stable", "passive") if v[n]["holds"] == "never"]
+    parts = []
+    if always:
+        parts.append(" and ".join(words[n][0] for n in always) + " for every value of the ranges")
+    if never:
+        parts.append(" and ".join(words[n][1] for n in never) + " for every value of the ranges")
+    for n in ("stable", "passive"):
+        if v[n]["holds"] != "depends":
+            continue
+        th = v[n]["thresholds"]
+        cond = " or ".join(_fmt_threshold(f, t) for f, t in th.items()) or "jointly decided"
+        nominal = words[n][0] if v[n]["nominal"] else words[n][1]
+        parts.append(f"{nominal} at nominal values, {words[n][0]} only if {cond}")
+    return (f"Robust verdict at K = {K:.4g} N/m: " + "; ".join(parts)
+            + f" (each input alone, the others nominal); over the ranges the largest stable K "
+            f"is {ks['worst']:.4g}–{ks['best']:.4g} N/m, the largest passive K "
+            f"{kp['worst']:.4g}–{kp['best']:.4g} N/m.")  # fmt: skip
+
+
+# ---- model against a bench --------------------------------------------------------------
+
+
+def measured_comparison(ev: Any) -> list[dict[str, Any]]:
+    """Every quantity the design's ``[measured]`` holds, model against measurement: rows of
+    quantity, unit, model, measured, error (model/measured − 1) and how the model got it.
+    The model's torque at the current limit is the evaluation's (its own method); at other
+    currents the reluctance network's (the fast model)."""
+    meas = ev.design.measured
+    if meas is None or meas.empty:
+        return []
+    op = ev.design.operating
+    model = ev.model_mr if ev.model_mr is not None else ev.mr
+    rows: list[dict[str, Any]] = []
+
+    def row(q: str, unit: str, m: float, x: float, how: str) -> None:
+        rows.append({"quantity": q, "unit": unit, "model": m, "measured": x,
+                     "error": m / x - 1.0, "model_source": how})  # fmt: skip
+
+    limit = ev.clutch.max_current
+    other = [p.current for p in meas.torque if not math.isclose(p.current, limit, rel_tol=1e-9)]
+    curve = {}
+    if other:
+        c = torque_curve(ev.design.clutch, other, method="network",
+                         speed_rpm=op.input_speed_rpm, temperature=op.fluid_temperature,
+                         support=ev.design.support)  # fmt: skip
+        curve = dict(zip(other, (float(t) for t in c.torque), strict=True))
+    for p in meas.torque:
+        if p.current in curve:
+            row(f"torque at {p.current:g} A", "N·m", curve[p.current], p.torque, "fast model")
+        else:
+            row(f"torque at {p.current:g} A", "N·m", ev.clutch.max_torque, p.torque,
+                f"torque by {ev.clutch.methods['torque']}")  # fmt: skip
+    if meas.step_delay is not None:
+        row("delay of a torque step", "s", float(ev.response["torque_delay_s"]),
+            meas.step_delay, "equivalent delay (magnetics.dynamics)")  # fmt: skip
+    if meas.m1 is not None:
+        row("m1 at the hand", "kg", float(model.m1), meas.m1, "Eq. 3 of the rotor and fluid")
+    if meas.b1 is not None:
+        row("b1 at the hand", "N·s/m", float(model.b1), meas.b1, "Eq. 3 of the drag terms")
+    if meas.off_state_torque is not None:
+        row("off-state torque", "N·m", ev.clutch.off_state_torque, meas.off_state_torque,
+            "drag terms (magnetics.drag)")  # fmt: skip
+    return rows

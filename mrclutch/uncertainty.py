@@ -319,3 +319,51 @@ def no_uncertainty(design: Any = None) -> Uncertainty:
     t = 20.0 if design is None else float(design.operating.fluid_temperature)
     d = 1e-3 if design is None else float(design.operating.delay)
     return Uncertainty(0.0, (t, t), 0.0, 0.0, 0.0, (d, d), (0.0, 0.0), 0.0, 0.0)
+
+
+#: The paper's own bench [lebel] (examples/paper_bench.toml holds the same): Fig. 2b's
+#: blocked torque ~0.4 N·m at 7 A (530 rpm), Table 2's identified m1 = 1.5 g and
+#: b1 = 1.0 N·s/m (170 mm lever, "manually adjusted … to a best visual fit"), and §IV-B's
+#: 1 ms pure delay "corroborating experiments". No off-state torque is published.
+PAPER_BENCH = Measured(
+    torque=(TorquePoint(7.0, 0.4),),
+    step_delay=1e-3,
+    m1=1.5e-3,
+    b1=1.0,
+    source="the paper's bench: Fig. 2b, Table 2, §IV-B [lebel]",
+)
+
+
+def _fmt(v: float) -> str:
+    return repr(float(v))
+
+
+def uncertainty_to_toml(u: Uncertainty) -> list[str]:
+    """The ``[uncertainty]`` lines that ``uncertainty_from_mapping`` reads back to ``u``."""
+    lines = []
+    for key, (name, factor, kind) in _UNCERTAINTY_KEYS.items():
+        v = getattr(u, name)
+        if v is None:
+            continue
+        if kind == "range":
+            lines.append(f"{key} = [{_fmt(v[0] / factor)}, {_fmt(v[1] / factor)}]")
+        else:
+            lines.append(f"{key} = {_fmt(v / factor)}")
+    return lines
+
+
+def measured_to_toml(m: Measured) -> list[str]:
+    """The ``[measured]`` lines that ``measured_from_mapping`` reads back to ``m``."""
+    lines = []
+    if m.torque:
+        pts = ", ".join(f"{{current_A = {_fmt(p.current)}, torque_N_m = {_fmt(p.torque)}}}"
+                        for p in m.torque)  # fmt: skip
+        lines.append(f"torque = [{pts}]")
+    for key, (name, factor) in _MEASURED_KEYS.items():
+        v = getattr(m, name)
+        if v is not None:
+            lines.append(f"{key} = {_fmt(v / factor)}")
+    lines.append(f"use_in_model = {'true' if m.use_in_model else 'false'}")
+    if m.source:
+        lines.append('source = "' + m.source.replace("\\", "\\\\").replace('"', '\\"') + '"')
+    return lines

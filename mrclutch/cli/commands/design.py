@@ -6,6 +6,7 @@ import argparse
 import math
 import sys
 import time
+from typing import Any
 
 import numpy as np
 
@@ -33,13 +34,21 @@ from mrclutch.optimize import (
     optimize,
     parse_bounds,
 )
-from mrclutch.outputs import CLUTCH_ROWS, HAND_ROWS, SWEEP_OPTIONAL, output, row_label
+from mrclutch.outputs import (
+    CLUTCH_ROWS,
+    HAND_ROWS,
+    SWEEP_OPTIONAL,
+    format_kmax,
+    output,
+    row_label,
+)
 from mrclutch.pipeline import (
     FAST_BANDWIDTH_ERROR,
     FIDELITIES,
     BatchEvaluator,
     evaluate,
 )
+from mrclutch.robust import measured_comparison, robust_verdicts
 from mrclutch.sweep import is_parquet, load_spec, run_sweep
 from mrclutch.verify import TORQUE, verified_path, verify_top, write_verified
 
@@ -66,6 +75,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         metavar="REL",
         help="relative accuracy target (e.g. 0.01): per quantity the cheapest method that "
         "meets it (docs/fidelity.md); overrides --fidelity",
+    )
+    p.add_argument(
+        "--no-uncertainty",
+        action="store_true",
+        help="the nominal verdict only: no ranges over the uncertain inputs ([uncertainty], "
+        "docs/verdicts.md)",
     )
     p.add_argument("--json", action="store_true", help="print JSON (SI units in the key names)")
     p.set_defaults(func=_evaluate)
@@ -227,7 +242,7 @@ def _evaluate(args: argparse.Namespace) -> int:
     if args.accuracy is not None and not 0 < args.accuracy < 1:
         raise CLIError(f"--accuracy = {args.accuracy}: need 0 < accuracy < 1 (relative)")
     ev = evaluate(design, args.fidelity, accuracy=args.accuracy)
-    data = ev.as_json()
+    data = evaluation_json(ev, robust=not args.no_uncertainty)
     if args.json:
         print_json(data)
         return 0
@@ -237,12 +252,76 @@ def _evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
+def evaluation_json(ev: Any, robust: bool = True) -> dict:
+    """``Evaluation.as_json()`` with the robust verdicts over the design's ranges (unless
+    ``robust`` is False: the nominal one) and the model against the bench's measurements."""
+    data = ev.as_json()
+    data["robust"] = robust_verdicts(ev) if robust else None
+    data["measured"] = measured_comparison(ev)
+    return data
+
+
+def verdict_headline(data: dict) -> str:
+    """The one-sentence verdict: robust over the ranges, or nominal without them."""
+    if data.get("robust"):
+        return str(data["robust"]["headline"])
+    h = data["haptic"]
+    stable = h["K_N_per_m"] <= h["max_stable_K_N_per_m"] * (1 + 1e-9)
+    return (f"Verdict at K = {h['K_N_per_m']:.4g} N/m (nominal, no uncertainty): "
+            f"{'stable' if stable else 'unstable'} and "
+            f"{'passive' if h['passive'] else 'not passive'}.")  # fmt: skip
+
+
+def format_robust(r: dict) -> list[str]:
+    """Nominal, worst and best of each verdict over the ranges (docs/verdicts.md)."""
+    lines = ["", f"{'over the uncertain inputs (MR pair)':<40}{'nominal':>10}{'worst':>10}"
+             f"{'best':>10}"]  # fmt: skip
+    rows = (("largest stable K (N/m)", "max_stable_K_N_per_m", 1.0),
+            ("largest passive K (N/m)", "max_passive_K_N_per_m", 1.0),
+            ("bandwidth at K_max (Hz)", "bandwidth_hz", 1.0),
+            ("rendering area (dB·decade)", "rendering_area_dB_decade", 1.0),
+            ("Z-width area (N²·s/m²)", "zwidth_area_N2_s_per_m2", 1.0))  # fmt: skip
+    for label, key, sc in rows:
+        v = r[key]
+        lines.append(f"  {label:<38}" + "".join(f"{v[c] * sc:>10.4g}" for c in
+                                                 ("nominal", "worst", "best")))  # fmt: skip
+    words = {"always": "yes, for every value", "never": "no, for any value",
+             "depends": "depends on the inputs"}  # fmt: skip
+    for n in ("stable", "passive"):
+        v = r["verdicts"][n]
+        lines.append(f"  {n + ' at K':<38}{'yes' if v['nominal'] else 'no':>10}  "
+                     f"{words[v['holds']]}")  # fmt: skip
+    g = r["ranges"]
+    lines.append(f"  ranges: m1 {g['m1_kg'][0] * 1e3:.3g}–{g['m1_kg'][1] * 1e3:.3g} g, b1 "
+                 f"{g['b1_N_s_per_m'][0]:.3g}–{g['b1_N_s_per_m'][1]:.3g} N·s/m, delay "
+                 f"{g['delay_s'][0] * 1e3:.3g}–{g['delay_s'][1] * 1e3:.3g} ms, K_max "
+                 f"{g['K_max_N_per_m'][0]:.4g}–{g['K_max_N_per_m'][1]:.4g} N/m "
+                 "([uncertainty], docs/verdicts.md)")  # fmt: skip
+    return lines
+
+
+def format_measured(rows: list) -> list[str]:
+    """Model against the bench ([measured]), error in %."""
+    if not rows:
+        return []
+    scale = {"N·m": (1.0, "N·m"), "s": (1e3, "ms"), "kg": (1e3, "g"), "N·s/m": (1.0, "N·s/m")}
+    lines = ["", f"{'model against the bench ([measured])':<34}{'model':>10}{'measured':>10}"
+             f"{'error':>9}"]  # fmt: skip
+    for r in rows:
+        f, unit = scale[r["unit"]]
+        lines.append(f"  {r['quantity'] + f' ({unit})':<32}{r['model'] * f:>10.4g}"
+                     f"{r['measured'] * f:>10.4g}{r['error'] * 100:>+8.1f} %  "
+                     f"{r['model_source']}")  # fmt: skip
+    return lines
+
+
 def format_evaluation(data: dict) -> str:
-    """A person's view of ``Evaluation.as_json()``."""
+    """A person's view of ``evaluation_json``."""
     c = data["clutch"]
     lines = [
         f"design {data['design']}  (fidelity {data['fidelity']}: inertia by "
         f"{c['methods']['inertia']}, torque by {c['methods']['torque']})",
+        verdict_headline(data),
         "",
         "clutch",
     ]
@@ -263,8 +342,13 @@ def format_evaluation(data: dict) -> str:
         lines.append(f"  (motor unavailable: {m['note']})")
     else:
         lines.append(f"  (motor geared ×{m['gearing']:.3g} to the MR pair's force)")
+    lines.append(f"  K rendered = {format_kmax(h['K_N_per_m'], data['source'])}, Eq. 4 of the "
+                 "MR pair's force")  # fmt: skip
     g, gl = data["bandwidth_gain"], data["bandwidth_gain_lumped"]
     lines.append(f"bandwidth gain MR over motor: {_pct(gl)} lumped, {_pct(g)} on the full response")
+    if data.get("robust"):
+        lines += format_robust(data["robust"])
+    lines += format_measured(data.get("measured") or [])
     lines += format_zwidth(data["zwidth"])
     lines += format_hand(data["hand"])
     lines += format_budget(data["budget"])
