@@ -415,7 +415,7 @@ SOURCE_LABELS = {"fast": "fast model", "reference": "reference model"}
 
 
 def source_label(fidelity: str) -> str:
-    """"fast model", "reference model", or the accuracy target's label."""
+    """ "fast model", "reference model", or the accuracy target's label."""
     return SOURCE_LABELS.get(fidelity, f"model, {fidelity}")
 
 

@@ -421,7 +421,7 @@ _LIMITS: dict[str, Callable[[HapticParams], Any]] = {
 
 
 def _holds(worst: float, best: float, K: float) -> str:
-    """"always" (K within the limit at every value of the ranges), "never", or "depends"."""
+    """ "always" (K within the limit at every value of the ranges), "never", or "depends"."""
     if K <= worst:
         return "always"
     if K > best:
@@ -466,6 +466,7 @@ def _rescaled(box: HandBox, p: HapticParams, K: float, bench: tuple[float, float
     """The box of the fast path moved onto the evaluated pair ``p`` (another fidelity, or
     measured values): each range keeps its ratio to the nominal; the bench damping is
     additive. Measured quantities (a range of one value) stay as they are."""
+
     def scale(t: tuple[np.ndarray, ...], v: float, add: tuple[float, float] = (0.0, 0.0)
               ) -> tuple[np.ndarray, ...]:  # fmt: skip
         nom, lo, hi = (float(x[0]) for x in t)
@@ -496,10 +497,11 @@ def robust_verdicts(ev: Any, uncertainty: Uncertainty | None = None) -> dict[str
                               for f, v in fix.items() if v is not None})  # fmt: skip
     lim = robust_limits(box)
     out: dict[str, Any] = {"K_N_per_m": K}
-    for q, key in (("max_stable_K", "max_stable_K_N_per_m"),
-                   ("max_passive_K", "max_passive_K_N_per_m"), ("bandwidth", "bandwidth_hz")):  # fmt: skip
+    pairs = (("max_stable_K", "max_stable_K_N_per_m"), ("max_passive_K", "max_passive_K_N_per_m"),
+             ("bandwidth", "bandwidth_hz"))  # fmt: skip
+    for q, key in pairs:
         out[key] = {c: float(lim[f"{q}_{c}"][0]) for c in CASES}
-    # the rendering area at K and the Z-width area: searched (3⁴ / 3³ grids, two zooms)
+    # the rendering area at K and the Z-width area: searched (3³ grids, two zooms)
     lo3 = np.array([[box.m1[1][0], box.b1[1][0], box.delay[1][0]]])
     hi3 = np.array([[box.m1[2][0], box.b1[2][0], box.delay[2][0]]])
 
@@ -556,7 +558,8 @@ def _fmt_threshold(field: str, t: dict[str, Any]) -> str:
     lo, hi = (x * scale for x in t["range"])
     inside = t["range"][0] <= t["value"] <= t["range"][1]
     where = "range" if inside else "outside its range"
-    return f"{label} {t['sense']} {t['value'] * scale:.3g} {unit} ({where} {lo:.3g}–{hi:.3g} {unit})"
+    value = f"{t['value'] * scale:.3g} {unit}"
+    return f"{label} {t['sense']} {value} ({where} {lo:.3g}–{hi:.3g} {unit})"
 
 
 def headline(r: dict[str, Any]) -> str:
