@@ -632,3 +632,13 @@ def measured_comparison(ev: Any) -> list[dict[str, Any]]:
         row("off-state torque", "N·m", ev.clutch.off_state_torque, meas.off_state_torque,
             "drag terms (magnetics.drag)")  # fmt: skip
     return rows
+
+
+def verdicts_json(ev: Any, robust: bool = True) -> dict[str, Any]:
+    """``Evaluation.as_json()`` with ``robust``: the robust verdicts over the design's ranges
+    (None where ``robust`` is False: the nominal answer only) and ``measured``: the model
+    against the bench (:func:`measured_comparison`). What ``evaluate`` and the report print."""
+    data = ev.as_json()
+    data["robust"] = robust_verdicts(ev) if robust else None
+    data["measured"] = measured_comparison(ev)
+    return data

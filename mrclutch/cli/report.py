@@ -47,8 +47,9 @@ from mrclutch.cli.plots.haptic import compare_figure, zwidth_figure
 from mrclutch.cli.plots.magnetics import plot_torque
 from mrclutch.cli.view import screenshot
 from mrclutch.design import ClutchDesign
-from mrclutch.outputs import CLUTCH_ROWS, HAND_ROWS, output, row_label
+from mrclutch.outputs import CLUTCH_ROWS, HAND_ROWS, format_kmax, output, row_label
 from mrclutch.pipeline import evaluate
+from mrclutch.robust import verdicts_json
 from mrclutch.sweep import sigterm_as_interrupt
 
 #: Currents of the report's torque curve (A): the paper's Fig. 2b range.
@@ -126,7 +127,7 @@ def _build(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[str],
     try:
         tick("evaluating the design")
         ev = evaluate(design, fidelity)
-        data = ev.as_json()
+        data = verdicts_json(ev)
         tick("CAD: STEP and STL")
         cad = _cad(design, tmp)
         tick("3D view")
@@ -210,18 +211,19 @@ def _fmt(v: Any, scale: float = 1.0, digits: int = 4) -> str:
 def findings(m: dict[str, Any]) -> list[str]:
     """Plain-language statements a designer should read first."""
     h, e, c = m["haptic"], m["motor"], m["clutch"]
-    out = []
+    out = [m["robust"]["headline"]] if m.get("robust") else []
+    kmax = format_kmax(h["K_N_per_m"], "MR pair, " + m.get("source", "model"))
     gain = m["bandwidth_gain"]
     stable = h["K_N_per_m"] <= h["max_stable_K_N_per_m"] * (1 + 1e-9)
     if gain is not None and stable:
         out.append(
-            f"At K = {h['K_N_per_m']:.0f} N/m (K_max of the MR pair) the MR pair renders the "
+            f"At {kmax} the MR pair renders the "
             f"spring up to {h['bandwidth_hz']:.1f} Hz, the equal-force Maxon 136206 up to "
             f"{e['bandwidth_hz']:.1f} Hz ({gain * 100:+.0f} %)."
         )
     elif gain is not None:
         out.append(
-            f"At K = {h['K_N_per_m']:.0f} N/m (K_max of the MR pair) the MR pair's loop is "
+            f"At {kmax} the MR pair's loop is "
             f"UNSTABLE when released (stable hands off only up to "
             f"{h['max_stable_K_N_per_m']:.0f} N/m), so its rendering bandwidth "
             f"({h['bandwidth_hz']:.1f} Hz, the first k_eff crossing) describes a loop that "
@@ -306,6 +308,23 @@ def budget_html(budget: dict[str, Any]) -> str:
     return "".join(parts)
 
 
+def measured_html(rows: list[dict[str, Any]]) -> str:
+    """The model against the bench's measurements ([measured]), error in %."""
+    if not rows:
+        return ""
+    scale = {"N·m": (1.0, "N·m"), "s": (1e3, "ms"), "kg": (1e3, "g"), "N·s/m": (1.0, "N·s/m")}
+    e_ = html.escape
+    body = ""
+    for r in rows:
+        f, unit = scale[r["unit"]]
+        body += (f"<tr><td>{e_(r['quantity'])} ({e_(unit)})</td><td class=n>"
+                 f"{r['model'] * f:.4g}</td><td class=n>{r['measured'] * f:.4g}</td>"
+                 f"<td class=n>{r['error'] * 100:+.1f} %</td>"
+                 f"<td>{e_(r['model_source'])}</td></tr>")  # fmt: skip
+    return ("<h2>Model against the bench</h2><table><tr><th></th><th>model</th>"
+            f"<th>measured</th><th>error</th><th>model from</th></tr>{body}</table>")  # fmt: skip
+
+
 def zwidth_caption(zw: dict[str, Any]) -> str:
     """One sentence on the Z-width of both sides (continuous time, with the delay)."""
     mr, em = zw["mr"], zw["motor"]
@@ -348,6 +367,7 @@ def render_html(m: dict[str, Any]) -> str:
     )
     items = "".join(f"<li>{e_(s)}</li>" for s in findings(m))
     budget = budget_html(m["budget"]) if "budget" in m else ""
+    budget = measured_html(m.get("measured") or []) + budget
     stl = ", ".join(f'<a href="{e_(p)}">{e_(p)}</a>' for p in m["cad"]["stl"].values())
     methods = ", ".join(f"{k}: {v}" for k, v in c["methods"].items())
     side = m["cad"].get("materials") or ""

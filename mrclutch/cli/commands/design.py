@@ -6,7 +6,6 @@ import argparse
 import math
 import sys
 import time
-from typing import Any
 
 import numpy as np
 
@@ -48,7 +47,7 @@ from mrclutch.pipeline import (
     BatchEvaluator,
     evaluate,
 )
-from mrclutch.robust import measured_comparison, robust_verdicts
+from mrclutch.robust import verdicts_json
 from mrclutch.sweep import is_parquet, load_spec, run_sweep
 from mrclutch.verify import TORQUE, verified_path, verify_top, write_verified
 
@@ -242,7 +241,7 @@ def _evaluate(args: argparse.Namespace) -> int:
     if args.accuracy is not None and not 0 < args.accuracy < 1:
         raise CLIError(f"--accuracy = {args.accuracy}: need 0 < accuracy < 1 (relative)")
     ev = evaluate(design, args.fidelity, accuracy=args.accuracy)
-    data = evaluation_json(ev, robust=not args.no_uncertainty)
+    data = verdicts_json(ev, robust=not args.no_uncertainty)
     if args.json:
         print_json(data)
         return 0
@@ -250,15 +249,6 @@ def _evaluate(args: argparse.Namespace) -> int:
     for note in data["clutch"]["notes"]:
         print(f"note: {note}")
     return 0
-
-
-def evaluation_json(ev: Any, robust: bool = True) -> dict:
-    """``Evaluation.as_json()`` with the robust verdicts over the design's ranges (unless
-    ``robust`` is False: the nominal one) and the model against the bench's measurements."""
-    data = ev.as_json()
-    data["robust"] = robust_verdicts(ev) if robust else None
-    data["measured"] = measured_comparison(ev)
-    return data
 
 
 def verdict_headline(data: dict) -> str:
@@ -316,7 +306,7 @@ def format_measured(rows: list) -> list[str]:
 
 
 def format_evaluation(data: dict) -> str:
-    """A person's view of ``evaluation_json``."""
+    """A person's view of ``robust.verdicts_json``."""
     c = data["clutch"]
     lines = [
         f"design {data['design']}  (fidelity {data['fidelity']}: inertia by "
@@ -342,8 +332,8 @@ def format_evaluation(data: dict) -> str:
         lines.append(f"  (motor unavailable: {m['note']})")
     else:
         lines.append(f"  (motor geared ×{m['gearing']:.3g} to the MR pair's force)")
-    lines.append(f"  K rendered = {format_kmax(h['K_N_per_m'], data['source'])}, Eq. 4 of the "
-                 "MR pair's force")  # fmt: skip
+    lines.append(f"  K rendered = {format_kmax(h['K_N_per_m'], 'MR pair, ' + data['source'])}, "
+                 "Eq. 4 of its force; m1, b1 and the bandwidths from the same source")  # fmt: skip
     g, gl = data["bandwidth_gain"], data["bandwidth_gain_lumped"]
     lines.append(f"bandwidth gain MR over motor: {_pct(gl)} lumped, {_pct(g)} on the full response")
     if data.get("robust"):

@@ -24,6 +24,7 @@ from mrclutch.haptics.actuator import (
     transmission_for,
 )
 from mrclutch.haptics.model import bandwidth, is_stable, metrics
+from mrclutch.outputs import format_kmax
 
 ACTUATOR_NAMES = ("mr-paper", "maxon-118890", "maxon-136206", "maxon-136209")
 
@@ -94,12 +95,31 @@ def run_haptic(args: argparse.Namespace) -> int:
         act = replace(act, delay=delay)
     tr = replace(transmission_for(act, lever), gearing=gearing, workspace=workspace)
     m = metrics(reflect(act, tr), K)
+    src = catalogue_source(act.name)
     if args.json:
-        print_json(m)
+        print_json({**m, "source": src})
     else:
         print(f"{act.name} on a {lever * 1e3:g} mm lever, gearing {gearing:g}, n = {tr.ratio:.3f}")
-        _print_metrics(m)
+        _print_metrics(m, src if K is None else "typed")
     return 0
+
+
+def catalogue_source(name: str) -> str:
+    """Where a catalogue actuator's figures come from, as printed beside its K_max."""
+    if name == "mr-paper":  # Table 1 torque and inertia, Table 2's identified b1
+        return "MR pair, Table 1 catalogue"
+    return f"{name}, Table 1 catalogue"
+
+
+#: The MR pair of ``compare``: Table 2's identified m1 and b1, Table 1's torque.
+TABLE2_SOURCE = "MR pair, Table 2"
+
+
+def compare_k_source(mr: Any, em: Any, K: float, typed: bool) -> str:
+    """Which K_max ``compare`` renders: the smaller of the two (the force both produce)."""
+    if typed:
+        return "typed"
+    return TABLE2_SOURCE if K == float(mr.k_max) else catalogue_source("maxon-136206")
 
 
 def compare_params(
@@ -132,8 +152,12 @@ def compare_result(mr: Any, em: Any, K: float) -> dict[str, Any]:
 
 def run_compare(args: argparse.Namespace) -> int:
     K, delay, workspace = _edge(args)
+    typed = K is not None
     mr, em, K = compare_params(K, delay, workspace)
     res = compare_result(mr, em, K)
+    src = compare_k_source(mr, em, K, typed)
+    res["K_source"] = src
+    res["sources"] = {"mr": TABLE2_SOURCE, "em": catalogue_source("maxon-136206")}
     if args.plot:
         with atomic_path(args.plot) as tmp:
             compare_figure({"MR pair (Table 2)": mr, "Maxon 136206": em}, K, tmp)
@@ -142,10 +166,13 @@ def run_compare(args: argparse.Namespace) -> int:
         return 0
     for side, title in (("mr", "MR pair (Table 2 identified)"), ("em", "Maxon 136206")):
         print(title)
-        _print_metrics(res[side])
+        _print_metrics(res[side], src, res["sources"][side])
     g, g0 = res["bandwidth_gain"], res["bandwidth_gain_mr_without_delay"]
     print(
-        f"At K = {K:.1f} N/m the MR lever renders {100 * res['bandwidth_gain_lumped']:.1f} % more "
+        f"At {format_kmax(K, src) if not typed else f'K = {K:.4g} N/m [typed]'} (the smaller "
+        f"of the two K_max: {float(mr.k_max):.4g} N/m [{TABLE2_SOURCE}], "
+        f"{float(em.k_max):.4g} N/m [{catalogue_source('maxon-136206')}]) the MR lever renders "
+        f"{100 * res['bandwidth_gain_lumped']:.1f} % more "
         f"lumped bandwidth (paper: 52.8 %), {100 * g:.1f} % on the full model with its "
         f"{mr.delay * 1e3:g} ms delay ({100 * g0:.1f} % without); its damping b1 is "
         f"{res['damping_ratio_mr_over_em']:.2f}× the motor's. MR: "
@@ -161,17 +188,22 @@ def _ps(passive: bool, stable: bool) -> str:
     return f"{'passive' if passive else 'NOT passive'}, {'stable' if stable else 'UNSTABLE'}"
 
 
-def _print_metrics(m: dict[str, Any]) -> None:
+def _print_metrics(m: dict[str, Any], k_source: str, source: str | None = None) -> None:
+    """The metrics of one side; ``k_source``: where K comes from ("typed", or the source of
+    the K_max rendered), ``source``: where m1, b1 come from (default ``k_source``)."""
+
     def f(v: float, scale: float = 1.0, unit: str = "") -> str:
         return "none" if not math.isfinite(v) else f"{v * scale:.4g}{unit}"
 
+    k_text = (f"K {f(m['K_N_per_m'])} N/m [typed]" if k_source == "typed"
+              else format_kmax(m["K_N_per_m"], k_source))  # fmt: skip
     print(
         f"  m1 {f(m['m1_kg'], 1e3)} g  m2 {f(m['m2_kg'], 1e3)} g  b1 {f(m['b1_N_s_per_m'])} N·s/m"
         f"  k {f(m['k_N_per_m'])} N/m  b {f(m['b_N_s_per_m'])} N·s/m"
-        f"  delay {f(m['delay_s'], 1e3)} ms"
+        f"  delay {f(m['delay_s'], 1e3)} ms  [{source or k_source}]"
     )
     print(
-        f"  K {f(m['K_N_per_m'])} N/m: bandwidth {f(m['bandwidth_hz'], unit=' Hz')}"
+        f"  {k_text}: bandwidth {f(m['bandwidth_hz'], unit=' Hz')}"
         f" (lumped {f(m['bandwidth_lumped_hz'], unit=' Hz')}),"
         f" resonance {f(m['resonance_hz'], unit=' Hz')},"
         f" rendering area {f(m['rendering_area_dB_decade'])} dB·decade"

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from mrclutch.cli.commands._common import add_design_args, load_design_args, print_json
+from mrclutch.pipeline import source_label
 from mrclutch.scaling import PAPER_TOTAL_INERTIA_INCREASE_2X, as_json, scaling_study
 
 
@@ -29,7 +30,8 @@ def _scale(args: argparse.Namespace) -> int:
         print_json(as_json(base, routes, notes, design))
         return 0
     print(f"{design.name}: {base['max_torque_N_m']:.3g} N·m → target "
-          f"{args.factor:g}× = {args.factor * base['max_torque_N_m']:.3g} N·m")  # fmt: skip
+          f"{args.factor:g}× = {args.factor * base['max_torque_N_m']:.3g} N·m  "
+          f"[MR pair, {source_label('fast')}: changes against its m1, b1, K_max]")  # fmt: skip
     print(f"{'route':<17}{'value':>12}{'torque':>9}{'inertia':>10}{'m1+m2':>9}{'b1':>9}"
           f"{'mass':>9}")  # fmt: skip
     for r in routes:
