@@ -128,6 +128,15 @@ _ALL = (
     Output("backdrive_force_N", "N", "peak force felt moving the lever with nothing "
            "rendered (K = 0), ±10 mm at 2 Hz: |Z_p(jω)|·ω·X (mrclutch.haptics.hand)",
            "backdrive force", "mN", 1e3),
+    Output("max_stable_K_worst_N_per_m", "N/m", "worst case of the largest stable K over "
+           "the design's uncertain inputs (mrclutch.robust, docs/verdicts.md)",
+           "largest stable K, worst case"),
+    Output("max_passive_K_worst_N_per_m", "N/m", "worst case of the largest passive K over "
+           "the design's uncertain inputs (mrclutch.robust, docs/verdicts.md)",
+           "largest passive K, worst case"),
+    Output("bandwidth_worst_hz", "Hz", "worst case of the full-response bandwidth at K_max "
+           "over the design's uncertain inputs (mrclutch.robust, docs/verdicts.md)",
+           "bandwidth, worst case"),
     Output("zwidth_area_N2_s_per_m2", "N²·s/m²", "area of the Z-width: virtual (K, B) "
            "rendered passively (mrclutch.haptics.zwidth)", "Z-width area"),
 )  # fmt: skip
@@ -203,6 +212,10 @@ SWEEP_OPTIONAL: tuple[str, ...] = (
     "max_passive_K_N_per_m",  # about ×1.7
     "max_stable_K_N_per_m",  # design by design, about ×8
     "zwidth_area_N2_s_per_m2",  # about ×7
+    # over the uncertain inputs (mrclutch.robust.RobustBatchEvaluator; benchmarks/bench_robust.py)
+    "max_stable_K_worst_N_per_m",
+    "max_passive_K_worst_N_per_m",
+    "bandwidth_worst_hz",
 )
 
 

@@ -558,6 +558,10 @@ class BatchEvaluator:
 
     def __call__(self, fields: Mapping[str, ArrayLike]) -> dict[str, np.ndarray]:
         on = set(self.optional)
+        robust = on - {"max_passive_K_N_per_m", "max_stable_K_N_per_m", "zwidth_area_N2_s_per_m2"}
+        if robust:  # over the uncertain inputs: the application's robust layer computes them
+            raise ParameterError(f"{sorted(robust)[0]}: a robust column; "
+                                 "use mrclutch.robust.RobustBatchEvaluator")  # fmt: skip
         return evaluate_batch(fields, self.base, passivity="max_passive_K_N_per_m" in on,
                               stability="max_stable_K_N_per_m" in on,
                               zwidth="zwidth_area_N2_s_per_m2" in on)  # fmt: skip

@@ -49,7 +49,7 @@ from mrclutch.haptics.model import (
     rendering_area,
 )
 from mrclutch.haptics.zwidth import zwidth as zwidth_of
-from mrclutch.pipeline import evaluate_batch, mr_at_hand
+from mrclutch.pipeline import BatchEvaluator, evaluate_batch, mr_at_hand
 from mrclutch.uncertainty import Uncertainty, default_uncertainty
 
 TWO_PI = 2.0 * math.pi
@@ -316,6 +316,10 @@ def hand_box_batch(
     c_lo, c_hi = unc.torque_factor
     tr = base.transmission
     n = ok.shape
+    # a corner with no finite figure (a torque response that never settles: τ_eq = inf)
+    # leaves the design unjudged (NaN) rather than judged on a part of its ranges
+    for x in (m1_lo, m1_hi, b1_lo, b1_hi, f_lo, f_hi, tau_lo, tau_hi):
+        ok = ok & np.isfinite(x)
     return HandBox(
         m1=(m1_0, m1_lo, m1_hi),
         b1=(b1_0, b1_lo, b1_hi),
@@ -339,16 +343,22 @@ def _rows(x: np.ndarray) -> np.ndarray:
     return x[:, None]
 
 
-def robust_limits(box: HandBox, *, points: int = 3, zooms: int = 3) -> dict[str, np.ndarray]:
+def robust_limits(
+    box: HandBox,
+    *,
+    points: int = 3,
+    zooms: int = 3,
+    cases: tuple[str, ...] = ("nominal", "worst", "best"),
+) -> dict[str, np.ndarray]:
     """Nominal, worst and best of the largest stable K, the largest passive K [N/m] and the
     bandwidth at the rendered K_max [Hz] over ``box`` (module docstring: corners where the
     verdict is monotone, a bounded search elsewhere). Keys ``<quantity>_<case>`` with
-    quantity in (max_stable_K, max_passive_K, bandwidth) and case in (nominal, worst,
-    best); NaN for invalid designs."""
+    quantity in (max_stable_K, max_passive_K, bandwidth) and case in ``cases`` (of nominal,
+    worst, best); NaN for invalid designs."""
     ok = box.valid
     n = ok.size
     out = {f"{q}_{c}": np.full(n, np.nan) for q in ("max_stable_K", "max_passive_K",
-                                                     "bandwidth") for c in CASES}  # fmt: skip
+                                                     "bandwidth") for c in cases}  # fmt: skip
     if not ok.any():
         return out
     sub = HandBox(*(tuple(x[ok] for x in f) if isinstance(f, tuple) else f[ok]
@@ -357,20 +367,24 @@ def robust_limits(box: HandBox, *, points: int = 3, zooms: int = 3) -> dict[str,
     (_, mlo, mhi), (_, blo, bhi), (_, tlo, thi), (k0, klo, khi) = sub.m1, sub.b1, sub.delay, sub.K
     res: dict[str, np.ndarray] = {}
     nom = sub.nominal
-    res["max_stable_K_nominal"] = stable_stiffness_batch(nom)
-    res["max_passive_K_nominal"] = max_passive_stiffness(nom)
-    res["bandwidth_nominal"] = bandwidth(nom, k0)
+    if "nominal" in cases:
+        res["max_stable_K_nominal"] = stable_stiffness_batch(nom)
+        res["max_passive_K_nominal"] = max_passive_stiffness(nom)
+        res["bandwidth_nominal"] = bandwidth(nom, k0)
     # passive K: corners (non-increasing in m1, increasing in b1, decreasing in τ)
-    res["max_passive_K_worst"] = max_passive_stiffness(sub.params(mhi, blo, thi))
-    res["max_passive_K_best"] = max_passive_stiffness(sub.params(mlo, bhi, tlo))
+    if "worst" in cases:
+        res["max_passive_K_worst"] = max_passive_stiffness(sub.params(mhi, blo, thi))
+    if "best" in cases:
+        res["max_passive_K_best"] = max_passive_stiffness(sub.params(mlo, bhi, tlo))
     # stable K: b1 at its corner (increasing in b1), a search over (m1, τ)
-    for case, b1, sense, z in (("worst", blo, -1, zooms + 2), ("best", bhi, 1, zooms)):
+    stable = (("worst", blo, -1, zooms + 2), ("best", bhi, 1, zooms))
+    for case, b1, sense, z in (x for x in stable if x[0] in cases):
         res[f"max_stable_K_{case}"], _ = box_search(
             lambda x, b1=b1: stable_stiffness_batch(sub.params(x[..., 0], _rows(b1), x[..., 1])),
             np.stack([mlo, tlo], 1), np.stack([mhi, thi], 1), sense=sense, points=points,
             zooms=z)  # fmt: skip
     # bandwidth at the rendered K: not monotone in any input (tests): a search over all four
-    for case, sense in (("worst", -1), ("best", 1)):
+    for case, sense in (x for x in (("worst", -1), ("best", 1)) if x[0] in cases):
         res[f"bandwidth_{case}"], _ = box_search(
             lambda x: bandwidth(sub.params(x[..., 0], x[..., 1], x[..., 2]), x[..., 3]),
             np.stack([mlo, blo, tlo, klo], 1), np.stack([mhi, bhi, thi, khi], 1),
@@ -384,9 +398,14 @@ CASES = ("nominal", "worst", "best")
 
 
 def robust_columns_batch(
-    fields: Mapping[str, ArrayLike], base: Any = None, uncertainty: Any = None
+    fields: Mapping[str, ArrayLike],
+    base: ClutchDesign | None = None,
+    uncertainty: Uncertainty | None = None,
+    *,
+    nominal: Mapping[str, np.ndarray] | None = None,
 ) -> dict[str, np.ndarray]:
-    """robust_columns_batch(fields, base=None, uncertainty=None) -> dict[str, np.ndarray]
+    """robust_columns_batch(fields, base=None, uncertainty=None, *, nominal=None)
+    -> dict[str, np.ndarray]
 
     The worst case, over ``uncertainty`` (an :class:`mrclutch.uncertainty.Uncertainty`;
     None: ``default_uncertainty(base)``), of the largest stable K and the largest passive
@@ -396,8 +415,12 @@ def robust_columns_batch(
     transmission (None: ``ClutchDesign()``). Returns 1-D arrays of S under
     ``ROBUST_COLUMNS``: ``max_stable_K_worst_N_per_m``, ``max_passive_K_worst_N_per_m``,
     ``bandwidth_worst_hz``; NaN for designs DrumClutch's validation refuses. Never above
-    the worst over a dense sampling of the ranges (tests/mrclutch/test_robust.py)."""
-    lim = robust_limits(hand_box_batch(fields, base, uncertainty))
+    the worst over a dense sampling of the ranges (tests/mrclutch/test_robust.py).
+    ``nominal``: ``evaluate_batch(fields, base)``'s rows where already computed (saves one
+    fast-path evaluation)."""
+    base = base if base is not None else ClutchDesign()
+    unc = uncertainty if uncertainty is not None else base.ranges
+    lim = robust_limits(hand_box_batch(fields, base, unc, nominal), cases=("worst",))
     return {
         "max_stable_K_worst_N_per_m": lim["max_stable_K_worst"],
         "max_passive_K_worst_N_per_m": lim["max_passive_K_worst"],
@@ -642,3 +665,21 @@ def verdicts_json(ev: Any, robust: bool = True) -> dict[str, Any]:
     data["robust"] = robust_verdicts(ev) if robust else None
     data["measured"] = measured_comparison(ev)
     return data
+
+
+@dataclass(frozen=True)
+class RobustBatchEvaluator(BatchEvaluator):
+    """``pipeline.BatchEvaluator`` that also computes the robust columns (``ROBUST_COLUMNS``,
+    ``outputs.SWEEP_OPTIONAL``) over ``uncertainty`` (None: the base design's ``ranges``):
+    what ``sweep --with max_stable_K_worst_N_per_m`` runs. Picklable."""
+
+    uncertainty: Uncertainty | None = None
+
+    def __call__(self, fields: Mapping[str, ArrayLike]) -> dict[str, np.ndarray]:
+        on = set(self.optional)
+        plain = tuple(k for k in self.optional if k not in ROBUST_COLUMNS)
+        rows = dict(BatchEvaluator(self.base, plain)(fields))
+        if on & set(ROBUST_COLUMNS):
+            unc = self.uncertainty if self.uncertainty is not None else self.base.ranges
+            rows.update(robust_columns_batch(fields, self.base, unc, nominal=rows))
+        return {k: rows[k] for k in self.columns}

@@ -265,3 +265,40 @@ def test_every_report_file_is_in_help_and_readme(report_dir):
         name = "<part>.stl" if p.suffix == ".stl" else p.name
         assert name in helped, f"report --help does not name {name}"
         assert name in readme, f"README does not name {name}"
+
+
+def test_every_k_max_printed_agrees_or_names_another_source(report_dir, capsys):
+    """The paper pair through evaluate, report, haptic and compare: every K_max printed with
+    its source label; one source, one value (the four figures of issue 29 each say why)."""
+    import re
+
+    page = (report_dir / "report.html").read_text()
+    texts = {"report": page}
+    for name, argv in (("evaluate", ["evaluate", "--preset", "paper", "--no-uncertainty"]),
+                       ("haptic", ["haptic", "--actuator", "mr-paper"]),
+                       ("compare", ["compare"])):  # fmt: skip
+        assert main(argv) == 0
+        texts[name] = capsys.readouterr().out
+    seen: dict[str, set[str]] = {}
+    for name, text in texts.items():
+        found = re.findall(r"K_max ([0-9.e+]+) N/m \[([^\]]+)\]", text)
+        assert found, name  # every command names its K_max with a source
+        for value, label in found:
+            seen.setdefault(label, set()).add(value)
+        # no K_max without its source label
+        assert len(re.findall(r"K_max [0-9]", text)) == len(found), name
+    assert all(len(v) == 1 for v in seen.values()), seen
+    labels = set(seen)
+    assert {"MR pair, reference model", "MR pair, fast model", "MR pair, Table 1 catalogue",
+            "maxon-136206, Table 1 catalogue"} <= labels  # fmt: skip
+
+
+def test_report_leads_with_the_robust_verdict_and_shows_the_bench(report_dir):
+    metrics = json.loads((report_dir / "metrics.json").read_text())
+    page = (report_dir / "report.html").read_text()
+    head = metrics["robust"]["headline"]
+    assert head.startswith("Robust verdict at K")
+    assert html.escape(head) in page
+    assert "Model against the bench" in page
+    rows = {r["quantity"] for r in metrics["measured"]}
+    assert rows == {"torque at 7 A", "delay of a torque step", "m1 at the hand", "b1 at the hand"}

@@ -47,7 +47,7 @@ from mrclutch.pipeline import (
     BatchEvaluator,
     evaluate,
 )
-from mrclutch.robust import verdicts_json
+from mrclutch.robust import ROBUST_COLUMNS, RobustBatchEvaluator, verdicts_json
 from mrclutch.sweep import is_parquet, load_spec, run_sweep
 from mrclutch.verify import TORQUE, verified_path, verify_top, write_verified
 
@@ -146,7 +146,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         choices=SWEEP_OPTIONAL,
         metavar="COLUMN",
         help="also compute this column (repeatable): max_passive_K_N_per_m (about ×1.7 the "
-        "cost), max_stable_K_N_per_m (×8), zwidth_area_N2_s_per_m2 (×7)",
+        "cost), max_stable_K_N_per_m (×8), zwidth_area_N2_s_per_m2 (×7); the worst case over "
+        "the design's [uncertainty] ranges (docs/verdicts.md; benchmarks/bench_robust.py): "
+        "max_stable_K_worst_N_per_m, max_passive_K_worst_N_per_m, bandwidth_worst_hz",
     )
     p.add_argument("--pareto", metavar="FILE.png", help="also draw the Pareto front")
     p.add_argument(
@@ -511,7 +513,8 @@ def _sweep(args: argparse.Namespace) -> int:
     spec, rest = load_spec(args.spec)
     base = design_from_mapping({"clutch": spec.base.to_mm(), **rest}, where=args.spec)
     check_writable("--out", args.results, folder=is_parquet(args.results))
-    evaluator = BatchEvaluator(base, tuple(args.optional))
+    robust = any(k in ROBUST_COLUMNS for k in args.optional)
+    evaluator = (RobustBatchEvaluator if robust else BatchEvaluator)(base, tuple(args.optional))
     fem_size = _verify_options(args, evaluator.columns)
     where = (args.workers, args.scheduler, args.dask_local, args.connect_timeout)
     with sweep_executor(*where) as (executor, workers):
