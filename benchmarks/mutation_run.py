@@ -9,13 +9,15 @@ docstrings, annotations, ``raise`` statements and the arguments of validation ca
 (``check_*``) are left alone (mutating an error message or a validation limit is not a
 physics error). Mutants are drawn uniformly at random (``--seed``) from every possible one.
 
-Each mutant runs in a private copy of the tree (no bytecode cache, its own numba cache)
-in two stages: first the test files of the module's own package that import it by name
-(fast, most mutants die here), and if it survives, every test of its package
-(``tests/geometry``, ``tests/magnetics`` or ``tests/mrclutch``), ``-x`` so a killed mutant
-stops at its first failure. Killed: a test failed or the run exceeded ``--timeout``.
-Survived: every test passed. The JSON lists each mutant with its location, the original
-and the mutated source, its status and the test that killed it; ``--report`` prints the
+Each mutant runs in a private copy of the tree (no bytecode cache, its own numba cache),
+``-x`` so a killed mutant stops at its first failure, in two stages: first the tests that
+execute the mutated line (a per-test coverage map, ``--coverage``, built once by running
+the suite under pytest-cov with ``--cov-context=test``); if it survives those (or no test
+covers the line: numba kernels and code reached only through a CLI subprocess are not
+seen by coverage), every test file of its package that imports the module by name.
+Killed: a test failed or the run exceeded ``--timeout``. Survived: every selected test
+passed. The JSON lists each mutant with its location, the original and the mutated
+source, its status and the test that killed it; ``--report`` prints the
 Markdown survival table docs/testing.md quotes.
 """
 
@@ -183,6 +185,39 @@ def _importers(tree_root: Path, module: str) -> list[str]:
                   if dotted in p.read_text())  # fmt: skip
 
 
+def build_coverage(tree: Path, out: Path) -> None:
+    """Run the packages' tests once under pytest-cov, recording which test ran each line."""
+    env = dict(os.environ, PYTHONPATH=str(tree), COVERAGE_FILE=str(out),
+               NUMBA_CACHE_DIR=str(tree / ".numba"), OPENBLAS_NUM_THREADS="1")  # fmt: skip
+    cov = [f"--cov={p.replace('/', '.')}" for p in PACKAGES]
+    r = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *cov,
+                        "--cov-context=test", "--cov-report=", "-o",
+                        "addopts=--benchmark-disable", *sorted(set(PACKAGES.values()))],
+                       cwd=tree, env=env, check=False)  # fmt: skip
+    if r.returncode != 0:  # the unmutated baseline must be green, or every kill is false
+        out.unlink(missing_ok=True)
+        raise SystemExit(f"the unmutated suite fails in {tree} (exit {r.returncode})")
+
+
+def covering_tests(coverage_file: Path) -> dict[tuple[str, int], list[str]]:
+    """(module, line) → the test node ids that executed it (the map names files of the
+    copy it ran in: each is read by its path below that copy's ``tree/``)."""
+    from coverage import CoverageData
+
+    data = CoverageData(str(coverage_file))
+    data.read()
+    out: dict[tuple[str, int], list[str]] = {}
+    for fname in data.measured_files():
+        if "/tree/" not in fname:
+            continue
+        rel = fname.split("/tree/", 1)[1]
+        for line, contexts in data.contexts_by_lineno(fname).items():
+            ids = sorted({c.split("|")[0] for c in contexts if c})
+            if ids:
+                out[(rel, line)] = ids
+    return out
+
+
 def _pytest(tree: Path, targets: list[str], timeout: float) -> tuple[str, str]:
     env = dict(os.environ, PYTHONPATH=str(tree), PYTHONDONTWRITEBYTECODE="1",
                NUMBA_CACHE_DIR=str(tree / ".numba"), OPENBLAS_NUM_THREADS="1")  # fmt: skip
@@ -211,7 +246,8 @@ def _worker_tree() -> Path:
 _TREE: Path | None = None
 
 
-def run_one(m: Mutant, timeout: float) -> Mutant:
+def run_one(m: Mutant, timeout: float, tests: list[str]) -> Mutant:
+    """Run one mutant: ``tests`` (node ids covering its line) first, then the importers."""
     global _TREE
     if _TREE is None:
         _TREE = _worker_tree()
@@ -220,10 +256,10 @@ def run_one(m: Mutant, timeout: float) -> Mutant:
     t0 = time.perf_counter()
     try:
         target.write_text(mutated_source(m))
-        status, by = _pytest(_TREE, _importers(_TREE, m.module) or [_package_tests(m.module)],
-                             timeout)  # fmt: skip
+        status, by = _pytest(_TREE, tests, timeout) if tests else ("survived", "")
         if status == "survived":
-            status, by = _pytest(_TREE, [_package_tests(m.module)], timeout * 4)
+            files = _importers(_TREE, m.module) or [_package_tests(m.module)]
+            status, by = _pytest(_TREE, files, timeout * 4)
     finally:
         target.write_text(original)
     m.status, m.killed_by, m.seconds = status, by, time.perf_counter() - t0
@@ -256,6 +292,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--list", action="store_true", help="print the sample, run nothing")
     ap.add_argument("--report", action="store_true", help="print the table of --out")
     ap.add_argument("--only", nargs="*", help="re-run these 'module:index' mutants only")
+    ap.add_argument(
+        "--coverage",
+        type=Path,
+        default=ROOT / "benchmarks/data/mutation.coverage",
+        help="per-test coverage map (built first if missing)",
+    )
     args = ap.parse_args(argv)
     if args.report:
         print(report([Mutant(**d) for d in json.loads(args.out.read_text())["mutants"]]))
@@ -271,17 +313,16 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{len(sample)} of {len(everything)} candidate mutants")
         return 0
     t0 = time.perf_counter()
-    base = _worker_tree()
-    for tests in sorted({_package_tests(m.module) for m in sample}):  # the unmutated baseline
-        status, by = _pytest(base, [tests], args.timeout * 4)
-        if status != "survived":
-            print(f"baseline: {tests} fails unmutated ({by}): fix that first", file=sys.stderr)
-            return 1
-    shutil.rmtree(base.parent)
-    print(f"baseline green in {time.perf_counter() - t0:.0f} s", flush=True)
+    if not args.coverage.exists():  # the unmutated suite once: the baseline and the map
+        base = _worker_tree()
+        build_coverage(base, args.coverage)
+        shutil.rmtree(base.parent)
+        print(f"coverage map in {time.perf_counter() - t0:.0f} s", flush=True)
+    cover = covering_tests(args.coverage)
     done: list[Mutant] = []
     with cf.ProcessPoolExecutor(args.jobs) as pool:
-        futures = [pool.submit(run_one, m, args.timeout) for m in sample]
+        futures = [pool.submit(run_one, m, args.timeout, cover.get((m.module, m.line), []))
+                   for m in sample]  # fmt: skip
         for k, fut in enumerate(cf.as_completed(futures), 1):
             m = fut.result()
             done.append(m)
