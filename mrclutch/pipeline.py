@@ -194,7 +194,7 @@ def clutch_figures(
                               float(curve.torque[0]))  # fmt: skip
     d, length = section.envelope
     notes = (tuple(mass.notes) + extra + drag.notes + _thermal_notes(design, thermal)
-             + _supply_notes(design))  # fmt: skip
+             + _density_notes(design) + _supply_notes(design))  # fmt: skip
     return ClutchFigures(
         max_current=i_max,
         max_torque=float(curve.torque[0]),
@@ -255,6 +255,22 @@ def _thermal_notes(design: ClutchDesign, th: Mapping[str, float]) -> tuple[str, 
                 f"{th['time_to_wire_limit_s']:.2g} s at the peak current, before the "
                 f"{op.peak_duration:g} s peak duration",)  # fmt: skip
     return ()
+
+
+def _density_notes(design: ClutchDesign) -> tuple[str, ...]:
+    """Say when the current-density limit, not max_current, sets the current limit (the
+    design is evaluated at a current the user did not type)."""
+    op = design.operating
+    area = math.pi * design.clutch.wire_diameter**2 / 4
+    cap = op.current_density_limit * area  # A = (A/m²)·m²
+    if cap >= op.max_current or design.supply_current < cap:  # not the binding limit
+        return ()
+    source = ("max_current_density_A_per_mm2" if op.max_current_density is not None
+              else f"IEC 60949 adiabatic limit for {op.peak_duration:g} s")  # fmt: skip
+    return (f"the current-density limit caps the current at {cap:.4g} A, below "
+            f"max_current_A = {op.max_current:g}: {op.current_density_limit * 1e-6:.4g} A/mm² "
+            f"({source}) in the {design.clutch.wire_diameter * 1e3:.3g} mm wire; every "
+            f"figure is at {cap:.4g} A",)  # fmt: skip
 
 
 def _supply_notes(design: ClutchDesign) -> tuple[str, ...]:

@@ -351,9 +351,12 @@ def render_html(m: dict[str, Any]) -> str:
     """One page: findings, the clutch, the hand, the figures, the files."""
     c, h, e = m["clutch"], m["haptic"], m["motor"]
     e_ = html.escape
+    capped = any("caps the current" in n or "supply holds at most" in n for n in c["notes"])
     clutch_rows = [
-        (output(k).label, output(k).display(c[k]), output(k).shown_unit) for k in CLUTCH_ROWS
-    ]
+        (output(k).label + (" (capped: see the note above)" if capped and k == "max_current_A"
+                            else ""), output(k).display(c[k]), output(k).shown_unit)
+        for k in CLUTCH_ROWS
+    ]  # fmt: skip
     d, length = c["envelope_m"]
     clutch_rows.append(("envelope", f"Ø{d * 1e3:.3g} × {length * 1e3:.3g}", "mm"))
     rows1 = "".join(

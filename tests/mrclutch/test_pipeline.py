@@ -155,3 +155,25 @@ def test_max_torque_is_the_network_curve_with_its_own_bound():
             circuit_error(c, "network").bound, rel=1e-12
         )
     assert np.isnan(out["max_torque_N_m"][2]) and np.isnan(out["torque_error_bound"][2])
+
+
+def test_a_current_density_cap_is_a_note_not_a_silent_change():
+    """Issue 34: 60 A/mm² in the paper's 0.321 mm wire allows 4.856 A, not the typed 7 A;
+    the evaluation runs at the cap and says so; an unbinding limit says nothing."""
+    from mrclutch.design import Operating
+
+    paper = design_preset("paper")
+    capped = replace(paper, operating=Operating(max_current_density=60e6))
+    cap = 60e6 * np.pi * paper.clutch.wire_diameter**2 / 4
+    ev = evaluate(capped)
+    assert ev.clutch.max_current == pytest.approx(cap, rel=1e-12)
+    (note,) = [n for n in ev.clutch.notes if "current-density limit caps" in n]
+    assert f"{cap:.4g} A" in note and "max_current_A = 7" in note
+    assert "max_current_density_A_per_mm2" in note
+    # the default limit (IEC 60949) binds too below a thin enough wire: its source is named
+    thin = replace(paper, clutch=replace(paper.clutch, wire_diameter=0.2e-3))
+    (note,) = [n for n in evaluate(thin).clutch.notes if "current-density limit" in n]
+    assert "IEC 60949" in note
+    assert not [n for n in evaluate(paper).clutch.notes if "current-density" in n]
+    loose = replace(paper, operating=Operating(max_current_density=1e9))
+    assert not [n for n in evaluate(loose).clutch.notes if "current-density" in n]

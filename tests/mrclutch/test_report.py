@@ -302,3 +302,16 @@ def test_report_leads_with_the_robust_verdict_and_shows_the_bench(report_dir):
     assert "Model against the bench" in page
     rows = {r["quantity"] for r in metrics["measured"]}
     assert rows == {"torque at 7 A", "delay of a torque step", "m1 at the hand", "b1 at the hand"}
+
+
+def test_a_capped_current_is_marked_in_the_page(report_dir):
+    """Issue 34: a cap on the typed current shows on the max current row and as a note."""
+    from mrclutch.cli.report import render_html
+
+    metrics = json.loads((report_dir / "metrics.json").read_text())
+    assert "capped" not in render_html(metrics)  # the paper preset runs at its 7 A
+    note = "the current-density limit caps the current at 4.856 A, below max_current_A = 7"
+    metrics["clutch"]["notes"] = [note]
+    page = render_html(metrics)
+    assert "max current (capped: see the note above)" in page
+    assert f"Note: {note}" in page

@@ -307,6 +307,11 @@ def format_measured(rows: list) -> list[str]:
     return lines
 
 
+#: The notes that say the current limit is not the typed max_current_A (mrclutch.pipeline).
+CAP_NOTE = "the current-density limit caps the current"
+SUPPLY_NOTE = "supply holds at most"
+
+
 def format_evaluation(data: dict) -> str:
     """A person's view of ``robust.verdicts_json``."""
     c = data["clutch"]
@@ -317,9 +322,11 @@ def format_evaluation(data: dict) -> str:
         "",
         "clutch",
     ]
+    capped = any(CAP_NOTE in n or SUPPLY_NOTE in n for n in c["notes"])
     for key in CLUTCH_ROWS:
         o = output(key)
-        lines.append(f"  {o.label:<30}{o.display(c[key]):>14} {o.shown_unit}")
+        mark = "  (capped: see the note below)" if key == "max_current_A" and capped else ""
+        lines.append(f"  {o.label:<30}{o.display(c[key]):>14} {o.shown_unit}{mark}")
     d, length = c["envelope_m"]
     lines += [
         f"  {'envelope':<30}{f'Ø{d * 1e3:.3g} × {length * 1e3:.3g}':>14} mm",
