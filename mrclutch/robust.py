@@ -277,7 +277,8 @@ def hand_box_batch(
       hull of the five (interior points lie inside it: tested);
     * b1 × (1 ± viscosity spread) × the drag's range over the fluid temperatures
       (``_temperature_factors``); its top × g/√(g² − e²) for a runout e (the mean of
-      1/(g − e cos θ) around the drum [gradshteyn-ryzhik] 2.553.3), then + bench damping;
+      1/(g − e cos θ) around the drum: (1/2π)∫dθ/(g − e cos θ) = 1/√(g² − e²), by residues),
+      then + bench damping;
     * τ: the declared range, or the typed delay to the geometry's τ_eq (all corners);
     * K = F_max/d × the torque factor (yield stress and B–H lot spreads).
 

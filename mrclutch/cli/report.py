@@ -309,7 +309,7 @@ def budget_html(budget: dict[str, Any]) -> str:
 
 
 def measured_html(rows: list[dict[str, Any]]) -> str:
-    """The model against the bench's measurements ([measured]), error in %."""
+    """The model against the bench's measurements (``[measured]``), error in %."""
     if not rows:
         return ""
     scale = {"N·m": (1.0, "N·m"), "s": (1e3, "ms"), "kg": (1e3, "g"), "N·s/m": (1.0, "N·s/m")}

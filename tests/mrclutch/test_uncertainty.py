@@ -1,4 +1,4 @@
-"""[uncertainty] and [measured] in design files, the paper's bench, the thresholds that
+"""``[uncertainty]`` and ``[measured]`` in design files, the paper's bench, the thresholds that
 decide a verdict, and bad input in the new sections (one line, exit 2)."""
 
 from __future__ import annotations

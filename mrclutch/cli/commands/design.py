@@ -293,7 +293,7 @@ def format_robust(r: dict) -> list[str]:
 
 
 def format_measured(rows: list) -> list[str]:
-    """Model against the bench ([measured]), error in %."""
+    """Model against the bench (``[measured]``), error in %."""
     if not rows:
         return []
     scale = {"N·m": (1.0, "N·m"), "s": (1e3, "ms"), "kg": (1e3, "g"), "N·s/m": (1.0, "N·s/m")}

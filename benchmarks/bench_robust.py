@@ -1,0 +1,85 @@
+"""Cost of the robust verdicts (mrclutch.robust, docs/verdicts.md), ratios in one run. Run
+from the repository root: ``python -m benchmarks.bench_robust [--designs N] [--json]``.
+
+* one design: ``evaluate(paper, "fast")`` against ``evaluate`` + ``robust_verdicts`` (the
+  nominal evaluation, then the box over the default ranges: four more fast-path
+  evaluations at the geometry corners, the searches, the thresholds), median of 3;
+* a sweep: ``BatchEvaluator`` (the default columns) against ``RobustBatchEvaluator`` with
+  the three robust columns (``sweep --with max_stable_K_worst_N_per_m --with
+  max_passive_K_worst_N_per_m --with bandwidth_worst_hz``) on N random designs (seed 0,
+  the ranges of examples/random_sweep.toml), median of 3 for the default, 1 for the robust.
+
+Set OPENBLAS_NUM_THREADS=1 on a shared machine."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from mrclutch.design import design_preset
+from mrclutch.pipeline import BatchEvaluator, evaluate
+from mrclutch.robust import ROBUST_COLUMNS, RobustBatchEvaluator, robust_verdicts
+
+
+def median_time(f: Callable[[], object], repeats: int) -> float:
+    out = []
+    for _ in range(repeats):
+        t = time.perf_counter()
+        f()
+        out.append(time.perf_counter() - t)
+    return statistics.median(out)
+
+
+def fields(n: int) -> dict[str, np.ndarray]:
+    rng = np.random.default_rng(0)
+    return {
+        "gap": rng.uniform(0.2e-3, 1.0e-3, n),
+        "drum_thickness": rng.uniform(0.1e-3, 0.5e-3, n),
+        "n_drums": rng.integers(1, 5, n).astype(float),
+        "drum_inner_diameter": rng.uniform(8e-3, 16e-3, n),
+        "zone_length": rng.uniform(4e-3, 8e-3, n),
+    }
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--designs", type=int, default=300, help="sweep designs (default 300)")
+    ap.add_argument("--json", action="store_true")
+    args = ap.parse_args(argv)
+    d = design_preset("paper")
+    evaluate(d)  # warm the caches (numba kernel, tables) before timing
+    one = median_time(lambda: evaluate(d), 3)
+    both = median_time(lambda: robust_verdicts(evaluate(d)), 3)
+    f = fields(args.designs)
+    plain = BatchEvaluator(d)
+    robust = RobustBatchEvaluator(d, ROBUST_COLUMNS)
+    plain(f)
+    t_plain = median_time(lambda: plain(f), 3)
+    t_robust = median_time(lambda: robust(f), 1)
+    res = {
+        "one_design_nominal_s": one,
+        "one_design_robust_s": both,
+        "one_design_ratio": both / one,
+        "sweep_designs": args.designs,
+        "sweep_default_s": t_plain,
+        "sweep_robust_s": t_robust,
+        "sweep_ratio": t_robust / t_plain,
+        "sweep_robust_ms_per_design": 1e3 * t_robust / args.designs,
+    }
+    if args.json:
+        print(json.dumps(res, indent=2))
+        return
+    print(f"one design (paper, fast): nominal {one:.3f} s, robust {both:.3f} s "
+          f"(median of 3): ratio {both / one:.1f}x")  # fmt: skip
+    print(f"sweep of {args.designs} designs: default columns {t_plain:.3f} s (median of 3), "
+          f"with the robust columns {t_robust:.3f} s: ratio {t_robust / t_plain:.1f}x "
+          f"({res['sweep_robust_ms_per_design']:.1f} ms a design)")  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()
