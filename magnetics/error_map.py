@@ -12,6 +12,12 @@ over v measured at off-grid designs. A design whose dimensions off the map's axe
 coil, …) differ from the paper preset's is off the map, as is one outside the grid: its
 error is unknown (NaN estimate, infinite bound, a note naming the fields), since those
 dimensions move the error by tens of percent (shell 0.7 mm instead of 1.4: −34 %).
+
+The reluctance network's error (``model="network"``) is not read off a grid: its bound covers
+every section dimension and the ampere-turns, from a design of experiments with a stated
+coverage (magnetics.network_bound); ``error_bound`` and ``circuit_error`` hand it over there
+and need the current. The network's grid map (data/network_error_map.json) stays a
+measurement of the model on the circuit's grid (benchmarks/measure_network_map.py).
 """
 
 from __future__ import annotations
@@ -29,6 +35,8 @@ from typing import Any
 import numpy as np
 
 from geometry.params import preset
+from magnetics.network_bound import DEFAULT_MATERIALS, network_bound
+from magnetics.network_bound import load as load_bound
 
 #: The measured maps (data, not code), one per fast torque model: the circuit's written by
 #: benchmarks/measure_circuit_map.py, the reluctance network's by
@@ -163,10 +171,27 @@ def _base_off_axes() -> dict[str, Any]:
     return {f.name: getattr(base, f.name) for f in fields(base) if f.name not in skip}
 
 
-def error_bound(p: Mapping[str, Any], model: str = "circuit") -> tuple[Any, Any, tuple[str, ...]]:
+def error_bound(
+    p: Mapping[str, Any], model: str = "circuit", current: Any = None,
+    material_set: str = DEFAULT_MATERIALS,
+) -> tuple[Any, Any, tuple[str, ...]]:  # fmt: skip
     """Vectorised core of :func:`circuit_error` over DrumClutch fields ``p`` (scalars or
     arrays, e.g. geometry.params.broadcast_fields): (estimate, bound, names of the fields
-    off the map's axes that differ from the base preset somewhere), by ``model``'s map."""
+    off the map's axes that differ from the base preset somewhere), by ``model``'s map.
+    The network's ("network") comes from magnetics.network_bound at ``current`` [A]
+    (required there) and ``material_set``: (estimate, bound, the inputs outside its ranges
+    or ("unmeasured",))."""
+    if model == "network":
+        if current is None:
+            raise ValueError("error_bound(model='network') needs the current (A)")
+        return network_bound(p, current, material_set)
+    return map_bound(p, model)
+
+
+def map_bound(p: Mapping[str, Any], model: str = "circuit") -> tuple[Any, Any, tuple[str, ...]]:
+    """:func:`error_bound` by ``model``'s grid map (data/<model>_error_map.json): the
+    circuit's bound; for the network, its grid measurement (the bound it reports is
+    magnetics.network_bound's)."""
     m = load(model)
     axes, grid = _grid(model)
     est, spread, rng = _interp(axes, grid, {k: p[k] for k in axes})
@@ -188,9 +213,15 @@ def error_bound(p: Mapping[str, Any], model: str = "circuit") -> tuple[Any, Any,
     return est, bound, tuple(names)
 
 
-def circuit_error(clutch: Any, model: str = "circuit") -> CircuitError:
+def circuit_error(
+    clutch: Any, model: str = "circuit", current: float | None = None,
+    material_set: str = DEFAULT_MATERIALS,
+) -> CircuitError:  # fmt: skip
     """The map's estimate and bound of ``model``'s torque error on ``clutch`` (the
-    saturating circuit by default; "network": the reluctance network)."""
+    saturating circuit by default; "network": the reluctance network's bound over every
+    dimension at ``current`` [A] and ``material_set``, magnetics.network_bound)."""
+    if model == "network":
+        return _network_error(clutch, current, material_set)
     m = load(model)
     label = LABELS[model]
     est, bound, off = error_bound({f.name: getattr(clutch, f.name) for f in fields(clutch)},
@@ -221,3 +252,43 @@ def circuit_error(clutch: Any, model: str = "circuit") -> CircuitError:
         )
     notes: tuple[str, ...] = ()
     return CircuitError(est, bound, notes)
+
+
+def _network_error(clutch: Any, current: float | None, material_set: str) -> CircuitError:
+    """The network's error estimate and bound on ``clutch`` at ``current`` (notes say why
+    it is unknown: inputs outside the measured ranges, or a material set never measured)."""
+    if current is None:
+        raise ValueError("circuit_error(model='network') needs the current (A)")
+    p = {f.name: getattr(clutch, f.name) for f in fields(clutch)}
+    est, bound, why = network_bound(p, current, material_set)
+    label = LABELS["network"]
+    if why == ("unmeasured",):
+        note = (f"{label}: unmeasured — its error was never measured with the materials "
+                f"{material_set} (benchmarks/measure_fem_doe.py measures "
+                f"{DEFAULT_MATERIALS}); check it with --fidelity reference")  # fmt: skip
+        return CircuitError(math.nan, math.inf, (note,))
+    if why:
+        from_doe = network_bound_ranges()
+        where = ", ".join(_in_range(k, p, current, from_doe[k]) for k in why)
+        note = (f"{label}: off the measured error map — {where}; its error is unknown "
+                f"(check it with --fidelity reference)")  # fmt: skip
+        return CircuitError(math.nan, math.inf, (note,))
+    return CircuitError(est, bound, ())
+
+
+def network_bound_ranges(
+    material_set: str = DEFAULT_MATERIALS,
+) -> Mapping[str, tuple[float, float]]:
+    """The inputs' ranges the network's bound was measured over (SI; ampere_turns in A)."""
+    m = load_bound(material_set)
+    return {} if m is None else m.ranges
+
+
+def _in_range(name: str, p: Mapping[str, Any], current: float, rng: tuple[float, float]) -> str:
+    lo, hi = rng
+    if name == "ampere_turns":
+        v = float(p["coil_turns"]) * float(current)
+        return f"N·I = {v:g} A outside [{lo:g}, {hi:g}] A"
+    if name == "n_drums":
+        return f"n_drums = {p[name]} outside [{lo:g}, {hi:g}]"
+    return f"{name} = {p[name] * 1e3:g} mm outside [{lo * 1e3:g}, {hi * 1e3:g}] mm"

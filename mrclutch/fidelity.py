@@ -100,7 +100,7 @@ def circuit_torque(design: ClutchDesign) -> float:
 def network_torque(design: ClutchDesign) -> float:
     """Torque at the current limit by the reluctance network (magnetics.network); warns
     outside its trusted region (its own measured error map, circuit_trust)."""
-    warn(circuit_trust(design.clutch, "network"))
+    warn(circuit_trust(design.clutch, "network", design.current_limit))
     curve = torque_curve(design.clutch, [design.current_limit], method="network",
                          speed_rpm=design.operating.input_speed_rpm)  # fmt: skip
     return float(curve.torque[0])

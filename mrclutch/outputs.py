@@ -92,9 +92,10 @@ _ALL = (
     Output("coil_resistance_ohm", "Ω", "coil resistance at the coil temperature",
            "coil resistance"),
     Output("coil_power_W", "W", "coil Joule power at the current limit", "coil power"),
-    Output("torque_error_bound", "1", "largest |relative error| of the max torque (the "
-           "reluctance network's) against the FEM in its measured error map's cell of this "
-           "design (inf: off the map; magnetics/data/network_error_map.json)",
+    Output("torque_error_bound", "1", "bound on the |relative error| of the max torque (the "
+           "reluctance network's) against the FEM at this design and current limit, 95 % "
+           "coverage over every section dimension (inf: outside the measured ranges or "
+           "materials; magnetics/data/network_bound.json)",
            "torque error bound"),
     Output("torque_delay_s", "s", "equivalent pure delay of the torque's response to a "
            "current step: Σ of the electrical, eddy-current and fluid lags "

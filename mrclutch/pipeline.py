@@ -177,7 +177,7 @@ def clutch_figures(
         inertia_method = "analytic" if fidelity == "fast" else "brep"
         torque_method = "network" if fidelity == "fast" else "fem"
         if torque_method == "network":  # never a silent wrong number (issue 6)
-            extra = circuit_trust(c, "network")
+            extra = circuit_trust(c, "network", design.current_limit)
     if inertia_method == "analytic":
         mass = analytic_mass(section)
     else:
@@ -661,7 +661,7 @@ def evaluate_batch(
         "diameter_m": fig["diameter"],
         "length_m": fig["length"],
         "max_torque_N_m": torque,
-        "torque_error_bound": np.where(ok, error_bound(p, "network")[1], np.nan),
+        "torque_error_bound": np.where(ok, error_bound(p, "network", current)[1], np.nan),
         "fluid_inertia_kg_m2": fig["fluid_inertia"],
         "drag_damping_N_m_s": fig["damping"],
         "off_state_torque_N_m": off_torque,

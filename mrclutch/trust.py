@@ -79,12 +79,15 @@ def linear_circuit_trust(clutch: Any, current: float) -> tuple[str, ...]:
     return ()
 
 
-def circuit_trust(clutch: Any, model: str = "circuit") -> tuple[str, ...]:
+def circuit_trust(
+    clutch: Any, model: str = "circuit", current: float | None = None
+) -> tuple[str, ...]:
     """Messages if the saturating circuit's torque (``model`` "network": the reluctance
-    network's) may be more than CIRCUIT_TORQUE_TRUST off the FEM on ``clutch``: the measured
-    error map's bound (magnetics.error_map), or the design lies outside the map (error
-    unknown)."""
-    e = circuit_error(clutch, model)
+    network's at ``current`` [A]) may be more than CIRCUIT_TORQUE_TRUST off the FEM on
+    ``clutch``: the measured error map's bound (magnetics.error_map; the network's covers
+    every dimension, magnetics.network_bound), or the design lies outside what was
+    measured (error unknown)."""
+    e = circuit_error(clutch, model, current)
     if not math.isfinite(e.bound):
         return e.notes
     if e.bound > CIRCUIT_TORQUE_TRUST:
@@ -161,13 +164,16 @@ TORQUE_METHODS: tuple[tuple[str, float | None, float], ...] = (
 )
 
 
-def torque_error_bound(clutch: Any, method: str, size: float | None) -> float:
+def torque_error_bound(
+    clutch: Any, method: str, size: float | None, current: float | None = None
+) -> float:
     """Bound on the relative torque error of a method against the reference FEM: the
-    circuit's and the network's from their measured error maps at this design
-    (magnetics.error_map); a coarse FEM's is the largest error measured over the map's
+    circuit's from its measured error map at this design (magnetics.error_map), the
+    network's from its bound over every dimension at ``current`` [A]
+    (magnetics.network_bound); a coarse FEM's is the largest error measured over the map's
     slice (FEM_ERROR_BOUND); 0 for the reference mesh size itself."""
     if method in ("circuit", "network"):
-        return circuit_error(clutch, method).bound
+        return circuit_error(clutch, method, current).bound
     m = load()
     if size == m.reference_fem_size:
         return 0.0
@@ -220,7 +226,9 @@ def choose(design: ClutchDesign, accuracy: float) -> Choice:
         notes.append("inertia: the analytic method misses the hub holes; B-rep used")
     t_target = min(accuracy, 2 * accuracy - ei)
     circ = circuit_error(design.clutch)
-    bounds = [(n, s, torque_error_bound(design.clutch, n, s), t) for n, s, t in TORQUE_METHODS]
+    i_max = design.current_limit
+    bounds = [(n, s, torque_error_bound(design.clutch, n, s, i_max), t)
+              for n, s, t in TORQUE_METHODS]  # fmt: skip
     name, size, et, t = next(b for b in bounds if b[2] <= t_target)  # the reference: 0
 
     def said(model: str, err: Any) -> str:
@@ -234,7 +242,7 @@ def choose(design: ClutchDesign, accuracy: float) -> Choice:
             f"{said('saturating circuit', circ)}; the network's bound is {et:.1%}"
         )
     if name == "fem":
-        net = circuit_error(design.clutch, "network")
+        net = circuit_error(design.clutch, "network", i_max)
         notes.append(
             f"torque within {accuracy:.3g} needs the FEM at {size * 1e3:g} mm (~{t:.2g} s): "
             f"{said('saturating circuit', circ)} and {said('reluctance network', net)}, so "

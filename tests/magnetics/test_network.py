@@ -655,7 +655,7 @@ def test_the_networks_error_map_is_this_measurement_and_bounds_its_checks():
         import measure_network_map as mm
     finally:
         sys.path.remove(str(BENCH))
-    from magnetics.error_map import error_bound, load
+    from magnetics.error_map import load, map_bound
 
     axes, errs, checks = mm.measure()
     stored = load("network")
@@ -663,7 +663,7 @@ def test_the_networks_error_map_is_this_measurement_and_bounds_its_checks():
     np.testing.assert_allclose(stored.errors, errs, atol=1e-5)  # stored to 5 decimals
     base = vars(PAPER)
     for c, e in checks:
-        _, bound, off = error_bound({**base, **c}, "network")
+        _, bound, off = map_bound({**base, **c}, "network")
         assert not off and abs(e) <= bound + 1e-12, (c, e, bound)
     assert 0.0 < stored.range_factor < 1.0
 

@@ -78,40 +78,28 @@ def test_circuit_off_the_fem_warns(paper):
 
 
 def test_fast_evaluate_notes_an_untrusted_network(paper, monkeypatch):
-    """The fast fidelity's torque is the reluctance network's. Its own measured map bounds
-    it within CIRCUIT_TORQUE_TRUST at every node and cell centre of the map (largest bound
-    8.8 %, at its worst corner: one drum with a 6 mm bore, 0.1 mm walls, 1 mm gaps and
-    9 mm zones, −8.8 % at 7 A; −10.9 % before the torque read the fluid's axial flux),
-    which so carries no note. Where the bound is past the trust (here with the trust
-    lowered to 5 %), or the shell is off the map, it is still used, and says so."""
-    import itertools
-
+    """The fast fidelity's torque is the reluctance network's. Its bound over every section
+    dimension (magnetics.network_bound) stays within CIRCUIT_TORQUE_TRUST on the paper
+    preset and on a half-thickness shell (which the five-axis map called off the map), so
+    they carry no note. Where the bound is past the trust (here with the trust lowered
+    below it), or the shell is outside the measured range, it is still used, and says so."""
     import mrclutch.trust as trust
-    from magnetics.error_map import error_bound, load
+    from magnetics.error_map import circuit_error
+    from magnetics.network_bound import load
     from mrclutch.pipeline import evaluate
 
-    axes = load("network").axes
-    base = {k: float(v) for k, v in vars(paper.clutch).items()}
-    mids = {k: v if k == "n_drums" else tuple(0.5 * (a + b) for a, b in itertools.pairwise(v))
-            for k, v in axes.items()}  # fmt: skip
-    worst = 0.0
-    for pts in (axes, mids):
-        for combo in itertools.product(*pts.values()):
-            p = {**base, **dict(zip(pts, combo, strict=True))}
-            _, bound, _ = error_bound({k: np.array([v]) for k, v in p.items()}, "network")
-            worst = max(worst, float(bound[0]))
-    assert 0.05 < worst < CIRCUIT_TORQUE_TRUST
-    thin = dict(n_drums=1, gap=1.0e-3, zone_length=9e-3, drum_inner_diameter=6e-3,
-                drum_thickness=0.1e-3)  # fmt: skip
-    corner = replace(paper, clutch=replace(paper.clutch, **thin))
-    assert evaluate(corner).clutch.methods["torque"] == "network"
-    assert not any("reluctance network" in n for n in evaluate(corner).clutch.notes)
-    monkeypatch.setattr(trust, "CIRCUIT_TORQUE_TRUST", 0.05)
-    notes = evaluate(corner).clutch.notes
+    thin = replace(paper, clutch=replace(paper.clutch, shell_thickness=0.7e-3))
+    b = circuit_error(thin.clutch, "network", thin.current_limit).bound
+    assert 0.0 < b < CIRCUIT_TORQUE_TRUST
+    assert evaluate(thin).clutch.methods["torque"] == "network"
+    assert not any("reluctance network" in n for n in evaluate(thin).clutch.notes)
+    monkeypatch.setattr(trust, "CIRCUIT_TORQUE_TRUST", 0.9 * b)
+    notes = evaluate(thin).clutch.notes
     assert any(n.startswith("reluctance network: torque") and "use the FEM" in n for n in notes)
     monkeypatch.undo()
-    shell = replace(paper, clutch=replace(paper.clutch, shell_thickness=0.7e-3))
-    assert any("reluctance network: off the measured error map" in n
+    hi = load().ranges["shell_thickness"][1]
+    shell = replace(paper, clutch=replace(paper.clutch, shell_thickness=1.05 * hi))
+    assert any("reluctance network: off the measured error map" in n and "shell_thickness" in n
                for n in evaluate(shell).clutch.notes)  # fmt: skip
     assert not any("reluctance network" in n for n in evaluate(paper).clutch.notes)
 

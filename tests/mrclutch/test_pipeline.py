@@ -146,13 +146,14 @@ def test_max_torque_is_the_network_curve_with_its_own_bound():
     op = base.operating
     for i in (0, 1):
         c = replace(base.clutch, gap=float(f["gap"][i]), n_drums=int(f["n_drums"][i]))
-        tc = torque_curve(c, [current_limit(op, c.wire_diameter)],
+        i_max = current_limit(op, c.wire_diameter)
+        tc = torque_curve(c, [i_max],
                           speed_rpm=op.input_speed_rpm, temperature=op.fluid_temperature,
                           support=base.support)  # fmt: skip
         assert tc.method == "network"
         assert out["max_torque_N_m"][i] == pytest.approx(tc.torque[0], rel=1e-9)
         assert out["torque_error_bound"][i] == pytest.approx(
-            circuit_error(c, "network").bound, rel=1e-12
+            circuit_error(c, "network", i_max).bound, rel=1e-12
         )
     assert np.isnan(out["max_torque_N_m"][2]) and np.isnan(out["torque_error_bound"][2])
 
