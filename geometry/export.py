@@ -1,11 +1,13 @@
 """STEP of the assembly (mm, part names kept) and one STL per part, written atomically.
 
-Every file goes through ``geometry.atomic.atomic_path``: it appears complete or not at all
-(an error or Ctrl-C leaves any previous file untouched). ``export_clutch`` then checks the
-round trip: the STEP re-imported gives every part's volume to ``1e-6`` relative, and every
-STL read back is watertight; a failed check raises ParameterError (nothing is half-done:
-the files that passed stay, the message names the one that failed). Each STL's volume is
-compared with its B-rep's: a difference above ``STL_VOLUME_RTOL`` is written as a note.
+Every file goes through the output layer (``geometry.atomic``): it appears complete or not
+at all (an error or Ctrl-C leaves any previous file untouched), and a write that fails
+(disk full, read-only) is one ``OutputError`` line naming the file and the reason.
+``export_clutch`` then checks the round trip: the STEP re-imported gives every part's
+volume to ``1e-6`` relative, and every STL read back is watertight; a failed check raises
+ParameterError (nothing is half-done: the files that passed stay, the message names the
+one that failed). Each STL's volume is compared with its B-rep's: a difference above
+``STL_VOLUME_RTOL`` is written as a note.
 
 Materials: in the STEP a part that mixes materials is a sub-assembly of one solid per
 material (``geometry.cad.solid_label``); beside it, ``<stem>.materials.json``
@@ -18,11 +20,12 @@ from __future__ import annotations
 import json
 import math
 import os
+import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from geometry.atomic import atomic_path
+from geometry.atomic import OutputError, atomic_path, write_bytes, write_text
 from geometry.cad import (
     assembly,
     brep_volume_mm3,
@@ -64,9 +67,26 @@ def write_step(shape: Any, path: str | os.PathLike[str]) -> Path:
 
     dest = Path(path)
     with atomic_path(dest) as tmp:
-        if not export_step(shape, tmp, unit=Unit.MM):
-            raise ParameterError(f"STEP export to {dest} failed")
+        try:
+            ok = export_step(shape, tmp, unit=Unit.MM)
+        except RuntimeError:  # build123d ≥ 0.8 raises where older ones returned False
+            ok = False
+        if not ok:  # OpenCascade says only "failed": the folder's answer to a write says why
+            raise OutputError(f"{dest}: cannot write ({_write_probe(tmp.parent)})")
     return dest
+
+
+def _write_probe(folder: Path) -> str:
+    """Why writing in ``folder`` fails (the reason of an OSError met writing and flushing
+    64 KiB there), or that OpenCascade's writer failed when the folder takes the bytes."""
+    try:
+        with tempfile.TemporaryFile(dir=folder) as f:
+            f.write(bytes(1 << 16))
+            f.flush()
+            os.fsync(f.fileno())
+    except OSError as exc:
+        return exc.strerror or type(exc).__name__
+    return "OpenCascade's STEP writer failed"
 
 
 def write_stl(
@@ -84,8 +104,7 @@ def write_stl(
     v, f = tessellate(shape, tolerance * 1e3, angular_tolerance)
     mesh = trimesh.Trimesh(v, f, process=True)
     check_mesh(mesh, dest.stem)
-    with atomic_path(dest) as tmp:
-        mesh.export(tmp, file_type="stl")
+    write_bytes(dest, mesh.export(file_type="stl"))  # in memory: no file left open on error
     return len(mesh.faces), float(mesh.volume)
 
 
@@ -140,10 +159,7 @@ def write_materials(step: Path, solids: list[tuple[str, str, str, float, float]]
             for p, n, m, rho, v in solids
         ],
     }
-    dest = sidecar_path(step)
-    with atomic_path(dest) as tmp:
-        tmp.write_text(json.dumps(doc, indent=2) + "\n")
-    return dest
+    return write_text(sidecar_path(step), json.dumps(doc, indent=2) + "\n")
 
 
 def read_materials(step: str | os.PathLike[str]) -> dict[str, dict[str, Any]] | None:
@@ -174,15 +190,36 @@ def export_clutch(
     angular_tolerance: float = 0.5,
     check: bool = True,
 ) -> ExportResult:
-    """Write ``clutch.step`` and ``<part>.stl`` into ``out_dir`` and check the round trip."""
+    """Write ``clutch.step`` and ``<part>.stl`` into ``out_dir`` and check the round trip.
+
+    A write that fails (OutputError: disk full, read-only) removes the files this call
+    wrote and the folder when this call made it: an export is whole or absent."""
     check_positive("tolerance", tolerance, " m")
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise ParameterError(f"--out {out}: exists and is not a directory")
+    created = not out.exists()
+    written: list[Path] = []
+    try:
+        return _export(clutch, out, tolerance, angular_tolerance, check, written)
+    except OutputError:
+        for p in written:
+            p.unlink(missing_ok=True)
+        if created:
+            try:
+                out.rmdir()
+            except OSError:  # not empty (someone else's file) or already gone
+                pass
+        raise
+
+
+def _export(clutch: DrumClutch, out: Path, tolerance: float, angular_tolerance: float,
+            check: bool, written: list[Path]) -> ExportResult:  # fmt: skip
     section = build_section(clutch)
     parts = part_solids(clutch, section)
     mats = material_solids(clutch, section)
     step = write_step(assembly(clutch, parts, mats), out / "clutch.step")
+    written.append(step)
     solids = []
     for part in parts:
         own = [(m, sh) for (p, m), sh in mats.items() if p == part]
@@ -191,11 +228,13 @@ def export_clutch(
             rho = float(section.densities[material])
             solids.append((part, name, material, rho, brep_volume_mm3(sh)))
     side = write_materials(step, solids)
+    written.append(side)
     stl = {name: out / f"{name}.stl" for name in parts}
     tris: dict[str, int] = {}
     stl_vols: dict[str, float] = {}
     for n, s in parts.items():
         tris[n], stl_vols[n] = write_stl(s, stl[n], tolerance, angular_tolerance)
+        written.append(stl[n])
     vols = {n: brep_volume_mm3(s) for n, s in parts.items()}
     notes = tuple(
         f"{n}.stl: mesh volume {stl_vols[n]:.6g} mm³ is {(stl_vols[n] / v - 1) * 100:+.2g} % "

@@ -11,8 +11,10 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from collections.abc import Collection, Sequence
+from typing import Any, TextIO
 
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.paths import OUTPUT_OPTIONS, check_writable
@@ -102,17 +104,96 @@ def check_outputs(args: argparse.Namespace) -> None:
             check_writable(f"--{dest}", value, folder)
 
 
+#: Exit status when standard output is closed early (``mrclutch evaluate --json | head -1``):
+#: what a process killed by SIGPIPE reports to the shell (128 + 13).
+EXIT_CLOSED_PIPE = 141
+
+
+class StdoutError(Exception):
+    """Standard output could not be written (not a closed pipe: that one is quiet)."""
+
+
+class GuardedStream:
+    """Standard output under the output layer's rule (geometry.atomic): an OSError writing
+    it (a full disk behind ``> file``) is one ``StdoutError`` line naming it and the
+    reason; a closed pipe stays a BrokenPipeError, which ``main`` ends quietly."""
+
+    def __init__(self, stream: TextIO, name: str = "standard output") -> None:
+        self._stream, self._name = stream, name
+
+    def _guard(self, fn: Any, *a: Any) -> Any:
+        try:
+            return fn(*a)
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            reason = exc.strerror or type(exc).__name__
+            raise StdoutError(f"{self._name}: cannot write ({reason})") from None
+
+    def write(self, s: str) -> int:
+        return self._guard(self._stream.write, s)
+
+    def flush(self) -> None:
+        self._guard(self._stream.flush)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._stream, name)
+
+
+def _silence_stdout(stream: TextIO) -> None:
+    """Point file descriptor 1 at /dev/null after a write to it failed, so the
+    interpreter's own flush at exit has nowhere to fail again (no "Exception ignored")."""
+    try:
+        fd = stream.fileno()
+    except (OSError, ValueError, AttributeError):  # not a real file (pytest's capture)
+        return
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, fd)
+    os.close(devnull)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    """Run one command; its exit status (0, 2 for bad input or an output that cannot be
+    written, 130 interrupted, 141 standard output closed early)."""
+    real_stdout = sys.stdout
+    sys.stdout = GuardedStream(real_stdout)  # type: ignore[assignment]
+    try:
+        try:
+            code = _run(argv)
+        except SystemExit:  # argparse's --help, --version and usage errors
+            sys.stdout.flush()
+            raise
+        sys.stdout.flush()
+        return code
+    except BrokenPipeError:  # the reader went away (| head): the Unix convention is quiet
+        _silence_stdout(real_stdout)
+        return EXIT_CLOSED_PIPE
+    except StdoutError as exc:
+        _silence_stdout(real_stdout)
+        print(f"mrclutch: error: {exc}", file=sys.stderr)
+        return 2
+    finally:
+        sys.stdout = real_stdout
+
+
+def _run(argv: Sequence[str] | None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     command = command_of(argv)
     parser = build_parser(() if command is None else (command,))
     args = parser.parse_args(argv)
     # the command's module has imported the physics by now; its input errors are
-    # ParameterErrors (geometry.validation), caught here without importing it up front
-    user_errors = (CLIError, importlib.import_module("geometry.validation").ParameterError)
+    # ParameterErrors (geometry.validation), and a file that cannot be written an
+    # OutputError (geometry.atomic, the output layer), caught here without importing them
+    # up front
+    user_errors = (CLIError, importlib.import_module("geometry.validation").ParameterError,
+                   importlib.import_module("geometry.atomic").OutputError)  # fmt: skip
     try:
         check_outputs(args)
-        return int(args.func(args) or 0)
+        code = int(args.func(args) or 0)
+        sys.stdout.flush()
+        return code
+    except StdoutError:
+        raise
     except user_errors as exc:
         print(f"mrclutch {args.command}: error: {exc}", file=sys.stderr)
         return 2

@@ -17,6 +17,13 @@ def check_writable(option: str, path: str, folder: bool) -> None:
     """Raise a one-line CLIError unless ``path`` can be written as a file (or a folder):
     its nearest existing ancestor is a folder we can create a file in."""
     p = Path(path)
+    if p.exists() and not p.is_dir() and not p.is_file():  # a device node, a FIFO, a socket
+        from geometry.atomic import OutputError, check_target  # the output layer's rule
+
+        try:
+            check_target(p)
+        except OutputError as exc:
+            raise CLIError(f"{option} {exc}") from None
     if p.exists() and p.is_dir() != folder:
         what = "is a directory; give a file name" if p.is_dir() else "is a file, not a folder"
         raise CLIError(f"{option} {path}: {what}")

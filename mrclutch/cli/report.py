@@ -36,6 +36,7 @@ from typing import Any
 
 import numpy as np
 
+from geometry.atomic import OutputError, fsync_dir, output_error, write_text
 from geometry.export import export_clutch
 from geometry.section import build_section
 from geometry.validation import ParameterError
@@ -123,41 +124,59 @@ def _alive(pid: int) -> bool:
 
 
 def _build(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[str], None]) -> Report:
-    tmp = Path(tempfile.mkdtemp(prefix=f"{_partial_prefix(out)}{os.getpid()}-", dir=out.parent))
+    """The report built in a staging folder and moved into ``out``; a write that fails
+    (disk full, read-only) is one OutputError naming the file under ``out``, and the
+    staging folder goes."""
     try:
-        tick("evaluating the design")
-        ev = evaluate(design, fidelity)
-        data = verdicts_json(ev)
-        tick("CAD: STEP and STL")
-        cad = _cad(design, tmp)
-        tick("3D view")
-        _view(design, tmp / "view.png")
-        tick("section drawing")
-        section_figure(build_section(design.clutch), tmp / "section.png")
-        tick("torque–current curve (network, circuit and FEM)")
-        curve = _torque(design, tmp / "torque.png")
-        tick("haptic plots")
-
-        k = float(ev.mr.k_max)
-        compare_figure({"MR pair": ev.mr, "Maxon 136206 (equal force)": ev.motor}, k,
-                       tmp / "haptic.png")  # fmt: skip
-        zw = {"MR pair": ev.zwidth["mr"], "Maxon 136206 (equal force)": ev.zwidth["motor"]}
-        zwidth_figure(zw, k, tmp / "zwidth.png")
-        tick("torque step response")
-        plot_torque_step([(design.name, ev.torque_response)], tmp / "response.png",
-                         typed_delay=design.operating.delay)  # fmt: skip
-        metrics = {**data, "torque_curve": curve, "cad": cad}
-        (tmp / "metrics.json").write_text(json.dumps(to_jsonable(metrics), indent=2) + "\n")
-        tick("report.html")
-        (tmp / "report.html").write_text(render_html(metrics))
-        files = tuple(sorted(p.name for p in tmp.iterdir()))
-        tick("moving the files into place")
-        out.mkdir(exist_ok=True)
-        for name in files:
-            (tmp / name).replace(out / name)
-        return Report(out, files, metrics)
+        tmp = Path(tempfile.mkdtemp(prefix=f"{_partial_prefix(out)}{os.getpid()}-",
+                                    dir=out.parent))  # fmt: skip
+    except OSError as exc:
+        raise output_error(out, exc) from None
+    try:
+        return _build_in(design, out, fidelity, tick, tmp)
+    except OutputError as exc:  # name the file where the user will look for it
+        raise OutputError(str(exc).replace(str(tmp), str(out))) from None
+    except OSError as exc:
+        raise output_error(Path(str(exc.filename or out).replace(str(tmp), str(out))),
+                           exc) from None  # fmt: skip
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _build_in(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[str], None],
+              tmp: Path) -> Report:  # fmt: skip
+    tick("evaluating the design")
+    ev = evaluate(design, fidelity)
+    data = verdicts_json(ev)
+    tick("CAD: STEP and STL")
+    cad = _cad(design, tmp)
+    tick("3D view")
+    _view(design, tmp / "view.png")
+    tick("section drawing")
+    section_figure(build_section(design.clutch), tmp / "section.png")
+    tick("torque–current curve (network, circuit and FEM)")
+    curve = _torque(design, tmp / "torque.png")
+    tick("haptic plots")
+
+    k = float(ev.mr.k_max)
+    compare_figure({"MR pair": ev.mr, "Maxon 136206 (equal force)": ev.motor}, k,
+                   tmp / "haptic.png")  # fmt: skip
+    zw = {"MR pair": ev.zwidth["mr"], "Maxon 136206 (equal force)": ev.zwidth["motor"]}
+    zwidth_figure(zw, k, tmp / "zwidth.png")
+    tick("torque step response")
+    plot_torque_step([(design.name, ev.torque_response)], tmp / "response.png",
+                     typed_delay=design.operating.delay)  # fmt: skip
+    metrics = {**data, "torque_curve": curve, "cad": cad}
+    write_text(tmp / "metrics.json", json.dumps(to_jsonable(metrics), indent=2) + "\n")
+    tick("report.html")
+    write_text(tmp / "report.html", render_html(metrics))
+    files = tuple(sorted(p.name for p in tmp.iterdir()))
+    tick("moving the files into place")
+    out.mkdir(exist_ok=True)
+    for name in files:
+        (tmp / name).replace(out / name)
+    fsync_dir(out)
+    return Report(out, files, metrics)
 
 
 def _cad(design: ClutchDesign, folder: Path) -> dict[str, Any]:

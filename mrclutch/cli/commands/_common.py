@@ -49,5 +49,8 @@ def load_clutch(args: argparse.Namespace) -> DrumClutch:
 
 
 def print_json(obj: Any) -> None:
+    """``obj`` as JSON on standard output, flushed at once: a full disk behind ``> file``
+    is one line (``mrclutch.cli.main.GuardedStream``), a closed pipe ends quietly."""
     json.dump(to_jsonable(obj), sys.stdout, indent=2)
     sys.stdout.write("\n")
+    sys.stdout.flush()

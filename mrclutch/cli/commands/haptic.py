@@ -9,7 +9,7 @@ from dataclasses import replace
 from typing import Any
 
 from geometry.validation import check_choice, check_range
-from mrclutch.cli.commands._common import atomic_path, print_json
+from mrclutch.cli.commands._common import print_json
 from mrclutch.cli.plots.haptic import compare_figure
 from mrclutch.design import MAX_DELAY
 from mrclutch.haptics.actuator import (
@@ -159,8 +159,7 @@ def run_compare(args: argparse.Namespace) -> int:
     res["K_source"] = src
     res["sources"] = {"mr": TABLE2_SOURCE, "em": catalogue_source("maxon-136206")}
     if args.plot:
-        with atomic_path(args.plot) as tmp:
-            compare_figure({"MR pair (Table 2)": mr, "Maxon 136206": em}, K, tmp)
+        compare_figure({"MR pair (Table 2)": mr, "Maxon 136206": em}, K, args.plot)
     if args.json:
         print_json(res)
         return 0

@@ -19,7 +19,7 @@ from magnetics.fem import FEMConvergenceError, solve_fem
 from magnetics.network import flux_linkage as network_flux_linkage
 from magnetics.network import network_from_regions
 from magnetics.torque import torque_curve
-from mrclutch.cli.commands._common import add_design_args, atomic_path, load_clutch, print_json
+from mrclutch.cli.commands._common import add_design_args, load_clutch, print_json
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.plots.magnetics import plot_field, plot_torque
 
@@ -91,8 +91,7 @@ def _torque(args: argparse.Namespace) -> int:
     except FloatingPointError as exc:  # pragma: no cover - defensive
         raise ParameterError(str(exc)) from None
     if args.plot:
-        with atomic_path(args.plot) as tmp:
-            plot_torque(curves, tmp)
+        plot_torque(curves, args.plot)  # through the output layer
     # largest relative network-vs-FEM difference where the FEM torque is not ~0 (0 A)
     err = None
     if len(curves) == 2:
@@ -163,7 +162,6 @@ def _field(args: argparse.Namespace) -> int:
         sol = solve_fem(section, args.current, size=size)
     except FEMConvergenceError as exc:
         raise CLIError(str(exc)) from None
-    with atomic_path(args.plot) as tmp:
-        plot_field(section, sol, tmp)
+    plot_field(section, sol, args.plot)  # through the output layer
     print(f"wrote {args.plot}: |B| max {sol.b.max():.3g} T, {sol.iterations} Newton iterations")
     return 0

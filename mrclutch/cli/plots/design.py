@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from geometry.atomic import atomic_path
+from mrclutch.cli.plots import save_png
 from mrclutch.sweep import pareto_front, read_results
 
 __all__ = ["pareto_plot", "read_results"]
@@ -39,9 +39,7 @@ def pareto_plot(results: str | Path, out: str | Path) -> Path:
         ax.legend(loc="best", fontsize=8)
     fig.colorbar(sc, ax=axes, label="clutch mass (g)")
     fig.suptitle(f"{ok.sum()} valid designs of {ok.size}")
-    with atomic_path(out) as tmp:
-        fig.savefig(tmp, dpi=120, format="png")
-    plt.close(fig)
+    save_png(fig, out, dpi=120)
     return Path(out)
 
 
@@ -88,7 +86,5 @@ def section_figure(section: object, out: str | Path) -> Path:
              "coil": "coil (Cu + epoxy)", "mrf_132dg": "MRF-132DG"}  # fmt: skip
     ax.legend(handles=[Patch(color=MATERIAL_COLOURS[m], label=n) for m, n in names.items()],
               loc="lower right", fontsize=8)  # fmt: skip
-    with atomic_path(out) as tmp:
-        fig.savefig(tmp, dpi=130, format="png")
-    plt.close(fig)
+    save_png(fig, out, dpi=130)
     return Path(out)

@@ -8,6 +8,8 @@ from typing import Any
 
 import numpy as np
 
+from mrclutch.cli.plots import save_png
+
 
 def plot_torque_step(
     responses: Sequence[tuple[str, Any]], path: str | Path, typed_delay: float | None = None
@@ -36,5 +38,4 @@ def plot_torque_step(
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, format="png", dpi=120)
-    plt.close(fig)
+    save_png(fig, path, dpi=120)

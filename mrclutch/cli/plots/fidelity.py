@@ -6,7 +6,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from geometry.atomic import atomic_path
+from mrclutch.cli.plots import save_png
 
 #: Errors below this are drawn at it (a log axis has no 0; the references sit there): the
 #: order of double-precision rounding, so no measured error is hidden under it.
@@ -43,6 +43,4 @@ def plot_fidelity(rows: Sequence[Any], path: str | Path, title: str = "") -> Non
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="center left")
     fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=120)
-    plt.close(fig)
+    save_png(fig, path, dpi=120)

@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from mrclutch.cli.plots import save_png
 from mrclutch.haptics.model import (
     BAND_HZ,
     bandwidth,
@@ -66,8 +67,7 @@ def compare_figure(
     for ax in axes:
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=8)
-    fig.savefig(path, dpi=110, format="png")
-    plt.close(fig)
+    save_png(fig, path, dpi=110)
 
 
 def zwidth_figure(sides: dict[str, dict[str, Any]], K: float, path: str | os.PathLike[str]) -> None:
@@ -104,5 +104,4 @@ def zwidth_figure(sides: dict[str, dict[str, Any]], K: float, path: str | os.Pat
         ax.set_ylim(0, None)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8)
-    fig.savefig(path, dpi=110, format="png")
-    plt.close(fig)
+    save_png(fig, path, dpi=110)

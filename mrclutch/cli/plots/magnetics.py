@@ -8,6 +8,8 @@ from typing import Any
 
 import numpy as np
 
+from mrclutch.cli.plots import save_png
+
 
 def plot_torque(curves: Sequence[Any], path: str | Path, title: str = "") -> None:
     """Torque (N·m) against current (A) for one or more TorqueCurve objects."""
@@ -26,8 +28,7 @@ def plot_torque(curves: Sequence[Any], path: str | Path, title: str = "") -> Non
     if title:
         ax.set_title(title)
     fig.tight_layout()
-    fig.savefig(path, format="png", dpi=120)
-    plt.close(fig)
+    save_png(fig, path, dpi=120)
 
 
 def plot_field(section: Any, sol: Any, path: str | Path) -> None:
@@ -61,5 +62,4 @@ def plot_field(section: Any, sol: Any, path: str | Path) -> None:
     ax.set_ylabel("z (mm)")
     ax.set_title(f"|B| at {sol.current:g} A (max {sol.b.max():.2f} T)")
     fig.tight_layout()
-    fig.savefig(path, format="png", dpi=120)
-    plt.close(fig)
+    save_png(fig, path, dpi=120)
