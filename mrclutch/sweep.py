@@ -7,30 +7,41 @@ designs depend only on the spec and k (random chunks draw from a generator seede
 uninterrupted one would.
 
 Each finished chunk is appended to the CSV in order with one write and a flush; a
-sidecar ``<out>.meta.json`` records the spec's fingerprint so ``resume`` refuses a
-different spec. Any ``concurrent.futures.Executor`` (a process pool, or a Dask
-``Client.get_executor()``) may evaluate the chunks.
+sidecar ``<out>.meta.json`` records the spec's fingerprint (``resume`` refuses a different
+spec) and, as they are written, every chunk's row range, byte range and SHA-256. A resume
+verifies every recorded chunk (sizes, then checksums) and refuses, naming the first bad
+chunk, a file that does not match; ``repair=True`` recomputes just the damaged chunks and
+restores the file an uninterrupted run writes, byte for byte. An advisory lock
+(``<out>.lock``, flock) keeps a second writer out while one runs; the kernel drops the lock
+of a killed run, so its lock file is taken over. Every file goes through the output layer
+(``geometry.atomic``): a full disk ends in one line and leaves whole chunks only. Any
+``concurrent.futures.Executor`` (a process pool, or a Dask ``Client.get_executor()``) may
+evaluate the chunks.
 """
 
 from __future__ import annotations
 
+import errno
+import fcntl
 import hashlib
-import io
 import json
 import math
+import mmap
 import os
 import re
 import signal
 import threading
+import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import Executor, Future
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, BinaryIO
+from typing import Any
 
 import numpy as np
 
+from geometry.atomic import OutputError, atomic_path, output_error, write_bytes, write_text
 from geometry.params import INT_RANGES, INTEGER_FIELDS, LENGTH_FIELDS, DrumClutch, preset
 from geometry.validation import ParameterError, check_int
 from mrclutch.inputs import read_toml
@@ -247,6 +258,7 @@ class SweepResult:
     rows: int
     complete: bool
     resumed_from: int = 0
+    repaired: tuple[int, ...] = ()  # chunks recomputed by ``repair=True``
 
 
 #: Chunks kept in flight for each worker of the executor: enough that no worker waits while
@@ -320,109 +332,210 @@ def _read_or_refuse(path: Path, parse: Callable[[str], Any]) -> Any:
         ) from None
 
 
-def _segments_backward(
-    f: BinaryIO, lo: int, hi: int, block: int = 1 << 16
-) -> Iterator[tuple[int, bytes]]:
-    """(offset, bytes) of the newline-separated pieces of ``f[lo:hi]``, last first, reading
-    the file backwards a block at a time. The first piece is what follows the last newline
-    (empty when the file ends with one)."""
-    pos, tail = hi, b""  # tail = f[pos:end of the next piece]
+#: Least time between two rewrites of the ``.meta.json`` chunk records (s). Chunks written
+#: since the last rewrite are not yet recorded: a resume cuts and recomputes them.
+META_INTERVAL = 0.5
+
+
+def _digest(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+def _lock_path(out: Path) -> Path:
+    return out.with_name(out.name + ".lock")
+
+
+@contextmanager
+def output_lock(out: str | Path) -> Iterator[Path]:
+    """Hold the advisory lock of a sweep's output: ``<out>.lock`` beside it, locked with
+    flock and holding this process's id. A second writer is refused in one line naming
+    the holder. The kernel releases the lock of a process however it ends (SIGKILL too), so
+    the lock file a killed run left is taken over; the file is removed at the end.
+
+    The locked file must still be the one at the path (a finishing run removes it while a
+    new one waits on it): otherwise the lock is taken again on the new file."""
+    out = Path(out)
+    lock = _lock_path(out)
     while True:
-        j = tail.rfind(b"\n")
-        if j >= 0:
-            yield pos + j + 1, tail[j + 1 :]
-            tail = tail[:j]
-        elif pos == lo:
-            yield lo, tail
-            return
-        else:
-            n = min(block, pos - lo)
-            pos -= n
-            f.seek(pos)
-            tail = f.read(n) + tail
+        try:
+            lock.parent.mkdir(parents=True, exist_ok=True)
+            fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o666)
+        except OSError as exc:
+            raise output_error(lock, exc) from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            holder = os.pread(fd, 64, 0).decode("ascii", "replace").strip() or "?"
+            os.close(fd)
+            if exc.errno in (errno.EAGAIN, errno.EACCES):
+                raise ParameterError(
+                    f"{out}: another sweep (pid {holder}) is writing it ({lock.name} is "
+                    "locked); wait for it to end or stop it"
+                ) from None
+            raise output_error(lock, exc, "cannot lock") from None
+        try:
+            same = os.fstat(fd).st_ino == os.stat(lock).st_ino
+        except FileNotFoundError:
+            same = False
+        if same:
+            break
+        os.close(fd)
+    try:
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        yield lock
+    finally:
+        try:
+            lock.unlink()
+        except FileNotFoundError:
+            pass
+        os.close(fd)
 
 
-def _design_id(line: bytes, n_columns: int) -> int | None:
-    head, *rest = line.split(b",")
-    if len(rest) != n_columns - 1 or not head.isdigit():
-        return None
-    return int(head)
+def _chunk_rows_range(spec: SweepSpec, k: int) -> list[int]:
+    return [k * spec.chunk_size, min((k + 1) * spec.chunk_size, spec.n_designs)]
 
 
 class _CsvSink:
-    """One CSV file; each chunk appended with one write and a flush."""
+    """One CSV file; each chunk appended with one write and a flush, recorded as its byte
+    range and checksum."""
 
     def __init__(self, out: Path, spec: SweepSpec, columns: Sequence[str]) -> None:
-        self.out, self.spec, self.n_columns = out, spec, len(columns)
-        self.header = ",".join(columns).encode()
+        self.out, self.spec = out, spec
+        self.header = (",".join(columns) + "\n").encode()
         self.file: Any = None
+        self.end = len(self.header)  # where the next chunk goes
 
     def create(self) -> None:
-        self.out.parent.mkdir(parents=True, exist_ok=True)
-        self.out.write_bytes(self.header + b"\n")
+        write_bytes(self.out, self.header)
+        self.end = len(self.header)
 
-    def resume(self) -> int:
-        """Rows of whole chunks already in the file, found from its end: only the header
-        and the tail (at most one chunk of rows) are read; a partial chunk or line is cut."""
+    def record(self, k: int, payload: bytes, digest: str) -> dict[str, Any]:
+        return {"chunk": k, "rows": _chunk_rows_range(self.spec, k), "offset": self.end,
+                "bytes": len(payload), "sha256": digest}  # fmt: skip
+
+    def well_formed(self, r: dict[str, Any], k: int, prev: dict[str, Any] | None) -> bool:
+        at = prev["offset"] + prev["bytes"] if prev else len(self.header)
+        return r.get("offset") == at
+
+    def bad_chunks(self, records: list[dict[str, Any]], first_only: bool
+                   ) -> list[tuple[int, str]]:  # fmt: skip
+        """(chunk, why) of every recorded chunk the file does not hold (chunk -1: the
+        header row); sizes first, then checksums."""
+        bad: list[tuple[int, str]] = []
+        try:
+            with self.out.open("rb") as f:
+                size = os.fstat(f.fileno()).st_size
+                if f.read(len(self.header)) != self.header:
+                    bad.append((-1, "its header row differs from this sweep's columns"))
+                for r in records:
+                    if first_only and bad:
+                        break
+                    if r["offset"] + r["bytes"] > size:
+                        bad.append((r["chunk"], "is missing or cut short (the file ends at "
+                                    f"byte {size}, before the chunk's end)"))  # fmt: skip
+                        continue
+                    f.seek(r["offset"])
+                    if _digest(f.read(r["bytes"])) != r["sha256"]:
+                        bad.append((r["chunk"], "does not match its checksum"))
+        except OSError as exc:
+            raise ParameterError(f"{self.out}: unreadable ({exc.strerror}); cannot resume"
+                                 ) from None  # fmt: skip
+        return bad
+
+    def cut(self, records: list[dict[str, Any]]) -> None:
+        """Drop what follows the last recorded chunk (a chunk written but not recorded)."""
+        self.end = records[-1]["offset"] + records[-1]["bytes"] if records else len(self.header)
         try:
             with self.out.open("rb+") as f:
-                return self._trim(f)
+                f.truncate(self.end)
         except OSError as exc:
-            raise ParameterError(
-                f"{self.out}: unreadable ({exc.strerror}); cannot resume"
-            ) from None
+            raise output_error(self.out, exc) from None
 
-    def _trim(self, f: BinaryIO) -> int:
-        first = f.readline(len(self.header) + 1)
-        if first != self.header + b"\n":
-            raise ParameterError(f"{self.out}: its columns differ from this sweep's; cannot resume")
-        lo, size = len(first), f.seek(0, io.SEEK_END)
-        pieces = _segments_backward(f, lo, size)
-        next(pieces)  # what follows the last newline: nothing, or a partial row (dropped)
-        cut, whole, expect = lo, 0, -1
-        for start, line in pieces:
-            i = _design_id(line, self.n_columns)
-            if expect < 0:  # the last complete row
-                if i is None or i >= self.spec.n_designs:
-                    raise ParameterError(
-                        f"{self.out}: its last row {line[:40]!r} is not a row of this sweep; "
-                        "cannot resume"
-                    )
-                done = i + 1
-                whole = done if done == self.spec.n_designs else done - done % self.spec.chunk_size
-                if whole == 0:
-                    break
-            elif i != expect:
-                raise ParameterError(f"{self.out}: row {expect} reads {line[:40]!r}; cannot resume")
-            if i == whole - 1:
-                cut = start + len(line) + 1
-                break
-            expect = i - 1
-        else:
-            if whole:  # the rows ran out above the last whole chunk's end
-                raise ParameterError(
-                    f"{self.out}: rows before {expect + 1} are missing; cannot resume"
-                )
-        f.truncate(cut)
-        return whole
+    def repair(self, records: list[dict[str, Any]], recompute: Callable[[int], bytes]
+               ) -> list[int]:  # fmt: skip
+        """Rewrite the file with every recorded chunk: found in the damaged file by its first
+        design id when its bytes match their checksum, recomputed otherwise."""
+        fixed = []
+        with self.out.open("rb") as f:
+            size = os.fstat(f.fileno()).st_size
+            mm: Any = mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) if size else b""
+            try:
+                with atomic_path(self.out) as tmp, tmp.open("wb") as g:
+                    g.write(self.header)
+                    pos = 0
+                    for r in records:
+                        data, pos = self._find(mm, r, pos)
+                        if data is None or _digest(data) != r["sha256"]:
+                            data = _recomputed(self.out, r, recompute)
+                            fixed.append(r["chunk"])
+                        g.write(data)
+            finally:
+                if size:
+                    mm.close()
+        return fixed
+
+    @staticmethod
+    def _find(mm: Any, r: dict[str, Any], pos: int) -> tuple[bytes | None, int]:
+        at, n = r["offset"], r["bytes"]
+        if _digest(mm[at : at + n]) == r["sha256"]:
+            return bytes(mm[at : at + n]), at
+        hit = mm.find(b"\n%d," % r["rows"][0], pos)  # the chunk's first row, moved
+        if hit < 0:
+            return None, pos
+        return bytes(mm[hit + 1 : hit + 1 + n]), hit
 
     def __enter__(self) -> _CsvSink:
-        self.file = self.out.open("a", encoding="utf-8", newline="")
+        try:
+            self.file = self.out.open("ab")
+        except OSError as exc:
+            raise output_error(self.out, exc) from None
         return self
 
-    def write(self, k: int, payload: str) -> None:
+    def write(self, k: int, payload: bytes, digest: str) -> dict[str, Any]:
+        rec = self.record(k, payload, digest)
         self.file.write(payload)
         self.file.flush()
+        self.end += len(payload)
+        return rec
+
+    def sync(self) -> None:
+        """The chunks written so far on the disk before the ``.meta.json`` records them."""
+        if self.file is not None and not self.file.closed:
+            self.file.flush()
+            os.fsync(self.file.fileno())
+
+    def remove(self) -> None:
+        self.out.unlink(missing_ok=True)
 
     def __exit__(self, *exc: object) -> None:
-        self.file.close()
+        try:
+            self.sync()  # on the disk before the final record names it
+        except OSError:  # the disk filled: the error that matters is already raised
+            pass
+        finally:
+            try:
+                self.file.close()
+            except OSError:
+                pass
+
+
+def _recomputed(out: Path, r: dict[str, Any], recompute: Callable[[int], bytes]) -> bytes:
+    data = recompute(r["chunk"])
+    if _digest(data) != r["sha256"]:
+        raise ParameterError(
+            f"{out}: chunk {r['chunk']} recomputed does not match its recorded checksum (a "
+            "different mrclutch version or machine?); cannot repair; pass --overwrite"
+        )
+    return data
 
 
 class _ParquetSink:
     """A Parquet dataset: the folder ``out`` holds ``part-<chunk>.parquet``, one file a chunk
-    in chunk order, each written under a hidden temporary name and renamed when whole. A
-    kill at any moment (SIGKILL and a power cut included) leaves only complete parts, which
-    pandas, pyarrow, polars and DuckDB read as one table in design order."""
+    in chunk order, each written through the output layer (a hidden temporary name in the
+    folder, fsync, rename). A kill at any moment (SIGKILL and a power cut included) leaves
+    only complete parts, which pandas, pyarrow, polars and DuckDB read as one table in
+    design order; the ``.meta.json`` records each part's size and checksum."""
 
     def __init__(self, out: Path, spec: SweepSpec, columns: Sequence[str]) -> None:
         self.out, self.spec, self.columns = out, spec, list(columns)
@@ -438,7 +551,7 @@ class _ParquetSink:
             m = re.fullmatch(r"part-(\d+)\.parquet", p.name)
             if m and len(m.group(1)) == self.width:
                 parts.append(int(m.group(1)))
-            elif re.fullmatch(r"\.part-\d+\.parquet\.tmp", p.name):
+            elif re.fullmatch(r"\.part-\d+(\.parquet\.tmp|-\w+\.parquet)", p.name):
                 temps.append(p)
             else:
                 other.append(p)
@@ -455,51 +568,74 @@ class _ParquetSink:
                 p.unlink()
         elif self.out.exists():
             self.out.unlink()
-        self.out.mkdir(parents=True, exist_ok=True)
+        try:
+            self.out.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise output_error(self.out, exc) from None
 
-    def resume(self) -> int:
-        """Rows of the parts on disk: their numbers must run 0, 1, …; the last one's footer
-        (read alone) must hold the rows and columns of its chunk."""
+    def record(self, k: int, payload: bytes, digest: str) -> dict[str, Any]:
+        return {"chunk": k, "rows": _chunk_rows_range(self.spec, k),
+                "part": self.part(k).name, "bytes": len(payload), "sha256": digest}  # fmt: skip
+
+    def well_formed(self, r: dict[str, Any], k: int, prev: dict[str, Any] | None) -> bool:
+        return r.get("part") == self.part(k).name
+
+    def bad_chunks(self, records: list[dict[str, Any]], first_only: bool
+                   ) -> list[tuple[int, str]]:  # fmt: skip
         if not self.out.is_dir():
             raise ParameterError(f"{self.out}: not a folder of Parquet parts; cannot resume")
-        parts, temps, _ = self._listing()
-        for p in temps:  # a part being written when the sweep stopped
-            p.unlink()
-        if parts != list(range(len(parts))) or len(parts) > self.spec.n_chunks:
-            gap = next(i for i, k in enumerate([*parts, -1]) if k != i)
-            raise ParameterError(
-                f"{self.out}: {self.part(gap).name} is missing or out of place; cannot resume"
-            )
-        if not parts:
-            return 0
-        import pyarrow.parquet as pq
+        bad: list[tuple[int, str]] = []
+        for r in records:
+            if first_only and bad:
+                break
+            p = self.out / r["part"]
+            try:
+                size = p.stat().st_size
+                if size != r["bytes"]:
+                    bad.append((r["chunk"], f"({p.name}) holds {size} bytes, not the "
+                                f"{r['bytes']} written (truncated or altered)"))  # fmt: skip
+                elif _digest(p.read_bytes()) != r["sha256"]:
+                    bad.append((r["chunk"], f"({p.name}) does not match its checksum"))
+            except FileNotFoundError:
+                bad.append((r["chunk"], f"({p.name}) is missing"))
+            except OSError as exc:
+                bad.append((r["chunk"], f"({p.name}) is unreadable ({exc.strerror})"))
+        return bad
 
-        last = self.part(parts[-1])
-        try:
-            md = pq.read_metadata(last)
-        except (OSError, ValueError) as exc:  # ArrowInvalid is a ValueError
-            raise ParameterError(
-                f"{last}: unreadable ({type(exc).__name__}); cannot resume; pass --overwrite "
-                "to start again"
-            ) from None
-        ids, _ = self.spec.chunk(parts[-1])
-        kv = md.metadata or {}
-        meta = json.loads(kv.get(b"mrclutch.sweep", b"{}"))
-        if md.schema.names != self.columns or md.num_rows != ids.size:
-            raise ParameterError(
-                f"{last}: its columns or rows differ from this sweep's; cannot resume"
-            )
-        if meta.get("fingerprint") != self.spec.fingerprint():
-            raise ParameterError(f"{last}: written by a different sweep spec; cannot resume")
-        return int(ids[-1]) + 1
+    def cut(self, records: list[dict[str, Any]]) -> None:
+        """Remove leftover temporaries and the parts written but not recorded."""
+        parts, temps, _ = self._listing()
+        for p in temps:
+            p.unlink()
+        for k in parts:
+            if k >= len(records):
+                self.part(k).unlink()
+
+    def repair(self, records: list[dict[str, Any]], recompute: Callable[[int], bytes]
+               ) -> list[int]:  # fmt: skip
+        fixed = []
+        for k, _ in self.bad_chunks(records, first_only=False):
+            write_bytes(self.part(k), _recomputed(self.out, records[k], recompute))
+            fixed.append(k)
+        return fixed
 
     def __enter__(self) -> _ParquetSink:
         return self
 
-    def write(self, k: int, payload: bytes) -> None:
-        tmp = self.out / f".{self.part(k).name}.tmp"
-        tmp.write_bytes(payload)
-        os.replace(tmp, self.part(k))  # atomic: a part is whole or absent
+    def write(self, k: int, payload: bytes, digest: str) -> dict[str, Any]:
+        write_bytes(self.part(k), payload)  # atomic: a part is whole or absent
+        return self.record(k, payload, digest)
+
+    def sync(self) -> None:
+        pass  # each part is flushed as it is renamed into place
+
+    def remove(self) -> None:
+        if self.out.is_dir():
+            parts, temps, other = self._listing()
+            for p in [*map(self.part, parts), *temps]:
+                p.unlink()
+            if not other:
+                self.out.rmdir()
 
     def __exit__(self, *exc: object) -> None:
         pass
@@ -605,6 +741,7 @@ def run_sweep(
     executor: Executor | None = None,
     resume: bool = False,
     overwrite: bool = False,
+    repair: bool = False,
     progress: bool = True,
     max_pending: int | None = None,
     workers: int | None = None,
@@ -617,64 +754,164 @@ def run_sweep(
     Up to ``max_pending`` chunks are in flight (default: ``chunks_in_flight`` of the
     executor's ``workers``, read from it when not given); rows are written in chunk order
     whatever the executor. On Ctrl-C or SIGTERM the finished chunks stay on disk;
-    ``resume=True`` continues.
+    ``resume=True`` verifies them and continues, ``repair=True`` (a resume too) first
+    recomputes the chunks that do not verify. The output is locked while this runs
+    (``output_lock``); a second writer is refused.
     """
     out = Path(out)
+    with output_lock(out):
+        return _run_locked(spec, out, evaluate, outputs, executor, resume or repair,
+                           overwrite, repair, progress, max_pending, workers)  # fmt: skip
+
+
+def _write_meta(out: Path, meta: dict[str, Any], records: list[dict[str, Any]]) -> None:
+    write_text(_meta_path(out), json.dumps({**meta, "chunks": records}))
+
+
+def _recorded(out: Path, meta: dict[str, Any], spec: SweepSpec, sink: Any
+              ) -> list[dict[str, Any]]:  # fmt: skip
+    """The chunk records of the ``.meta.json`` beside ``out``, checked for shape; one line
+    refusing the resume when it is missing, of another spec or damaged."""
+    mp = _meta_path(out)
+    if not mp.exists():
+        raise ParameterError(f"{mp}: missing; cannot verify {out}; cannot resume; pass "
+                             "--overwrite to start again")  # fmt: skip
+    old = _read_or_refuse(mp, json.loads)
+    if not isinstance(old, dict) or {k: old.get(k) for k in meta} != meta:
+        raise ParameterError(f"{out}: written by a different sweep spec; cannot resume")
+    records = old.get("chunks")
+    if records is None:
+        raise ParameterError(f"{mp}: records no chunk checksums (an older mrclutch wrote "
+                             "it); cannot verify; pass --overwrite to start again")  # fmt: skip
+    keys = {"chunk", "rows", "bytes", "sha256"}
+    ok = isinstance(records, list) and len(records) <= spec.n_chunks
+    for k, r in enumerate(records if ok else []):
+        prev = records[k - 1] if k else None
+        ok = (isinstance(r, dict) and keys <= set(r) and r["chunk"] == k
+              and r["rows"] == _chunk_rows_range(spec, k) and isinstance(r["bytes"], int)
+              and r["bytes"] >= 0 and isinstance(r["sha256"], str)
+              and sink.well_formed(r, k, prev))  # fmt: skip
+        if not ok:
+            break
+    if not ok:
+        raise ParameterError(f"{mp}: its chunk records are damaged; cannot resume; pass "
+                             "--overwrite to start again")  # fmt: skip
+    return records
+
+
+def _run_locked(spec: SweepSpec, out: Path, evaluate: Evaluator, outputs: Sequence[str],
+                executor: Executor | None, resume: bool, overwrite: bool, repair: bool,
+                progress: bool, max_pending: int | None, workers: int | None
+                ) -> SweepResult:  # fmt: skip
     meta = _meta(spec, outputs)
     columns = ["design_id", *spec.columns, *outputs]
     fmt = "parquet" if is_parquet(out) else "csv"
     sink = (_ParquetSink if fmt == "parquet" else _CsvSink)(out, spec, columns)
-    start_rows = 0
+    records: list[dict[str, Any]] = []
+    fixed: list[int] = []
+    fresh = False
     if out.exists() and resume:
-        mp = _meta_path(out)
-        old = _read_or_refuse(mp, json.loads) if mp.exists() else {}
-        if old != meta:
-            raise ParameterError(f"{out}: written by a different sweep spec; cannot resume")
-        start_rows = sink.resume()
+        records = _recorded(out, meta, spec, sink)
+        if repair:
+            fixed = sink.repair(records, lambda k: chunk_rows(spec, evaluate, outputs, k,
+                                                              fmt)[1])  # fmt: skip
+        else:
+            bad = sink.bad_chunks(records, first_only=True)
+            if bad:
+                k, why = bad[0]
+                what = (
+                    "its header row"
+                    if k < 0
+                    else (f"chunk {k} (rows {records[k]['rows'][0]}–{records[k]['rows'][1] - 1})")
+                )
+                raise ParameterError(f"{out}: {what} {why}; cannot resume; run again with "
+                                     "--repair to recompute the damaged chunks")  # fmt: skip
+        sink.cut(records)
     elif out.exists() and not overwrite:
         raise ParameterError(f"{out}: exists; pass --resume to continue it or --overwrite")
     else:
-        sink.create()
-        _meta_path(out).write_text(json.dumps(meta))
+        fresh = True
+        try:
+            sink.create()
+            _write_meta(out, meta, records)
+        except OutputError:
+            sink.remove()
+            raise
+    start_rows = records[-1]["rows"][1] if records else 0
 
     if max_pending is None:
         n = workers if workers is not None else executor_workers(executor)
         max_pending = chunks_in_flight(n, spec.chunk_size)
-    first_chunk = start_rows // spec.chunk_size if start_rows < spec.n_designs else spec.n_chunks
+    first_chunk = len(records)
     rows = start_rows
     bar = None
     if progress:
         from tqdm import tqdm
 
         bar = tqdm(total=spec.n_designs, initial=start_rows, unit="design", desc="sweep")
+    complete = False
+    failed: BaseException | None = None
+    last = time.monotonic()
     try:
         with sigterm_as_interrupt(), sink:
             chunks = _results(spec, evaluate, outputs, first_chunk, executor, max_pending, fmt)
-            for k, (n, payload) in enumerate(chunks, start=first_chunk):
-                sink.write(k, payload)
+            for k, (n, payload, digest) in enumerate(chunks, start=first_chunk):
+                records.append(sink.write(k, payload, digest))
                 rows += n
+                if time.monotonic() - last >= META_INTERVAL:
+                    sink.sync()
+                    _write_meta(out, meta, records)
+                    last = time.monotonic()
                 if bar is not None:
                     bar.update(n)
+            sink.sync()
+        complete = True
     except KeyboardInterrupt:
-        return SweepResult(out, rows, False, start_rows)
+        pass
+    except (OSError, OutputError) as exc:
+        failed = exc
     finally:
         if bar is not None:
             bar.close()
-    return SweepResult(out, rows, True, start_rows)
+    if failed is not None:
+        return _fail(out, sink, meta, records, fresh, failed, start_rows)
+    _write_meta(out, meta, records)
+    return SweepResult(out, rows, complete, start_rows, tuple(fixed))
+
+
+def _fail(out: Path, sink: Any, meta: dict[str, Any], records: list[dict[str, Any]],
+          fresh: bool, exc: BaseException, start_rows: int) -> SweepResult:  # fmt: skip
+    """A write failed (disk full, read-only): keep the whole, recorded chunks, or nothing
+    when this run recorded none of a new output; one OutputError line either way."""
+    err = exc if isinstance(exc, OutputError) else output_error(out, exc)  # type: ignore[arg-type]
+    if fresh and not records:
+        sink.remove()
+        _meta_path(out).unlink(missing_ok=True)
+        raise err
+    try:
+        sink.cut(records)
+        _write_meta(out, meta, records)
+    except (OSError, OutputError):  # the older record stays: fewer chunks, still true
+        pass
+    rows = records[-1]["rows"][1] if records else start_rows
+    raise OutputError(f"{err}; the {rows} rows of whole chunks are kept: free space, then "
+                      "run again with --resume")  # fmt: skip
 
 
 def chunk_rows(
     spec: SweepSpec, evaluate: Evaluator, outputs: Sequence[str], k: int, fmt: str = "csv"
-) -> tuple[int, str | bytes]:
-    """Chunk k evaluated and encoded, as CSV rows or a Parquet file (runs in a worker: only
-    the encoded chunk returns)."""
+) -> tuple[int, bytes, str]:
+    """Chunk k evaluated and encoded, as CSV rows or a Parquet file, with its SHA-256 (runs
+    in a worker: only the encoded chunk and its checksum return)."""
     ids, fields = spec.chunk(k)
     res = evaluate(fields)
     cols = [_display(p.name, fields[p.name]) for p in spec.params]
     cols += [res[name] for name in outputs]
     if fmt == "parquet":
-        return ids.size, _parquet_part(spec, outputs, ids, cols)
-    return ids.size, _format_chunk(ids, cols)
+        payload = _parquet_part(spec, outputs, ids, cols)
+    else:
+        payload = _format_chunk(ids, cols).encode("ascii")
+    return ids.size, payload, _digest(payload)
 
 
 def _results(
@@ -685,8 +922,8 @@ def _results(
     executor: Executor | None,
     max_pending: int,
     fmt: str = "csv",
-) -> Iterator[tuple[int, str | bytes]]:
-    """(rows, encoded chunk) of every chunk from ``first`` on, in chunk order, evaluated
+) -> Iterator[tuple[int, bytes, str]]:
+    """(rows, encoded chunk, checksum) of every chunk from ``first`` on, in chunk order, evaluated
     in-process or on ``executor`` with at most ``max_pending`` chunks submitted and not yet
     handed on."""
     if executor is None:

@@ -116,7 +116,18 @@ def register(sub: argparse._SubParsersAction) -> None:
         "when the name ends in .parquet; beside it RESULTS.csv.meta.json records the spec's "
         "fingerprint (for --resume) and each column's unit and meaning",
     )
-    p.add_argument("--resume", action="store_true", help="continue an interrupted sweep")
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue an interrupted sweep (every chunk on disk is verified first against "
+        "the sizes and checksums in RESULTS.meta.json)",
+    )
+    p.add_argument(
+        "--repair",
+        action="store_true",
+        help="like --resume, but recompute the chunks that do not verify (a row lost, "
+        "altered or duplicated, a part cut short) instead of refusing",
+    )
     p.add_argument("--overwrite", action="store_true", help="replace an existing results file")
     p.add_argument("--workers", type=int, default=0, help="processes (0: in this process)")
     p.add_argument(
@@ -534,6 +545,7 @@ def _sweep(args: argparse.Namespace) -> int:
             workers=workers,
             resume=args.resume,
             overwrite=args.overwrite,
+            repair=args.repair,
             progress=not args.no_progress,
         )
         verified = None
@@ -550,6 +562,9 @@ def _sweep(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 130
+    if res.repaired:
+        print(f"repaired chunk(s) {', '.join(map(str, res.repaired))} of {res.path} "
+              "(recomputed; checksums match the record)")  # fmt: skip
     print(
         f"{res.rows} designs in {res.path}"
         + (f" (resumed at {res.resumed_from})" if res.resumed_from else "")
