@@ -3,6 +3,7 @@ imports it before it knows which command runs)."""
 
 from __future__ import annotations
 
+import importlib
 import tempfile
 from pathlib import Path
 
@@ -18,11 +19,11 @@ def check_writable(option: str, path: str, folder: bool) -> None:
     its nearest existing ancestor is a folder we can create a file in."""
     p = Path(path)
     if p.exists() and not p.is_dir() and not p.is_file():  # a device node, a FIFO, a socket
-        from geometry.atomic import OutputError, check_target  # the output layer's rule
-
+        # the output layer's rule (imported here, after the command's module: no numpy before)
+        layer = importlib.import_module("geometry.atomic")
         try:
-            check_target(p)
-        except OutputError as exc:
+            layer.check_target(p)
+        except layer.OutputError as exc:
             raise CLIError(f"{option} {exc}") from None
     if p.exists() and p.is_dir() != folder:
         what = "is a directory; give a file name" if p.is_dir() else "is a file, not a folder"
