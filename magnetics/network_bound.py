@@ -96,7 +96,7 @@ class NetworkBound:
     def estimate(self, x: np.ndarray) -> np.ndarray:
         """ê at scaled inputs ``x`` (P, k)."""
         a = np.asarray(self.a)
-        return self.c + x @ np.asarray(self.b) + np.einsum("pi,ij,pj->p", x, a, x)
+        return self.c + x @ np.asarray(self.b) + np.sum((x @ a) * x, axis=1)
 
 
 @functools.lru_cache(maxsize=1)
