@@ -132,6 +132,7 @@ def test_the_batch_bound_is_the_single_one_and_needs_a_current() -> None:
         error_bound(p, "network")
 
 
+@pytest.mark.slow
 def test_a_small_sample_of_the_stored_fem_is_re_measured() -> None:
     """Two of the stored check designs solved again by the FEM: the stored torques are
     what the FEM gives today (the bound rests on them)."""
