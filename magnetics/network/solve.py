@@ -514,7 +514,7 @@ def _kernels() -> Any:
 
     g = globals()
     for name in _KERNELS:  # in place: the kernels find each other compiled
-        g[name] = numba.njit(cache=True)(g[name])
+        g[name] = numba.njit(cache=True, error_model="numpy")(g[name])
     entry = (g["_solve_rows"], g["_tangent_rows"])
     cached = [Path(d.stats.cache_path).glob(f"{d.py_func.__module__.rpartition('.')[2]}."
                                             f"{d.py_func.__name__}-*.nbi")

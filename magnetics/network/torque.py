@@ -207,8 +207,10 @@ def _read_rows(phi, bz, r, length, w_end, scale, band_end, gt, gw, tab, inv, nse
                         continue
                     # the fringe at this end: τ_max·[e^W·S(ln a − W) − S(ln a)]
                     e = j - gt.size
-                    a = min(a, 1e200)
                     w = w_end[s, k, e]
+                    if w == 0.0:  # no fringe: e^0·S(v) − S(v) = 0 exactly
+                        continue
+                    a = min(a, 1e200)
                     v = math.log(max(a, 1e-300))
                     f = 0.0
                     for sign, u in ((1.0, v - w), (-1.0, v)):
@@ -234,7 +236,7 @@ def _reader():  # type: ignore[no-untyped-def]
     stderr (``solve._notice``)."""
     import numba
 
-    read = numba.njit(cache=True)(_read_rows)
+    read = numba.njit(cache=True, error_model="numpy")(_read_rows)
     timer = threading.Timer(_COMPILE_NOTICE_S, _notice)
     timer.daemon = True
     timer.start()
