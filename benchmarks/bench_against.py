@@ -35,10 +35,10 @@ f = {"n_drums": rng.integers(1, 5, S), "gap": rng.uniform(0.2e-3, 1.0e-3, S),
      "drum_inner_diameter": rng.uniform(6e-3, 18e-3, S)}
 chunk = 20000  # the sweep's chunk size
 evaluate_batch({k: v[:100] for k, v in f.items()})  # warm-up (imports, caches)
-t = time.perf_counter()
+t, c = time.perf_counter(), time.process_time()
 for i in range(0, S, chunk):
     out = evaluate_batch({k: v[i:i + chunk] for k, v in f.items()})
-print(time.perf_counter() - t)
+print(time.perf_counter() - t, time.process_time() - c)
 """
 
 HELP = r"""
@@ -49,13 +49,13 @@ print(time.perf_counter() - t)
 """
 
 
-def _time(tree: Path, code: str, *args: str) -> float:
+def _time(tree: Path, code: str, *args: str) -> list[float]:
     env = {**os.environ, "PYTHONPATH": str(tree)}
     out = subprocess.run(
         [sys.executable, "-c", code, *args], cwd=tree, env=env, check=True,
         capture_output=True, text=True,
     )  # fmt: skip
-    return float(out.stdout.strip().splitlines()[-1])
+    return [float(v) for v in out.stdout.strip().splitlines()[-1].split()]  # wall[, CPU] s
 
 
 @contextlib.contextmanager
@@ -87,8 +87,14 @@ def main() -> None:
             for _ in range(a.rounds):
                 then.append(_time(base, code, *args))
                 now.append(_time(ROOT, code, *args))
-            mn, mb = statistics.median(now), statistics.median(then)
+            mn, mb = (statistics.median(t[0] for t in x) for x in (now, then))
             print(f"{name:<38} now {mn:8.3f} s   base {mb:8.3f} s   ratio {mn / mb:5.2f}")
+            if code is SWEEP:  # one core's rate: rows per second of the sweep's evaluator
+                cn, cb = (statistics.median(t[1] for t in x) for x in (now, then))
+                print(
+                    f"{'':<38} rows/s now {a.designs / mn:.0f}, base {a.designs / mb:.0f}; "
+                    f"per CPU second now {a.designs / cn:.0f}, base {a.designs / cb:.0f}"
+                )
 
 
 if __name__ == "__main__":
