@@ -516,10 +516,7 @@ def _kernels() -> Any:
     for name in _KERNELS:  # in place: the kernels find each other compiled
         g[name] = numba.njit(cache=True, error_model="numpy")(g[name])
     entry = (g["_solve_rows"], g["_tangent_rows"])
-    cached = [Path(d.stats.cache_path).glob(f"{d.py_func.__module__.rpartition('.')[2]}."
-                                            f"{d.py_func.__name__}-*.nbi")
-              for d in entry if hasattr(d, "stats")]  # fmt: skip
-    cold = bool(cached) and not all(any(c) for c in cached)
+    cold = any(_cold(d) for d in entry)
     timer = threading.Timer(_COMPILE_NOTICE_S, _notice)
     timer.daemon = True
     t0 = time.perf_counter()
@@ -537,14 +534,23 @@ def _kernels() -> Any:
     took = time.perf_counter() - t0
     missed = sum(len(d.stats.cache_misses) for d in entry if hasattr(d, "stats"))
     if missed and took > _COMPILE_NOTICE_S:
-        print(f"mrclutch: the network's kernel compiled in {took:.0f} s (cached: later runs "
-              "load it)", file=sys.stderr)  # fmt: skip
+        print(f"mrclutch: compiled in {took:.0f} s (cached: later runs load it)",
+              file=sys.stderr)  # fmt: skip
     return g
 
 
-def _notice() -> None:
-    print("mrclutch: compiling the reluctance network's kernel (numba, once on this machine; "
-          "≈ 10–40 s) …", file=sys.stderr, flush=True)  # fmt: skip
+def _cold(kernel: Any) -> bool:
+    """Whether numba's cache holds no index of ``kernel`` yet (its first compile on this
+    machine); False on the debug path (no dispatcher)."""
+    if not hasattr(kernel, "stats"):
+        return False
+    name = f"{kernel.py_func.__module__.rpartition('.')[2]}.{kernel.py_func.__name__}-*.nbi"
+    return not any(Path(kernel.stats.cache_path).glob(name))
+
+
+def _notice(what: str = "the reluctance network's solver") -> None:
+    print(f"mrclutch: compiling {what} (numba, once on this machine; ~10 s of CPU) …",
+          file=sys.stderr, flush=True)  # fmt: skip
 
 
 def _materials(net: Network, mats: Mapping[str, Magnetic]):  # type: ignore[no-untyped-def]

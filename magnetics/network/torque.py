@@ -33,7 +33,13 @@ from magnetics.materials import (
     magnetic,
 )
 from magnetics.network.build import Network, network_from_regions
-from magnetics.network.solve import _COMPILE_NOTICE_S, _notice, _tables, solve_network
+from magnetics.network.solve import (
+    _COMPILE_NOTICE_S,
+    _cold,
+    _notice,
+    _tables,
+    solve_network,
+)
 
 FloatArray = NDArray[np.float64]
 #: How a gap's torque reads its field across the gap's thickness (``network_film_torque``,
@@ -237,9 +243,10 @@ def _reader():  # type: ignore[no-untyped-def]
     import numba
 
     read = numba.njit(cache=True, error_model="numpy")(_read_rows)
-    timer = threading.Timer(_COMPILE_NOTICE_S, _notice)
+    timer = threading.Timer(_COMPILE_NOTICE_S, _notice, ("the network's torque reading",))
     timer.daemon = True
-    timer.start()
+    if _cold(read):
+        timer.start()
     try:
         e2, e3, ends = np.zeros((0, 1)), np.zeros((0, 1, 1)), np.zeros((0, 1, 2))
         g = np.zeros(_AXIAL_POINTS)
