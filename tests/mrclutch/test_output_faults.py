@@ -50,7 +50,11 @@ def disk_full(monkeypatch):
 
 #: Notes a command may print before its answer: the numba kernel's one-off compilation
 #: (issue 31) on a machine whose cache is cold.
-NOTES = ("mrclutch: compiling the reluctance network's kernel", "mrclutch: the network's kernel")
+NOTES = (
+    "mrclutch: compiling the reluctance network's solver",
+    "mrclutch: compiling the network's torque reading",
+    "mrclutch: compiled in ",
+)  # magnetics.network.solve
 
 
 def _one_line(err: str, *fragments: str) -> None:
