@@ -46,6 +46,11 @@ the key name too::
     [measured]               # optional: what a bench measured (mrclutch/uncertainty.py)
     m1_g = 1.5
 
+    [process]                # optional, defaults in `mrclutch.process.Process`
+    runout_mm = 0.03         # TIR of the drums: sets the smallest gap (optimize)
+    tolerance_mm = 0.02
+    min_wall_mm = 0.25       # the thinnest drum wall
+
 Every key is checked: unknown keys, unit-less keys and wrong types are refused with a
 message naming the key.
 """
@@ -71,6 +76,7 @@ from magnetics.materials import FLUIDS
 from magnetics.thermal import adiabatic_current_density
 from mrclutch.haptics.actuator import MR_170, MR_DELAY, Transmission
 from mrclutch.inputs import read_toml
+from mrclutch.process import PROCESS_KEYS, Process
 from mrclutch.uncertainty import (
     PAPER_BENCH,
     Measured,
@@ -152,6 +158,8 @@ class ClutchDesign:
     uncertainty: Uncertainty | None = None
     #: what a bench measured (None: nothing)
     measured: Measured | None = None
+
+    process: Process = field(default_factory=Process)  # what the workshop holds (optimize)
 
     @property
     def ranges(self) -> Uncertainty:
@@ -282,7 +290,7 @@ def _short(v: Any) -> str:
 def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> ClutchDesign:
     """Build a design from a parsed design file (see the module docstring)."""
     known = {"clutch", "operating", "transmission", "support", "amplifier", "laminations",
-             "uncertainty", "measured", "name"}  # fmt: skip
+             "uncertainty", "measured", "process", "name"}  # fmt: skip
     for key in data:
         if key not in known and not isinstance(data[key], dict):
             raise ParameterError(f"{where}: {key}: not in a table; dimensions go under [clutch]")
@@ -310,8 +318,10 @@ def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> Clutc
     lam_table = data["laminations"] if "laminations" in data else {}
     tr_table = data["transmission"] if "transmission" in data else {}
     sup_table = dict(data["support"]) if "support" in data else {}
+    proc_table = data["process"] if "process" in data else {}
     for name, t in (("operating", op_table), ("transmission", tr_table), ("support", sup_table),
-                    ("amplifier", amp_table), ("laminations", lam_table)):  # fmt: skip
+                    ("amplifier", amp_table), ("laminations", lam_table),
+                    ("process", proc_table)):  # fmt: skip
         if not isinstance(t, dict):
             raise ParameterError(f"{where}: [{name}] must be a table")
     source = op_table.pop("delay_source", "fixed")
@@ -341,9 +351,11 @@ def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> Clutc
         sup["bearings"] = int(sup["bearings"])
     with _file_key(sup_table, _SUPPORT_KEYS, f"{where}: support"):
         support = Support(bearing=bearing, **sup)  # type: ignore[arg-type]
+    with _file_key(proc_table, PROCESS_KEYS, f"{where}: process"):
+        process = Process(**_read_table(proc_table, PROCESS_KEYS, f"{where}: process"))
     name = data["name"] if "name" in data else Path(where).stem
     design = ClutchDesign(clutch, operating, transmission, str(name), support, amplifier,
-                          laminations)  # fmt: skip
+                          laminations, process=process)  # fmt: skip
     if "uncertainty" in data:
         unc = uncertainty_from_mapping(data["uncertainty"], f"{where}: uncertainty",
                                        base=default_uncertainty(design))  # fmt: skip
@@ -394,6 +406,11 @@ def design_to_toml(design: ClutchDesign) -> str:
         lines += ["", "[uncertainty]", *uncertainty_to_toml(design.uncertainty)]
     if design.measured is not None:
         lines += ["", "[measured]", *measured_to_toml(design.measured)]
+
+    lines += ["", "[process]"]
+    lines += [
+        f"{k} = {_toml(_si(getattr(design.process, n), f))}" for k, (n, f) in PROCESS_KEYS.items()
+    ]
     return "\n".join(lines) + "\n"
 
 

@@ -134,16 +134,33 @@ def verify_top(
             raise ParameterError(f"{results_path}: no {col} column; cannot verify")
     rows = top_rows(res, key, n, maximize)
     designs = [design_of(spec, base, int(res["design_id"][i])) for i in rows]
+    ids = [int(res["design_id"][i]) for i in rows]
+    keys, fast, bounds = (res[c][rows].astype(float).tolist() for c in (key, TORQUE, BOUND))
+    return verify_designs(designs, ids, keys, fast, bounds, fem_size, executor)
+
+
+def verify_designs(
+    designs: Sequence[ClutchDesign],
+    ids: Sequence[int],
+    values: Sequence[float],
+    fast: Sequence[float],
+    bounds: Sequence[float],
+    fem_size: float,
+    executor: Executor | None = None,
+) -> list[VerifiedRow]:
+    """Designs (with their ids, objective values, fast max torques and torque error bounds)
+    re-solved by the FEM at ``fem_size`` (m) on ``executor`` (in this process when None),
+    beside the single loop's torque: the sweep's and the optimiser's --verify-top."""
+    if not (math.isfinite(fem_size) and fem_size > 0):
+        raise ParameterError(f"FEM size = {fem_size!r} m: must be finite and > 0")
     if executor is None:
         fem = [fem_max_torque(d, fem_size) for d in designs]
     else:
         futures = [executor.submit(fem_max_torque, d, fem_size) for d in designs]
         fem = [f.result() for f in futures]
-    ids = [int(res["design_id"][i]) for i in rows]
-    keys, fast, bounds = (res[c][rows].astype(float).tolist() for c in (key, TORQUE, BOUND))
     circ = [_max_torque(d, "circuit") for d in designs]
     circ_bound = [circuit_error(d.clutch).bound for d in designs]
-    rows_ = zip(ids, keys, fast, fem, bounds, circ, circ_bound, strict=True)
+    rows_ = zip(ids, values, fast, fem, bounds, circ, circ_bound, strict=True)
     return [VerifiedRow(*row) for row in rows_]
 
 

@@ -32,6 +32,7 @@ LAZY_OK = {
     "distributed": "≈ 1 s; only when a sweep runs on a Dask cluster",
     "pyarrow": "≈ 0.3 s; only when a sweep writes or reads Parquet",
     "numba": "≈ 0.3 s and its compiled kernels; only when the network is solved",
+    "pymoo": "≈ 0.5 s; only where optimize searches for a Pareto set",
 }
 
 

@@ -6,6 +6,7 @@ import argparse
 import math
 import sys
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -20,18 +21,28 @@ from mrclutch.cli.commands._common import (
 )
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.executors import sweep_executor
-from mrclutch.cli.plots.design import pareto_plot
+from mrclutch.cli.plots.design import pareto_plot, pareto_set_plot
 from mrclutch.cli.report import write_report
-from mrclutch.design import ClutchDesign, design_from_mapping, design_to_toml
+from mrclutch.design import ClutchDesign, design_from_mapping, design_preset, design_to_toml
 from mrclutch.optimize import (
+    DEFAULT_MEMBERS,
     MAX_CANDIDATES,
+    MAX_ECCENTRICITY,
     MINIMISED,
     OBJECTIVES,
+    RENDERING,
+    CONTINUOUS,
+    PAPER_CONTINUOUS_ABOVE_DRAG,
     Candidate,
     Constraints,
+    Member,
     Optimum,
+    ParetoSet,
+    limit_columns,
     optimize,
+    pareto,
     parse_bounds,
+    robust_verdict,
 )
 from mrclutch.outputs import (
     CLUTCH_ROWS,
@@ -49,7 +60,7 @@ from mrclutch.pipeline import (
 )
 from mrclutch.robust import ROBUST_COLUMNS, RobustBatchEvaluator, verdicts_json
 from mrclutch.sweep import is_parquet, load_spec, run_sweep
-from mrclutch.verify import TORQUE, verified_path, verify_top, write_verified
+from mrclutch.verify import TORQUE, verified_path, verify_designs, verify_top, write_verified
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -192,29 +203,75 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser(
         "optimize",
-        help="maximise rendering bandwidth (area, Z-width or transparency) under torque, "
-        "mass, envelope and stability/passivity limits",
-        description="Differential evolution on the vectorised fast path for each drum count, "
-        "then the winner re-evaluated at reference fidelity (exact B-rep inertia, FEM torque) "
-        "and its haptic verdict printed. By default the optimum must be stable and passive "
-        "at its own K = K_max (Eq. 4).",
-        epilog="exit status: 0 the optimum meets every requirement (at reference fidelity "
-        "unless --no-verify); 2 bad input, or no design meets the limits on the fast path; "
-        "3 the reference re-check violates a requirement (named on stderr; --out still "
-        "writes the design).",
+        help="the trade-offs (a Pareto set: rendering bandwidth, transparency, continuous "
+        "torque, mass) or one objective, under the builder's limits",
+        description="By default a Pareto set (pymoo's NSGA-II on the vectorised fast path) "
+        "over rendering bandwidth (or Z-width), backdrive force in free motion, continuous "
+        "torque above the off-state drag and clutch mass; --objective NAME gives the single "
+        "best design (differential evolution) instead. Every limit is enforced: torque, "
+        "mass, envelope, continuous torque, coil power, time at peak, an optional duty "
+        "cycle, the process's smallest gap and wall ([process] in the design file), and a "
+        "closed loop stable and passive at the design's own K = K_max (Eq. 4). Each design "
+        "is then re-evaluated at reference fidelity (exact B-rep inertia, FEM torque); "
+        "those failing a limit there are dropped (Pareto) or the next candidate is tried.",
+        epilog="exit status: 0 the reported design(s) meet every requirement (at reference "
+        "fidelity unless --no-verify); 2 bad input, or no design meets the limits on the "
+        "fast path; 3 no design meets the requirements at reference fidelity (named on "
+        "stderr; --out still writes the design).",
     )
     add_design_args(p)
     p.add_argument(
         "--objective",
+        default=None,
+        help="one objective instead of the Pareto set: bandwidth (rendering bandwidth at "
+        "K_max, Hz), area (rendering area, dB·decade), zwidth (Z-width area, N²·s/m²; about "
+        "×7 slower) or transparency (least backdrive force in free motion, 10 mm at 2 Hz)",
+    )
+    p.add_argument(
+        "--rendering",
         default="bandwidth",
-        help="bandwidth (rendering bandwidth at K_max, Hz), area (rendering area, dB·decade), "
-        "zwidth (Z-width area, N²·s/m²; about ×7 slower) or transparency (least backdrive "
-        "force in free motion, 10 mm at 2 Hz); default bandwidth",
+        help="the Pareto set's rendering objective: bandwidth (default) or zwidth",
     )
     p.add_argument("--min-torque", type=float, default=0.4, help="N·m (default 0.4)")
     p.add_argument("--max-mass-g", type=float, default=100.0, help="clutch mass, g (default 100)")
     p.add_argument("--max-diameter-mm", type=float, default=30.0, help="default 30")
     p.add_argument("--max-length-mm", type=float, default=40.0, help="default 40")
+    p.add_argument(
+        "--min-continuous-torque",
+        type=float,
+        default=PAPER_CONTINUOUS_ABOVE_DRAG,
+        metavar="NM",
+        help="N·m held forever above the off-state drag while slipping at the input speed "
+        f"(default {PAPER_CONTINUOUS_ABOVE_DRAG:g}, the paper clutch's; 0: no limit)",
+    )
+    p.add_argument(
+        "--max-power-w",
+        type=float,
+        default=None,
+        metavar="W",
+        help="coil heat at the current limit (default: the amplifier's supply voltage × "
+        "the current limit, 24 V × 7 A)",
+    )
+    p.add_argument(
+        "--peak-time-s",
+        type=float,
+        default=None,
+        metavar="S",
+        help="seconds at the peak current (holding the peak torque, slipping) before the "
+        "wire or fluid limit (default: the design's peak_duration_s, 1 s; 0: no limit)",
+    )
+    p.add_argument(
+        "--duty",
+        default=None,
+        metavar="NM:S",
+        help="a duty cycle: hold NM N·m (yield + drag, slipping) for S seconds before the "
+        "wire or fluid limit (default: none)",
+    )
+    for key, what in (("runout", "drums' runout, TIR"), ("tolerance", "diameters' tolerance"),
+                      ("min-wall", "thinnest drum wall")):  # fmt: skip
+        p.add_argument(f"--{key}-mm", type=float, default=None, metavar="MM",
+                       help=f"the process's {what} (default: the design's [process]; "
+                       "docs/optimize.md)")  # fmt: skip
     p.add_argument(
         "--allow-active",
         action="store_true",
@@ -235,16 +292,44 @@ def register(sub: argparse._SubParsersAction) -> None:
         "inner diameter and zone length)",
     )
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument(
+        "--members",
+        type=int,
+        default=DEFAULT_MEMBERS,
+        metavar="N",
+        help=f"Pareto members to keep, spread over the front (default {DEFAULT_MEMBERS})",
+    )
+    p.add_argument("--plot", metavar="FILE.png", help="draw the Pareto set (Pareto mode)")
+    p.add_argument(
+        "--designs",
+        metavar="DIR",
+        help="write each Pareto member as a design file DIR/member_NN.toml (Pareto mode)",
+    )
     p.add_argument("--no-verify", action="store_true", help="skip the reference-fidelity check")
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=0,
+        help="processes for the reference checks and --verify-top (0: in this process)",
+    )
+    p.add_argument(
+        "--verify-top",
+        type=int,
+        metavar="N",
+        help="re-solve the torque of the N best designs (Pareto: the first N members; one "
+        "objective: the first N candidates) with the FEM at the error map's reference size "
+        "on the same workers, and print the network's error on each",
+    )
     p.add_argument(
         "--tries",
         type=int,
         default=3,
         metavar="N",
-        help="candidates checked at reference fidelity, best first, until one meets every "
-        f"requirement (1..{MAX_CANDIDATES}, default 3)",
+        help="one objective: candidates checked at reference fidelity, best first, until "
+        f"one meets every requirement (1..{MAX_CANDIDATES}, default 3)",
     )
-    p.add_argument("--out", metavar="DESIGN.toml", help="write the optimum as a design file")
+    p.add_argument("--out", metavar="DESIGN.toml",
+                   help="one objective: write the optimum as a design file")  # fmt: skip
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=_optimize)
 
@@ -619,12 +704,28 @@ MAX_SEED = 2**32 - 1
 EXIT_REQUIREMENT_VIOLATED = 3
 
 
-def _optimize(args: argparse.Namespace) -> int:
+def _optimize_inputs(args: argparse.Namespace) -> tuple[ClutchDesign, tuple[int, ...],
+                                                       Constraints]:  # fmt: skip
+    """The base design (with --runout-mm etc. over its [process]), the drum counts and the
+    limits, every option checked."""
     base = load_design_args(args)
+    proc = {name: getattr(args, f"{name}_mm") * 1e-3 for name in ("runout", "tolerance",
+            "min_wall") if getattr(args, f"{name}_mm") is not None}  # fmt: skip
+    if proc:
+        base = replace(base, process=replace(base.process, **proc))
     try:
         drums = tuple(int(x) for x in args.drums.split(","))
     except ValueError:
         raise CLIError(f"--drums {args.drums!r}: give drum counts such as 1,2,3") from None
+    duty = (0.0, 0.0)
+    if args.duty is not None:
+        torque, _, seconds = args.duty.partition(":")
+        try:
+            duty = (float(torque), float(seconds))
+        except ValueError:
+            raise CLIError(f"--duty {args.duty!r}: give NM:S, e.g. 0.2:60") from None
+        if not (duty[0] > 0 and duty[1] > 0):
+            raise CLIError(f"--duty {args.duty!r}: torque and seconds must be > 0")
     cons = Constraints(
         min_torque=args.min_torque,
         max_mass=args.max_mass_g * 1e-3,
@@ -632,7 +733,27 @@ def _optimize(args: argparse.Namespace) -> int:
         max_length=args.max_length_mm * 1e-3,
         passive=not args.allow_active,
         stable=not args.allow_unstable,
-    )
+        min_continuous_torque=args.min_continuous_torque,
+        max_power=args.max_power_w,
+        peak_time=args.peak_time_s,
+        duty_torque=duty[0],
+        duty_time=duty[1],
+    ).resolved(base)
+    if args.verify_top is not None and args.verify_top < 1:
+        raise CLIError(f"--verify-top = {args.verify_top}: must be >= 1")
+    return base, drums, cons
+
+
+def _optimize(args: argparse.Namespace) -> int:
+    base, drums, cons = _optimize_inputs(args)
+    if args.objective is None:
+        for opt, given in (("--out", args.out), ("--tries", args.tries != 3)):
+            if given:
+                raise CLIError(f"{opt}: only with --objective (the Pareto set: --designs DIR)")
+        return _pareto(args, base, drums, cons)
+    for opt, given in (("--plot", args.plot), ("--designs", args.designs)):
+        if given:
+            raise CLIError(f"{opt}: only for the Pareto set (without --objective)")
     check_int("--tries", args.tries, 1, MAX_CANDIDATES)
     check_int("--seed", args.seed, 0, MAX_SEED)
     t0 = time.perf_counter()
@@ -697,6 +818,269 @@ def _optimize(args: argparse.Namespace) -> int:
     return 0
 
 
+def _limits_line(base: ClutchDesign, cons: Constraints) -> str:
+    """Every limit enforced, in one paragraph."""
+    pr = base.process
+    parts = [f"torque ≥ {cons.min_torque:g} N·m", f"mass ≤ {cons.max_mass * 1e3:g} g",
+             f"envelope ≤ Ø{cons.max_diameter * 1e3:g} × {cons.max_length * 1e3:g} mm",
+             f"continuous torque above drag ≥ {cons.min_continuous_torque:g} N·m",
+             f"coil power ≤ {cons.max_power:g} W", f"time at peak ≥ {cons.peak_time:g} s"]  # fmt: skip
+    if cons.duty_time > 0:
+        parts.append(f"{cons.duty_torque:g} N·m held ≥ {cons.duty_time:g} s")
+    parts.append(f"gap ≥ {pr.min_gap * 1e3:.3g} mm (runout {pr.runout * 1e3:g} + tolerance "
+                 f"{pr.tolerance * 1e3:g} mm, eccentricity ≤ {MAX_ECCENTRICITY:g})")  # fmt: skip
+    parts.append(f"drum wall ≥ {pr.min_wall * 1e3:g} mm")
+    need = [w for w, on in (("stable", cons.stable), ("passive", cons.passive)) if on]
+    if need:
+        parts.append(" and ".join(need) + " at K = K_max")
+    return "limits: " + "; ".join(parts)
+
+
+def _reference_all(designs: list[ClutchDesign], workers: int) -> list[dict]:
+    """Every design at reference fidelity, on ``workers`` processes (0: here)."""
+    with sweep_executor(workers) as (executor, _):
+        if executor is None:
+            return [reference_check(d) for d in designs]
+        futures = [executor.submit(reference_check, d) for d in designs]
+        return [f.result() for f in futures]
+
+
+def _member_json(i: int, m: Member, ev: dict | None, violations: list[str]) -> dict:
+    return {"member": i, "n_drums": m.design.clutch.n_drums,
+            "design_mm": m.design.clutch.to_mm(), "fast": dict(m.row),
+            "active_limits": list(m.active), "edges": list(m.edges),
+            "reference": ev, "violations": violations}  # fmt: skip
+
+
+def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...],
+            cons: Constraints) -> int:  # fmt: skip
+    check_choice("--rendering", args.rendering, tuple(RENDERING))
+    check_int("--members", args.members, 1, 200)
+    for opt, path, folder in (("--plot", args.plot, False), ("--designs", args.designs, True)):
+        if path:
+            check_writable(opt, path, folder=folder)
+    t0 = time.perf_counter()
+    ps = pareto(base, rendering=args.rendering, constraints=cons,
+                bounds=parse_bounds(args.vary) if args.vary else None, drum_counts=drums,
+                seed=args.seed, members=args.members, robust=robust_verdict())  # fmt: skip
+    t_fast = time.perf_counter() - t0
+    if not ps.members:
+        raise CLIError("no design meets the constraints in the search box; relax a limit")
+    refs: list[dict | None] = [None] * len(ps.members)
+    t_ref = 0.0
+    if not args.no_verify:
+        t1 = time.perf_counter()
+        refs = list(_reference_all([m.design for m in ps.members], args.workers))
+        t_ref = time.perf_counter() - t1
+    rows = []
+    for i, (m, ev) in enumerate(zip(ps.members, refs, strict=True), 1):
+        viol = requirement_violations(ev, cons, m.design) if ev is not None else []
+        rows.append(_member_json(i, m, ev, viol))
+    kept = [r for r in rows if not r["violations"]]
+    verified = None
+    if args.verify_top is not None and kept:
+        t2 = time.perf_counter()
+        top = [(r, ps.members[r["member"] - 1]) for r in kept[: args.verify_top]]
+        with sweep_executor(args.workers) as (executor, _):
+            verified = verify_designs([m.design for _, m in top], [r["member"] for r, _ in top],
+                                      [m.row[ps.objectives[0][1]] for _, m in top],
+                                      [m.row[TORQUE] for _, m in top],
+                                      [m.row["torque_error_bound"] for _, m in top],
+                                      load_error_map().reference_fem_size, executor)  # fmt: skip
+        t_verify = time.perf_counter() - t2
+    written = []
+    if args.designs and kept:
+        from pathlib import Path
+
+        folder = Path(args.designs)
+        folder.mkdir(parents=True, exist_ok=True)
+        for r in kept:
+            m = ps.members[r["member"] - 1]
+            path = folder / f"member_{r['member']:02d}.toml"
+            with atomic_path(path) as tmp:
+                tmp.write_text(design_to_toml(replace(m.design, name=path.stem)))
+            written.append(str(path))
+    paper = evaluate(replace(design_preset("paper"), operating=base.operating,
+                             transmission=base.transmission)).as_json()  # fmt: skip
+    if args.plot:
+        pareto_set_plot(ps, [r["member"] for r in kept], paper, args.plot)
+    data = {
+        "mode": "pareto",
+        "objectives": [
+            {"name": n, "column": c, "sense": "max" if sg > 0 else "min"}
+            for n, c, sg in ps.objectives
+        ],  # fmt: skip
+        "evaluations": ps.evaluations,
+        "optimisation_time_s": t_fast,
+        "reference_time_s": t_ref,
+        "front_size": ps.front_size,
+        "dropped_unstable_fast": ps.dropped_unstable,
+        "dropped_robust_fast": ps.dropped_robust,
+        "haptic_verdict": ps.robust,
+        "fidelity": "fast" if args.no_verify else "reference",
+        "members": rows,
+        "kept": [r["member"] for r in kept],
+        "dropped_at_reference": [r["member"] for r in rows if r["violations"]],
+        "limits": _limits_json(base, cons),
+        "box_mm": {f"{k}_mm": [lo * 1e3, hi * 1e3] for k, (lo, hi) in ps.box.items()},
+        "box_source": {f"{k}_mm": v for k, v in ps.box_source.items()},
+        "designs_written": written,
+        "paper_preset": _explain_json(paper),
+    }
+    if verified is not None:
+        data["verified"] = [vars(v) | {"error": v.error} for v in verified]
+    if args.json:
+        print_json(data)
+    else:
+        _print_pareto(args, ps, rows, kept, t_fast, t_ref, base, cons, paper)
+        if verified is not None:
+            print()
+            print(format_verified(verified, ps.objectives[0][1],
+                                  load_error_map().reference_fem_size, max(args.workers, 1),
+                                  t_verify).replace("rows", "members"))  # fmt: skip
+        if written:
+            print(f"\n{len(written)} design files in {args.designs}")
+        if args.plot:
+            print(f"Pareto plot: {args.plot}")
+    if not kept:
+        print(f"mrclutch optimize: none of the {len(rows)} Pareto members meets the "
+              f"requirements at reference fidelity", file=sys.stderr)  # fmt: skip
+        return EXIT_REQUIREMENT_VIOLATED
+    return 0
+
+
+def _limits_json(base: ClutchDesign, cons: Constraints) -> dict:
+    pr = base.process
+    return {"min_torque_N_m": cons.min_torque, "max_mass_kg": cons.max_mass,
+            "max_diameter_m": cons.max_diameter, "max_length_m": cons.max_length,
+            "min_continuous_torque_above_drag_N_m": cons.min_continuous_torque,
+            "max_coil_power_W": cons.max_power, "min_time_at_peak_s": cons.peak_time,
+            "duty_torque_N_m": cons.duty_torque, "duty_time_s": cons.duty_time,
+            "runout_m": pr.runout, "tolerance_m": pr.tolerance, "min_wall_m": pr.min_wall,
+            "min_gap_m": pr.min_gap, "passive": cons.passive, "stable": cons.stable}  # fmt: skip
+
+
+def _explain_json(ev: dict) -> dict:
+    """What ``explain`` prints, as JSON: bandwidth and resonance, the b1 budget, the
+    thermal rating."""
+    h, c, b = ev["haptic"], ev["clutch"], ev["budget"]["b1_N_s_per_m"]
+    return {
+        "bandwidth_hz": h["bandwidth_hz"], "bandwidth_lumped_hz": h["bandwidth_lumped_hz"],
+        "resonance_hz": h["resonance_hz"], "K_N_per_m": h["K_N_per_m"],
+        "m1_kg": h["m1_kg"], "m2_kg": h["m2_kg"], "k_N_per_m": h["k_N_per_m"],
+        "b1_N_s_per_m": h["b1_N_s_per_m"],
+        "b1_terms": {t["name"]: t["value"] for t in b["terms"]},
+        "continuous_current_A": c["continuous_current_A"],
+        "continuous_torque_N_m": c["continuous_torque_N_m"],
+        "off_state_torque_N_m": c["off_state_torque_N_m"],
+        "time_to_wire_limit_s": c["time_to_wire_limit_s"],
+        "time_to_fluid_limit_s": c["time_to_fluid_limit_s"],
+        "coil_power_W": c["coil_power_W"], "fidelity": ev["fidelity"],
+    }  # fmt: skip
+
+
+def explain(ev: dict, paper: dict, label: str) -> str:
+    """How a design's bandwidth and resonance relate, where its damping comes from (the
+    b1 budget) and its thermal rating, beside the paper preset's."""
+    a, p = _explain_json(ev), _explain_json(paper)
+
+    def row(name: str, x: float, y: float, fmt: str = ".4g") -> str:
+        return f"  {name:<44}{format(x, fmt):>12}{format(y, fmt):>12}"
+
+    def film(e: dict) -> float:
+        return e["b1_terms"].get("drum gaps", 0.0) / e["b1_N_s_per_m"]
+
+    lines = [
+        f"\n{label} beside the paper preset ({a['fidelity']} / {p['fidelity']} fidelity):",
+        f"  {'':<44}{label:>12}{'paper':>12}",
+        row("bandwidth at K = K_max, full response (Hz)", a["bandwidth_hz"], p["bandwidth_hz"]),
+        row("bandwidth, lumped √(K/(m1+m2)) (Hz)", a["bandwidth_lumped_hz"],
+            p["bandwidth_lumped_hz"]),
+        row("system resonance at K = 0 (Hz)", a["resonance_hz"], p["resonance_hz"]),
+        row("K = K_max (N/m)", a["K_N_per_m"], p["K_N_per_m"]),
+        row("b1 at the hand (N·s/m)", a["b1_N_s_per_m"], p["b1_N_s_per_m"]),
+        row("  share from the drum-gap films", film(a), film(p), ".0%"),
+        row("continuous current (A)", a["continuous_current_A"], p["continuous_current_A"]),
+        row("continuous torque above drag (N·m)",
+            a["continuous_torque_N_m"] - a["off_state_torque_N_m"],
+            p["continuous_torque_N_m"] - p["off_state_torque_N_m"]),
+        row("off-state drag (N·m)", a["off_state_torque_N_m"], p["off_state_torque_N_m"]),
+        row("time at peak to the wire limit (s)", a["time_to_wire_limit_s"],
+            p["time_to_wire_limit_s"]),
+        row("time at peak to the fluid limit (s)", a["time_to_fluid_limit_s"],
+            p["time_to_fluid_limit_s"]),
+        row("coil power at the current limit (W)", a["coil_power_W"], p["coil_power_W"]),
+        "  how to read it: the bandwidth is the closed loop's, at the rendered K: the first "
+        "frequency where the",
+        "  effective stiffness Re(jωZ) turns from spring-like to mass-like (its "
+        "anti-resonance, Eq. 1's √(K/(m1+m2))",
+        "  with the transmission and the delay). The system resonance is another mode: "
+        "the free device (K = 0,",
+        "  Eq. 2), m1 and m2 swinging on the transmission stiffness k with b1 damping it. "
+        "A bandwidth above the",
+        "  resonance is no contradiction: K adds its stiffness to the loop. b1 is the "
+        "drag the hand feels in free",
+        "  motion (backdrive force); the drum films' share of it is viscous drag, which "
+        "also heats the fluid and",
+        "  lowers the continuous rating (the slip heat T_off·ω).",
+    ]  # fmt: skip
+    return "\n".join(lines)
+
+
+def _print_pareto(args: argparse.Namespace, ps: ParetoSet, rows: list[dict], kept: list[dict],
+                  t_fast: float, t_ref: float, base: ClutchDesign, cons: Constraints,
+                  paper: dict) -> None:  # fmt: skip
+    dropped = [r for r in rows if r["violations"]]
+    fid = "fast path (--no-verify)" if args.no_verify else "reference fidelity"
+    print(f"Pareto set: {len(kept)} members meet every limit at {fid}"
+          + (f"; {len(dropped)} of {len(rows)} dropped there" if dropped else ""))  # fmt: skip
+    print(f"  NSGA-II: {ps.evaluations} designs in {t_fast:.1f} s; front of {ps.front_size} "
+          f"designs meeting every limit on the fast path ({ps.dropped_unstable} dropped as "
+          f"unstable at their K, {ps.dropped_robust} by the worst case)"
+          + (f"; reference checks {t_ref:.1f} s" if t_ref else ""))  # fmt: skip
+    print(f"  haptic verdict: {ps.robust}")
+    print("  " + _limits_line(base, cons))
+    rend = "BW Hz" if args.rendering == "bandwidth" else "Z-width"
+    print(f"\n{'#':>3} {'drums':>5} {'gap':>6} {'wall':>6} {'d_in':>6} {'zone':>6} "
+          f"{rend:>8} {'backdr N':>8} {'cont mNm':>8} {'mass g':>7} {'K N/m':>7} "
+          f"{'Ks':>7} {'Kp':>7}  active limits")  # fmt: skip
+    for r in rows:
+        m = ps.members[r["member"] - 1]
+        c = m.design.clutch
+        src = r["reference"] if r["reference"] is not None else None
+        if src is not None:
+            h, cl = src["haptic"], src["clutch"]
+            rv = h["bandwidth_hz"] if args.rendering == "bandwidth" else m.row[ps.objectives[0][1]]
+            vals = (rv, src["hand"]["mr"]["backdrive_force_N"],
+                    (cl["continuous_torque_N_m"] - cl["off_state_torque_N_m"]) * 1e3,
+                    cl["clutch_mass_kg"] * 1e3, h["K_N_per_m"], h["max_stable_K_N_per_m"],
+                    h["max_passive_K_N_per_m"])  # fmt: skip
+        else:
+            f = m.row
+            vals = (f[ps.objectives[0][1]], f["backdrive_force_N"], f[CONTINUOUS] * 1e3,
+                    f["clutch_mass_kg"] * 1e3, f["K_N_per_m"], f["max_stable_K_N_per_m"],
+                    f["max_passive_K_N_per_m"])  # fmt: skip
+        mark = " DROPPED" if r["violations"] else ""
+        print(f"{r['member']:>3} {c.n_drums:>5} {c.gap * 1e3:>6.3f} {c.drum_thickness * 1e3:>6.3f} "
+              f"{c.drum_inner_diameter * 1e3:>6.2f} {c.zone_length * 1e3:>6.2f} "
+              f"{vals[0]:>8.4g} {vals[1]:>8.3g} {vals[2]:>8.3g} {vals[3]:>7.4g} {vals[4]:>7.4g} "
+              f"{vals[5]:>7.4g} {vals[6]:>7.4g}  {', '.join(m.active) or '—'}{mark}")  # fmt: skip
+    print("  (lengths in mm: gap, drum wall, drum inner diameter, zone length; values at "
+          f"{'the fast path' if args.no_verify else 'reference fidelity'}; Ks, Kp: largest "
+          "stable and passive K)")  # fmt: skip
+    for r in rows:
+        for e in r["edges"]:
+            print(f"  #{r['member']}: {e}")
+    for r in dropped:
+        print(f"  #{r['member']} dropped at reference fidelity: {'; '.join(r['violations'])}")
+    if kept:
+        first = kept[0]
+        ev = first["reference"]
+        if ev is None:
+            ev = evaluate(ps.members[first["member"] - 1].design, "fast").as_json()
+        print(explain(ev, paper, f"member #{first['member']}"))
+
+
 def _check_candidate(args: argparse.Namespace, cand: Candidate, cons: Constraints) -> dict:
     """One candidate on the fast path and (unless --no-verify) at reference fidelity: its
     evaluations, verdict and the requirements it misses at the highest fidelity run."""
@@ -714,7 +1098,7 @@ def _check_candidate(args: argparse.Namespace, cand: Candidate, cons: Constraint
         data["reference"] = ref
         data["bandwidth_change_reference_vs_fast"] = b_ref / b_fast - 1
         checked = ref
-    violations = requirement_violations(checked, cons)
+    violations = requirement_violations(checked, cons, cand.design)
     data["verdict"] = {**haptic_verdict(checked), "fidelity": checked["fidelity"]}
     data["requirements_met"] = not violations
     data["violations"] = violations
@@ -740,9 +1124,42 @@ def haptic_verdict(ev: dict) -> dict:
     }
 
 
-def requirement_violations(ev: dict, cons: Constraints) -> list[str]:
+def reference_row(ev: dict, design: ClutchDesign, cons: Constraints) -> dict[str, np.ndarray]:
+    """One evaluated design (``Evaluation.as_json()``) as a row of the columns
+    ``Constraints.terms`` reads, the builder's limits (power, time at peak, duty) computed
+    from its own torques (``limit_columns``)."""
+    c, h = ev["clutch"], ev["haptic"]
+    d, length = c["envelope_m"]
+    r = {"valid": 1.0, "max_torque_N_m": c["max_torque_N_m"],
+         "off_state_torque_N_m": c["off_state_torque_N_m"],
+         "continuous_torque_N_m": c["continuous_torque_N_m"],
+         "clutch_mass_kg": c["clutch_mass_kg"], "diameter_m": d, "length_m": length,
+         "K_N_per_m": h["K_N_per_m"], "max_passive_K_N_per_m": h["max_passive_K_N_per_m"],
+         "max_stable_K_N_per_m": h["max_stable_K_N_per_m"]}  # fmt: skip
+    row = {k: np.array([float(v)]) for k, v in r.items()}
+    fields = {k: np.array([getattr(design.clutch, k)]) for k in ("gap", "n_drums")}
+    row.update(limit_columns(fields, design, row, cons.duty_torque))
+    return row
+
+
+#: How each builder's limit is told when missed: term → (column, unit, scale, limit field).
+_LIMIT_PHRASES = {
+    "continuous torque": ("continuous torque above drag", CONTINUOUS, "N·m", 1.0,
+                          "min_continuous_torque", "below"),
+    "power": ("coil power", "coil_power_W", "W", 1.0, "max_power", "above"),
+    "time at peak": ("time at peak", "time_at_peak_s", "s", 1.0, "peak_time", "below"),
+    "duty cycle": ("time at the duty torque", "time_at_duty_s", "s", 1.0, "duty_time", "below"),
+}  # fmt: skip
+
+
+def requirement_violations(ev: dict, cons: Constraints, design: ClutchDesign | None = None
+                           ) -> list[str]:  # fmt: skip
     """Every limit of ``cons`` the evaluated design misses, each as a phrase (empty: none).
-    Torque, mass and envelope within 1e-9 relative (rounding) of their limits pass."""
+    Torque, mass and envelope within 1e-9 relative (rounding) of their limits pass.
+    ``design``: the design evaluated (its amplifier and operating point resolve the
+    default power and peak limits; the paper preset's when None)."""
+    design = design if design is not None else design_preset("paper")
+    cons = cons.resolved(design)
     c, v = ev["clutch"], haptic_verdict(ev)
     tol = 1e-9
     out = []
@@ -753,6 +1170,12 @@ def requirement_violations(ev: dict, cons: Constraints) -> list[str]:
     d, length = c["envelope_m"]
     if d > cons.max_diameter * (1 + tol) or length > cons.max_length * (1 + tol):
         out.append(f"envelope Ø{d * 1e3:.4g} × {length * 1e3:.4g} mm outside the limits")
+    row = reference_row(ev, design, cons)
+    terms = cons.terms(row)
+    for term, (label, col, unit, scale, limit, side) in _LIMIT_PHRASES.items():
+        if term in terms and terms[term][0] > tol:
+            out.append(f"{label} {row[col][0] * scale:.4g} {unit} {side} the "
+                       f"{getattr(cons, limit) * scale:.4g} {unit} limit")  # fmt: skip
     k = v["K_N_per_m"]
     if cons.stable and not v["stable"]:
         out.append(f"not stable at K = {k:.4g} N/m (largest stable K "

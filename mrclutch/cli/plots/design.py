@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from mrclutch.cli.plots import save_png
 from mrclutch.sweep import pareto_front, read_results
 
-__all__ = ["pareto_plot", "read_results"]
+__all__ = ["pareto_plot", "pareto_set_plot", "read_results"]
 
 
 def pareto_plot(results: str | Path, out: str | Path) -> Path:
@@ -87,4 +88,50 @@ def section_figure(section: object, out: str | Path) -> Path:
     ax.legend(handles=[Patch(color=MATERIAL_COLOURS[m], label=n) for m, n in names.items()],
               loc="lower right", fontsize=8)  # fmt: skip
     save_png(fig, out, dpi=130)
+    return Path(out)
+
+
+def pareto_set_plot(ps: Any, kept: list[int], paper: dict, out: str | Path) -> Path:
+    """The optimiser's Pareto set (``mrclutch.optimize.ParetoSet``): the rendering figure
+    against the backdrive force and against the clutch mass, the continuous torque above
+    the drag as colour; every front design small, the members kept (numbered) large, the
+    paper preset as a star."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    (_, rcol, _), *_ = ps.objectives
+    f = ps.front
+    rend, force = f[rcol], f["backdrive_force_N"]
+    cont, mass = f["continuous_above_drag_N_m"] * 1e3, f["clutch_mass_kg"] * 1e3
+    rows = {i: m.row for i, m in enumerate(ps.members, 1) if i in kept}
+    ph, pc = paper["haptic"], paper["clutch"]
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), constrained_layout=True)
+    for ax, x, key, scale, label in (
+        (axes[0], force, "backdrive_force_N", 1.0, "backdrive force in free motion (N)"),
+        (axes[1], mass, "clutch_mass_kg", 1e3, "clutch mass (g)"),
+    ):
+        sc = ax.scatter(x, rend, c=cont, s=6, cmap="viridis", alpha=0.5, linewidths=0)
+        for i, r in rows.items():
+            ax.scatter(r[key] * scale, r[rcol], s=40, facecolors="none", edgecolors="crimson")
+            ax.annotate(str(i), (r[key] * scale, r[rcol]), fontsize=7, xytext=(3, 3),
+                        textcoords="offset points")  # fmt: skip
+        if rcol == "bandwidth_hz":
+            px = (
+                paper["hand"]["mr"]["backdrive_force_N"]
+                if key == "backdrive_force_N"
+                else (pc["clutch_mass_kg"] * 1e3)
+            )
+            ax.scatter(px, ph["bandwidth_hz"], marker="*", s=120, c="k", label="paper preset")
+            ax.legend(loc="best", fontsize=8)
+        ax.set_xlabel(label)
+        ax.set_ylabel(rcol)
+        ax.grid(alpha=0.3)
+    fig.colorbar(sc, ax=axes, label="continuous torque above drag (mN·m)")
+    fig.suptitle(f"Pareto front: {ps.front_size} designs meeting every limit (fast path); "
+                 f"{len(rows)} members kept at reference fidelity")  # fmt: skip
+    with atomic_path(out) as tmp:
+        fig.savefig(tmp, dpi=120, format="png")
+    plt.close(fig)
     return Path(out)
