@@ -3,6 +3,7 @@ at reference fidelity), the optimum beats the start, the CLI never exits 0 with 
 requirement."""
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -15,6 +16,7 @@ from mrclutch.cli.main import main
 from mrclutch.design import design_preset, load_design
 from mrclutch.optimize import Constraints, optimize, parse_bounds
 from mrclutch.pipeline import evaluate, evaluate_batch
+from mrclutch.process import Process
 
 
 @pytest.fixture(scope="module")
@@ -65,8 +67,9 @@ def test_optimum_is_not_beaten_by_random_feasible_designs(small):
         "zone_length": rng.uniform(3e-3, 9e-3, n),
         "n_drums": rng.integers(1, 3, n),
     }
-    r = evaluate_batch(f, design_preset("paper"), passivity=True, stability=True)
-    ok = Constraints().violation(r) == 0
+    cons = Constraints().resolved(design_preset("paper"))
+    r = opt_mod.evaluate_rows(f, design_preset("paper"), cons, stability=True)
+    ok = cons.violation(r) == 0
     assert ok.sum() > 50
     assert r["bandwidth_hz"][ok].max() <= small.value * 1.01
 
@@ -125,7 +128,21 @@ def test_transparency_objective_lowers_the_backdrive_force():
 
 
 def test_impossible_constraints_are_reported(capsys):
-    assert main(["optimize", "--min-torque", "50", "--drums", "1", "--no-verify"]) == 2
+    assert (
+        main(
+            [
+                "optimize",
+                "--objective",
+                "bandwidth",
+                "--min-torque",
+                "50",
+                "--drums",
+                "1",
+                "--no-verify",
+            ]
+        )
+        == 2
+    )
     assert "no design meets the constraints" in capsys.readouterr().err
 
 
@@ -134,6 +151,8 @@ def test_cli_json_and_design_file(tmp_path, capsys):
     code = main(
         [
             "optimize",
+            "--objective",
+            "bandwidth",
             "--drums",
             "2",
             "--min-torque",
@@ -146,6 +165,8 @@ def test_cli_json_and_design_file(tmp_path, capsys):
             "gap_mm=0.3:0.6",
             "--vary",
             "zone_length_mm=4:6",
+            "--min-continuous-torque",
+            "0",
         ]
     )
     assert code == 0
@@ -167,7 +188,7 @@ def test_bad_bounds_are_named():
 
 def test_cli_prints_the_reference_verdict(tmp_path, capsys):
     out = tmp_path / "best.toml"
-    assert main(["optimize", "--drums", "1", "--out", str(out)]) == 0
+    assert main(["optimize", "--objective", "bandwidth", "--drums", "1", "--out", str(out)]) == 0
     text = capsys.readouterr().out
     assert "haptic verdict (reference fidelity)" in text
     assert "stable at K:  yes (required)" in text
@@ -202,7 +223,7 @@ def test_cli_exits_3_when_the_reference_check_violates_a_requirement(
 ):
     monkeypatch.setattr(design_cmd, "reference_check", _violating_reference(key))
     out = tmp_path / "best.toml"
-    argv = ["optimize", "--drums", "1", "--json", "--out", str(out)]
+    argv = ["optimize", "--objective", "bandwidth", "--drums", "1", "--json", "--out", str(out)]
     assert main(argv) == design_cmd.EXIT_REQUIREMENT_VIOLATED == 3
     cap = capsys.readouterr()
     assert phrase in cap.err and "reference fidelity" in cap.err
@@ -239,7 +260,11 @@ def test_stability_is_searched_again_when_no_passive_member_is_stable(monkeypatc
     # Only ~0.2 % of the box meets every limit with gaps ≥ 0.8 mm at 4 drums (uniform
     # draws): 10 members per parameter found it with the torque before the fringe's
     # laminate (issue 12) and missed it after, 16 find it
-    o = optimize(design_preset("paper"), drum_counts=(4,), maxiter=15, popsize=16)
+    # (no continuous-torque floor and 0.1 mm walls: 4 drums with such gaps fit the envelope
+    # only with thinner walls than the default process's, and few hold the paper's rating)
+    base = replace(design_preset("paper"), process=Process(min_wall=0.1e-3))
+    o = optimize(base, drum_counts=(4,), maxiter=15, popsize=16,
+                 constraints=Constraints(min_continuous_torque=0.0))  # fmt: skip
     assert o.stability_searches == 1
     assert o.feasible and o.design.clutch.gap >= 0.8e-3
 
@@ -293,8 +318,9 @@ def test_candidates_are_ranked_and_all_feasible_on_the_fast_path(small):
     assert len({(c.design.clutch.n_drums, c.design.clutch.gap) for c in cands}) == len(cands)
     f = {k: np.array([getattr(c.design.clutch, k) for c in cands]) for k in
          ("gap", "drum_thickness", "drum_inner_diameter", "zone_length", "n_drums")}  # fmt: skip
-    r = evaluate_batch(f, design_preset("paper"), passivity=True, stability=True)
-    assert np.all(Constraints().violation(r) == 0)
+    cons = Constraints().resolved(design_preset("paper"))
+    r = opt_mod.evaluate_rows(f, design_preset("paper"), cons, stability=True)
+    assert np.all(cons.violation(r) == 0)
     assert np.allclose(r["bandwidth_hz"], [c.value for c in cands], rtol=1e-9)
 
 
@@ -313,7 +339,12 @@ def test_cli_tries_the_next_candidate_when_the_best_fails_at_reference(
 
     monkeypatch.setattr(design_cmd, "reference_check", check)
     out = tmp_path / "best.toml"
-    assert main(["optimize", "--drums", "1,2", "--json", "--out", str(out)]) == 0
+    assert (
+        main(
+            ["optimize", "--objective", "bandwidth", "--drums", "1,2", "--json", "--out", str(out)]
+        )
+        == 0
+    )
     data = json.loads(capsys.readouterr().out)
     assert len(seen) == 2 and seen[0] != seen[1]
     first, second = data["tried"]
@@ -334,7 +365,7 @@ def test_cli_exits_3_naming_every_candidate_when_none_passes(tmp_path, capsys, m
         return _violating_reference("stable")(design)
 
     monkeypatch.setattr(design_cmd, "reference_check", check)
-    assert main(["optimize", "--drums", "1,2", "--tries", "2"]) == 3
+    assert main(["optimize", "--objective", "bandwidth", "--drums", "1,2", "--tries", "2"]) == 3
     cap = capsys.readouterr()
     assert len(seen) == 2
     assert "none of the 2 best candidate(s) meets the requirements at reference fidelity" in (
@@ -342,14 +373,14 @@ def test_cli_exits_3_naming_every_candidate_when_none_passes(tmp_path, capsys, m
     )
     assert "#1 (" in cap.err and "#2 (" in cap.err and "stability was required" in cap.err
     assert "candidate #2" in cap.out and "requirements: VIOLATED" in cap.out
-    assert main(["optimize", "--tries", "0"]) == 2
+    assert main(["optimize", "--objective", "bandwidth", "--tries", "0"]) == 2
     assert "--tries = 0: must be an integer in [1, 8]" in capsys.readouterr().err
 
 
 def test_summary_lists_every_varied_field(capsys, monkeypatch):
     """Issue 16: ``--vary band_length_mm=5:25 --vary gap_mm=0.2:1`` printed no band length."""
     _quick_search(monkeypatch)
-    argv = ["optimize", "--vary", "band_length_mm=5:25", "--vary", "gap_mm=0.2:1", "--drums",
+    argv = ["optimize", "--objective", "bandwidth", "--vary", "band_length_mm=5:25", "--vary", "gap_mm=0.2:1", "--drums",
             "2", "--no-verify", "--min-torque", "0.2"]  # fmt: skip
     code = main(argv)
     text = capsys.readouterr().out

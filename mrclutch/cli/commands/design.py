@@ -7,6 +7,7 @@ import math
 import sys
 import time
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 
@@ -39,10 +40,14 @@ from mrclutch.optimize import (
     Optimum,
     ParetoSet,
     limit_columns,
+    active_limits,
+    evaluate_rows,
     optimize,
     pareto,
     parse_bounds,
+    range_edges,
     robust_verdict,
+    search_box,
 )
 from mrclutch.outputs import (
     CLUTCH_ROWS,
@@ -706,7 +711,7 @@ EXIT_REQUIREMENT_VIOLATED = 3
 
 def _optimize_inputs(args: argparse.Namespace) -> tuple[ClutchDesign, tuple[int, ...],
                                                        Constraints]:  # fmt: skip
-    """The base design (with --runout-mm etc. over its [process]), the drum counts and the
+    """The base design (with --runout-mm etc. over its ``[process]``), the drum counts and the
     limits, every option checked."""
     base = load_design_args(args)
     proc = {name: getattr(args, f"{name}_mm") * 1e-3 for name in ("runout", "tolerance",
@@ -785,7 +790,14 @@ def _optimize(args: argparse.Namespace) -> int:
             break
     assert chosen is not None
     cand, data = chosen
+    bounds = parse_bounds(args.vary) if args.vary else None
+    box, source = search_box(base, bounds)
+    fl = {k: np.array([getattr(cand.design.clutch, k)]) for k in (*box, "n_drums")}
+    row = evaluate_rows(fl, base, cons, stability=cons.stable)
     data = {
+        "active_limits": list(active_limits(cons, row, 0)),
+        "edges": list(range_edges(cand.design, box, source, drums)),
+        "limits": _limits_json(base, cons),
         "objective": args.objective,
         "objective_column": key,
         "objective_value": cand.value,
@@ -799,10 +811,28 @@ def _optimize(args: argparse.Namespace) -> int:
     if args.out:
         with atomic_path(args.out) as tmp:
             tmp.write_text(design_to_toml(cand.design))
+    verified = None
+    if args.verify_top is not None:
+        t2 = time.perf_counter()
+        top = list(opt.candidates[: args.verify_top])
+        f = {k: np.array([getattr(c.design.clutch, k) for c in top]) for k in (*box, "n_drums")}
+        rows = evaluate_rows(f, base, cons)
+        fem_size = load_error_map().reference_fem_size
+        with sweep_executor(args.workers) as (executor, _):
+            verified = verify_designs([c.design for c in top], list(range(1, len(top) + 1)),
+                                      [c.value for c in top], rows[TORQUE].tolist(),
+                                      rows["torque_error_bound"].tolist(), fem_size,
+                                      executor)  # fmt: skip
+        data["verified"] = [vars(v) | {"error": v.error} for v in verified]
+        t_verify = time.perf_counter() - t2
     if args.json:
         print_json(data)
     else:
         _print_optimum(args, opt, cand, t_fast, data)
+        if verified is not None:
+            print()
+            print(format_verified(verified, key, fem_size, max(args.workers, 1), t_verify)
+                  .replace("rows", "candidates"))  # fmt: skip
     violations = data["violations"]
     if violations:
         fid = data["verdict"]["fidelity"]
@@ -890,8 +920,6 @@ def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...]
         t_verify = time.perf_counter() - t2
     written = []
     if args.designs and kept:
-        from pathlib import Path
-
         folder = Path(args.designs)
         folder.mkdir(parents=True, exist_ok=True)
         for r in kept:
@@ -900,8 +928,7 @@ def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...]
             with atomic_path(path) as tmp:
                 tmp.write_text(design_to_toml(replace(m.design, name=path.stem)))
             written.append(str(path))
-    paper = evaluate(replace(design_preset("paper"), operating=base.operating,
-                             transmission=base.transmission)).as_json()  # fmt: skip
+    paper = _paper_beside(base, "fast" if args.no_verify else "reference")
     if args.plot:
         pareto_set_plot(ps, [r["member"] for r in kept], paper, args.plot)
     data = {
@@ -979,13 +1006,23 @@ def _explain_json(ev: dict) -> dict:
     }  # fmt: skip
 
 
+def _paper_beside(base: ClutchDesign, fidelity: str) -> dict:
+    """The paper preset's clutch on ``base``'s operating point and transmission."""
+    paper = replace(design_preset("paper"), operating=base.operating,
+                    transmission=base.transmission)  # fmt: skip
+    return reference_check(paper) if fidelity == "reference" else evaluate(paper).as_json()
+
+
 def explain(ev: dict, paper: dict, label: str) -> str:
     """How a design's bandwidth and resonance relate, where its damping comes from (the
     b1 budget) and its thermal rating, beside the paper preset's."""
     a, p = _explain_json(ev), _explain_json(paper)
 
     def row(name: str, x: float, y: float, fmt: str = ".4g") -> str:
-        return f"  {name:<44}{format(x, fmt):>12}{format(y, fmt):>12}"
+        def cell(v: float) -> str:
+            return format(v, fmt) if math.isfinite(v) else "none" if math.isnan(v) else "∞"
+
+        return f"  {name:<44}{cell(x):>12}{cell(y):>12}"
 
     def film(e: dict) -> float:
         return e["b1_terms"].get("drum gaps", 0.0) / e["b1_N_s_per_m"]
@@ -1018,8 +1055,10 @@ def explain(ev: dict, paper: dict, label: str) -> str:
         "the free device (K = 0,",
         "  Eq. 2), m1 and m2 swinging on the transmission stiffness k with b1 damping it. "
         "A bandwidth above the",
-        "  resonance is no contradiction: K adds its stiffness to the loop. b1 is the "
-        "drag the hand feels in free",
+        "  resonance is no contradiction: K adds its stiffness to the loop (\"none\": "
+        "Eq. 2's zeros are real, the",
+        "  free device is overdamped and has no resonance). b1 is the drag the hand "
+        "feels in free",
         "  motion (backdrive force); the drum films' share of it is viscous drag, which "
         "also heats the fluid and",
         "  lowers the continuous rating (the slip heat T_off·ω).",
@@ -1212,6 +1251,12 @@ def _print_optimum(
             f"path's stated error of {FAST_BANDWIDTH_ERROR * 100:.1f} %)"
         )
     print(format_verdict(data))
+    print("  active limits (fast path): " + (", ".join(data["active_limits"]) or "none"))
+    for e in data["edges"]:
+        print(f"  {e}")
+    if "reference" in data:
+        paper = _paper_beside(cand.design, "reference")
+        print(explain(data["reference"], paper, "optimum"))
     if args.out:
         print(f"design written to {args.out}")
 
