@@ -493,8 +493,8 @@ def pareto(
     bounds: dict[str, tuple[float, float]] | None = None,
     drum_counts: Sequence[int] = (1, 2, 3, 4),
     seed: int = 0,
-    pop_size: int = 64,
-    generations: int = 50,
+    pop_size: int = 100,
+    generations: int = 100,
     members: int = DEFAULT_MEMBERS,
     robust: Any = None,
 ) -> ParetoSet:
