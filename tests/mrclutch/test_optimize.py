@@ -380,8 +380,8 @@ def test_cli_exits_3_naming_every_candidate_when_none_passes(tmp_path, capsys, m
 def test_summary_lists_every_varied_field(capsys, monkeypatch):
     """Issue 16: ``--vary band_length_mm=5:25 --vary gap_mm=0.2:1`` printed no band length."""
     _quick_search(monkeypatch)
-    argv = ["optimize", "--objective", "bandwidth", "--vary", "band_length_mm=5:25", "--vary", "gap_mm=0.2:1", "--drums",
-            "2", "--no-verify", "--min-torque", "0.2"]  # fmt: skip
+    argv = ["optimize", "--objective", "bandwidth", "--vary", "band_length_mm=5:25", "--vary",
+            "gap_mm=0.2:1", "--drums", "2", "--no-verify", "--min-torque", "0.2"]  # fmt: skip
     code = main(argv)
     text = capsys.readouterr().out
     assert code == 0, text

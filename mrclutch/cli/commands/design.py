@@ -26,22 +26,22 @@ from mrclutch.cli.plots.design import pareto_plot, pareto_set_plot
 from mrclutch.cli.report import write_report
 from mrclutch.design import ClutchDesign, design_from_mapping, design_preset, design_to_toml
 from mrclutch.optimize import (
+    CONTINUOUS,
     DEFAULT_MEMBERS,
     MAX_CANDIDATES,
     MAX_ECCENTRICITY,
     MINIMISED,
     OBJECTIVES,
-    RENDERING,
-    CONTINUOUS,
     PAPER_CONTINUOUS_ABOVE_DRAG,
+    RENDERING,
     Candidate,
     Constraints,
     Member,
     Optimum,
     ParetoSet,
-    limit_columns,
     active_limits,
     evaluate_rows,
+    limit_columns,
     optimize,
     pareto,
     parse_bounds,
@@ -311,6 +311,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="write each Pareto member as a design file DIR/member_NN.toml (Pareto mode)",
     )
     p.add_argument("--no-verify", action="store_true", help="skip the reference-fidelity check")
+    p.add_argument(
+        "--robust",
+        action="store_true",
+        help="require each design stable and passive at its K over the uncertainty ranges "
+        "(worst case, mrclutch.robust; the process's runout and tolerance as the "
+        "manufacturing ranges), not only at the nominal inputs; docs/optimize.md",
+    )
     p.add_argument(
         "--workers",
         type=int,
@@ -769,6 +776,7 @@ def _optimize(args: argparse.Namespace) -> int:
         bounds=parse_bounds(args.vary) if args.vary else None,
         drum_counts=drums,
         seed=args.seed,
+        robust=robust_verdict(base) if args.robust else None,
     )
     t_fast = time.perf_counter() - t0
     if not opt.feasible:
@@ -851,10 +859,14 @@ def _optimize(args: argparse.Namespace) -> int:
 def _limits_line(base: ClutchDesign, cons: Constraints) -> str:
     """Every limit enforced, in one paragraph."""
     pr = base.process
-    parts = [f"torque ≥ {cons.min_torque:g} N·m", f"mass ≤ {cons.max_mass * 1e3:g} g",
-             f"envelope ≤ Ø{cons.max_diameter * 1e3:g} × {cons.max_length * 1e3:g} mm",
-             f"continuous torque above drag ≥ {cons.min_continuous_torque:g} N·m",
-             f"coil power ≤ {cons.max_power:g} W", f"time at peak ≥ {cons.peak_time:g} s"]  # fmt: skip
+    parts = [
+        f"torque ≥ {cons.min_torque:g} N·m",
+        f"mass ≤ {cons.max_mass * 1e3:g} g",
+        f"envelope ≤ Ø{cons.max_diameter * 1e3:g} × {cons.max_length * 1e3:g} mm",
+        f"continuous torque above drag ≥ {cons.min_continuous_torque:g} N·m",
+        f"coil power ≤ {cons.max_power:g} W",
+        f"time at peak ≥ {cons.peak_time:g} s",
+    ]
     if cons.duty_time > 0:
         parts.append(f"{cons.duty_torque:g} N·m held ≥ {cons.duty_time:g} s")
     parts.append(f"gap ≥ {pr.min_gap * 1e3:.3g} mm (runout {pr.runout * 1e3:g} + tolerance "
@@ -892,7 +904,8 @@ def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...]
     t0 = time.perf_counter()
     ps = pareto(base, rendering=args.rendering, constraints=cons,
                 bounds=parse_bounds(args.vary) if args.vary else None, drum_counts=drums,
-                seed=args.seed, members=args.members, robust=robust_verdict())  # fmt: skip
+                seed=args.seed, members=args.members,
+                robust=robust_verdict(base) if args.robust else None)  # fmt: skip
     t_fast = time.perf_counter() - t0
     if not ps.members:
         raise CLIError("no design meets the constraints in the search box; relax a limit")
@@ -936,7 +949,7 @@ def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...]
         "objectives": [
             {"name": n, "column": c, "sense": "max" if sg > 0 else "min"}
             for n, c, sg in ps.objectives
-        ],  # fmt: skip
+        ],
         "evaluations": ps.evaluations,
         "optimisation_time_s": t_fast,
         "reference_time_s": t_ref,
@@ -1010,7 +1023,7 @@ def _paper_beside(base: ClutchDesign, fidelity: str) -> dict:
     """The paper preset's clutch on ``base``'s operating point and transmission."""
     paper = replace(design_preset("paper"), operating=base.operating,
                     transmission=base.transmission)  # fmt: skip
-    return reference_check(paper) if fidelity == "reference" else evaluate(paper).as_json()
+    return evaluate(paper, fidelity).as_json()
 
 
 def explain(ev: dict, paper: dict, label: str) -> str:
