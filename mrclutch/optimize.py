@@ -699,10 +699,13 @@ def _spread(f: np.ndarray, k: int) -> list[int]:
 
 
 def process_uncertainty(base: ClutchDesign) -> Uncertainty:
-    """The uncertainty ranges the optimiser's worst case takes: ``default_uncertainty``
-    (viscosity, fluid temperature, delay, bench damping, yield-stress and B–H lots;
-    docs/verdicts.md) with the manufacturing ranges of the design's ``[process]``: its
-    runout as the drums' eccentricity and its tolerance as the gap's."""
+    """The uncertainty ranges the optimiser's worst case takes: the design's declared
+    ``[uncertainty]`` if it has one; otherwise ``default_uncertainty`` (viscosity, fluid
+    temperature, delay, bench damping, yield-stress and B–H lots; docs/verdicts.md) with the
+    manufacturing ranges of its ``[process]``: the runout as the drums' eccentricity and
+    the tolerance as the gap's."""
+    if base.uncertainty is not None:
+        return base.uncertainty
     pr = base.process
     return replace(default_uncertainty(base), runout=pr.runout, gap_tolerance=pr.tolerance)
 
