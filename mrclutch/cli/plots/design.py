@@ -131,7 +131,5 @@ def pareto_set_plot(ps: Any, kept: list[int], paper: dict, out: str | Path) -> P
     fig.colorbar(sc, ax=axes, label="continuous torque above drag (mN·m)")
     fig.suptitle(f"Pareto front: {ps.front_size} designs meeting every limit (fast path); "
                  f"{len(rows)} members kept at reference fidelity")  # fmt: skip
-    with atomic_path(out) as tmp:
-        fig.savefig(tmp, dpi=120, format="png")
-    plt.close(fig)
+    save_png(fig, out, dpi=120)
     return Path(out)
