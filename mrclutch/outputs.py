@@ -91,7 +91,8 @@ _ALL = (
            "inertia", "torque / inertia"),
     Output("coil_resistance_ohm", "Ω", "coil resistance at the coil temperature",
            "coil resistance"),
-    Output("coil_power_W", "W", "coil Joule power at the current limit", "coil power"),
+    Output("coil_power_W", "W", "coil Joule power at the current limit",
+           "coil power at max current"),
     Output("torque_error_bound", "1", "bound on the |relative error| of the max torque (the "
            "reluctance network's) against the FEM at this design and current limit, 95 % "
            "coverage over every section dimension (inf: outside the measured ranges or "

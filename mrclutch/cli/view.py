@@ -14,7 +14,6 @@ from typing import Any
 
 import numpy as np
 
-from geometry.atomic import atomic_path
 from geometry.cad import MATERIAL_COLOURS, material_solids, tessellate
 from geometry.params import DrumClutch
 from geometry.section import build_section
@@ -73,9 +72,11 @@ def build_plotter(
     tolerance: float | None = None,
     window_size: tuple[int, int] = WINDOW_SIZE,
     cut: bool = True,
+    legend: bool = True,
 ) -> Any:
     """A pyvista Plotter with the clutch, looking at the cut face from slightly above;
-    tessellated to ``tolerance`` [m], by default one pixel of ``window_size``."""
+    tessellated to ``tolerance`` [m], by default one pixel of ``window_size``. The
+    screenshot draws its legend beside the model instead (``legend=False`` here)."""
     tolerance = view_tolerance(clutch, window_size) if tolerance is None else tolerance
     if off_screen:
         _prepare_offscreen()
@@ -91,7 +92,8 @@ def build_plotter(
             smooth_shading=False,
             label=f"{part} ({material})",
         )
-    plotter.add_legend(bcolor="white", face="rectangle", size=(0.28, 0.28))
+    if legend:
+        plotter.add_legend(bcolor="white", face="rectangle", size=(0.28, 0.28))
     # look along +y at the x–z cut plane, a little from above and from the shaft side
     plotter.camera_position = "xz"
     plotter.camera.azimuth = -25
@@ -107,17 +109,63 @@ def screenshot(
     tolerance: float | None = None,
     window_size: tuple[int, int] = WINDOW_SIZE,
 ) -> Path:
-    """Render off screen (no display needed) into a PNG at ``path``, atomically."""
+    """Render off screen (no display needed) into a PNG of ``window_size`` pixels at
+    ``path``, atomically: the model on the left, its legend in a panel on the right (never
+    over the model; each swatch outlined so the pale stainless reads on white), text at
+    least 2.1 % of the width tall (≥ 9 px when the image is shown 450 px wide)."""
     dest = Path(path)
     if dest.suffix.lower() != ".png":
         raise ParameterError(f"--screenshot {dest}: must end in .png")
-    plotter = build_plotter(clutch, off_screen=True, tolerance=tolerance, window_size=window_size)
+    w, h = window_size
+    model_w = max(1, round(w * LEGEND_SPLIT))
+    plotter = build_plotter(clutch, off_screen=True, tolerance=tolerance,
+                            window_size=(model_w, h), legend=False)  # fmt: skip
     try:
-        with atomic_path(dest) as tmp:
-            plotter.screenshot(str(tmp))
+        img = plotter.screenshot(return_img=True)
     finally:
         plotter.close()
+    _compose(img, _legend_entries(clutch), (w, h), dest)
     return dest
+
+
+#: Share of the screenshot's width given to the model; the legend takes the rest.
+LEGEND_SPLIT = 0.66
+
+
+def _legend_entries(clutch: DrumClutch) -> list[tuple[str, tuple[float, float, float]]]:
+    """(label, colour) of every (part, material) in the view, in the section's order."""
+    seen: list[tuple[str, tuple[float, float, float]]] = []
+    for reg in build_section(clutch).regions:
+        entry = (f"{reg.part} ({reg.material})", MATERIAL_COLOURS[reg.material])
+        if entry not in seen:
+            seen.append(entry)
+    return seen
+
+
+def _compose(img: Any, labels: list, size: tuple[int, int], dest: Path) -> None:
+    """The rendered model and a legend panel beside it, as one PNG of ``size`` pixels."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Patch
+
+    from mrclutch.cli.plots import save_png
+
+    w, h = size
+    dpi = 100
+    fig = plt.figure(figsize=(w / dpi, h / dpi), dpi=dpi)
+    ax = fig.add_axes((0, 0, LEGEND_SPLIT, 1))
+    ax.imshow(img)
+    ax.set_axis_off()
+    side = fig.add_axes((LEGEND_SPLIT, 0, 1 - LEGEND_SPLIT, 1))
+    side.set_axis_off()
+    font_pt = max(6.0, 0.021 * w * 72 / dpi)  # 2.1 % of the width, in points
+    side.legend(handles=[Patch(facecolor=c, edgecolor="0.15", lw=1.0, label=t)
+                         for t, c in labels], loc="center left", fontsize=font_pt,
+                frameon=False, labelcolor="0.1", handlelength=1.4)  # fmt: skip
+    save_png(fig, dest, dpi=dpi)
+    plt.close(fig)
 
 
 def show(clutch: DrumClutch, *, tolerance: float | None = None) -> None:

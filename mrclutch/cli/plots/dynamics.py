@@ -36,6 +36,7 @@ def plot_torque_step(
     ax.set_xlabel("time after the current command (ms)")
     ax.set_ylabel("torque / final torque")
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
+    ax.set_title("torque after a step of the current command to the peak", fontsize=11)
+    ax.legend(fontsize=9)
     fig.tight_layout()
     save_png(fig, path, dpi=120)

@@ -39,7 +39,7 @@ def compare_figure(
     band = BAND_HZ if band is None else band
     f = np.logspace(np.log10(band[0]), np.log10(band[1]), 1500)
     w = 2 * np.pi * f
-    fig, axes = plt.subplots(3, 1, figsize=(8, 10), sharex=True, constrained_layout=True)
+    fig, axes = plt.subplots(3, 1, figsize=(6, 8.4), sharex=True, constrained_layout=True)
     ax_z, ax_k, ax_b = axes
     for (label, p), color in zip(sides.items(), ("tab:blue", "tab:red", "tab:green"), strict=False):
         zc = np.abs(closed_loop_impedance(p, K, w))
@@ -52,21 +52,21 @@ def compare_figure(
         if np.isfinite(bw):
             for ax in axes:
                 ax.axvline(bw, color=color, lw=0.8, ls=":")
-            ax_z.annotate(f"{bw:.1f} Hz", (bw, zc.min()), color=color, fontsize=8)
+            ax_z.annotate(f"{bw:.1f} Hz", (bw, zc.min()), color=color, fontsize=9)
         eff = effective_impedance(p, K, w)
         ax_k.semilogx(f, eff.stiffness, color=color, label=label)
         ax_b.semilogx(f, eff.damping, color=color, label=label)
     ax_k.axhline(K, color="0.5", lw=0.8, label=f"K = {K:.0f} N/m")
     ax_k.axhline(0.0, color="k", lw=0.5)
     ax_z.set_ylabel("|Z| = |F/ẋ| [N·s/m]")
-    ax_z.set_title(f"Rendering a {K:.0f} N/m spring (dotted: full-model bandwidth)")
+    ax_z.set_title(f"Rendering K = {K:.0f} N/m (dotted: bandwidth)", fontsize=11)
     ax_k.set_ylabel("effective stiffness [N/m]")
     ax_k.set_ylim(-2 * K, 2 * K)
     ax_b.set_ylabel("effective damping [N·s/m]")
     ax_b.set_xlabel("frequency [Hz]")
     for ax in axes:
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=9)
     save_png(fig, path, dpi=110)
 
 
@@ -79,7 +79,7 @@ def zwidth_figure(sides: dict[str, dict[str, Any]], K: float, path: str | os.Pat
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(1, len(sides), figsize=(5 * len(sides), 4.2), constrained_layout=True)
+    fig, axes = plt.subplots(len(sides), 1, figsize=(6, 3.6 * len(sides)), constrained_layout=True)
     colors = ("tab:blue", "tab:red", "tab:green")
     for ax, (label, zw), color in zip(np.atleast_1d(axes), sides.items(), colors, strict=False):
         b = np.asarray(zw["B_N_s_per_m"], dtype=float)
@@ -103,5 +103,5 @@ def zwidth_figure(sides: dict[str, dict[str, Any]], K: float, path: str | os.Pat
         ax.set_xlim(0, 1.1 * max(float(np.nanmax(hi[ok], initial=0.0)), K))
         ax.set_ylim(0, None)
         ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=9)
     save_png(fig, path, dpi=110)
