@@ -18,6 +18,7 @@ from geometry.cad import MATERIAL_COLOURS, material_solids, tessellate
 from geometry.params import DrumClutch
 from geometry.section import build_section
 from geometry.validation import ParameterError, check_positive
+from mrclutch.cli.plots import save_png
 
 #: Default window of the view and screenshots (pixels).
 WINDOW_SIZE = (1024, 768)
@@ -149,8 +150,6 @@ def _compose(img: Any, labels: list, size: tuple[int, int], dest: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.patches import Patch
-
-    from mrclutch.cli.plots import save_png
 
     w, h = size
     dpi = 100

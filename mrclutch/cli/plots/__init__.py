@@ -11,6 +11,8 @@ are drawn about 6 in wide with text of at least 9 pt for that reason.
 from __future__ import annotations
 
 import os
+import struct
+import zlib
 from pathlib import Path
 from typing import Any
 
@@ -55,9 +57,6 @@ def save_png(fig: Any, path: str | os.PathLike[str], dpi: float = 110) -> Path:
 
 def read_min_text_px(path: str | os.PathLike[str]) -> float | None:
     """The ``mrclutch:min_text_px`` a PNG carries, or None (read with the stdlib)."""
-    import struct
-    import zlib
-
     data = Path(path).read_bytes()
     pos = 8
     while pos + 8 <= len(data):
