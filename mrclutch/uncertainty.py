@@ -118,23 +118,6 @@ class Uncertainty:
             (1 + self.yield_stress_spread) * (1 + self.bh_spread),
         )
 
-    @property
-    def is_none(self) -> bool:
-        """No spread at all: the robust verdicts are the nominal ones."""
-        return (
-            self.viscosity_spread == 0
-            and self.fluid_temperature is not None
-            and self.fluid_temperature[0] == self.fluid_temperature[1]
-            and self.gap_tolerance == 0
-            and self.runout == 0
-            and self.drum_thickness_tolerance == 0
-            and self.delay is not None
-            and self.delay[0] == self.delay[1]
-            and self.bench_damping == (0.0, 0.0)
-            and self.yield_stress_spread == 0
-            and self.bh_spread == 0
-        )
-
 
 @dataclass(frozen=True)
 class TorquePoint:

@@ -200,3 +200,29 @@ def test_bad_input_in_the_new_sections_is_one_line_exit_2(tmp_path, capsys, tabl
     err = capsys.readouterr().err
     assert fragment in err, err
     assert "Traceback" not in err and err.count("\n") == 1, err
+
+
+def test_sweep_with_the_robust_columns_equals_robust_columns_batch(tmp_path):
+    """``sweep --with`` the robust columns: the same numbers as ``robust_columns_batch`` on
+    the same designs, over the ranges the spec's ``[uncertainty]`` table declares."""
+    import csv
+
+    from mrclutch.robust import ROBUST_COLUMNS, robust_columns_batch
+
+    spec = tmp_path / "s.toml"
+    spec.write_text('[sweep]\nmode = "grid"\nbase = "paper"\n[parameters]\n'
+                    "gap_mm = {values = [0.5, 0.7]}\n"
+                    "[uncertainty]\ndelay_ms = [1, 3]\n")  # fmt: skip
+    out = tmp_path / "r.csv"
+    argv = ["sweep", str(spec), "--out", str(out), "--no-progress"]
+    for k in ROBUST_COLUMNS:
+        argv += ["--with", k]
+    assert main(argv) == 0
+    with out.open() as fh:
+        rows = list(csv.DictReader(fh))
+    d = design_preset("paper")
+    unc = replace(default_uncertainty(d), delay=(1e-3, 3e-3))
+    want = robust_columns_batch({"gap": np.array([0.5e-3, 0.7e-3])}, d, unc)
+    for k in ROBUST_COLUMNS:
+        got = np.array([float(r[k]) for r in rows])
+        np.testing.assert_allclose(got, want[k], rtol=1e-8)  # the CSV's 9 digits
