@@ -125,3 +125,33 @@ def test_sweep_with_an_unknown_column_is_refused(tmp_path):
                        capture_output=True, text=True, timeout=60)  # fmt: skip
     assert r.returncode == 2 and "nonsense" in r.stderr and "Traceback" not in r.stderr
     assert not (tmp_path / "r.csv").exists()
+
+
+SMALL = """
+[sweep]
+mode = "grid"
+chunk_size = 6
+[parameters]
+gap_mm = {min = 0.3, max = 0.9, count = 8}
+n_drums = {min = 1, max = 3}
+"""
+
+
+def test_cli_refuses_a_damaged_chunk_in_one_line_and_repair_restores_the_file(tmp_path, capsys):
+    from mrclutch.cli.main import main
+
+    spec = tmp_path / "s.toml"
+    spec.write_text(SMALL)  # 24 designs, 4 chunks of 6
+    whole, out = tmp_path / "whole.csv", tmp_path / "r.csv"
+    for path in (whole, out):
+        assert main(["sweep", str(spec), "--out", str(path), "--no-progress"]) == 0
+    lines = out.read_bytes().split(b"\n")
+    out.write_bytes(b"\n".join(lines[: 1 + 14] + lines[1 + 15 :]))  # row 14 of chunk 2 lost
+    capsys.readouterr()
+    assert main(["sweep", str(spec), "--out", str(out), "--no-progress", "--resume"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "r.csv: chunk 2 (rows 12–17) does not match its checksum" in err[0]
+    assert "--repair" in err[0]
+    assert main(["sweep", str(spec), "--out", str(out), "--no-progress", "--repair"]) == 0
+    assert "repaired chunk(s) 2 of" in capsys.readouterr().out
+    assert out.read_bytes() == whole.read_bytes()
