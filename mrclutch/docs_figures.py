@@ -44,6 +44,8 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from geometry.atomic import write_text
+
 ROOT = Path(__file__).resolve().parents[1]
 REGISTRY = ROOT / "docs" / "figures.toml"
 #: A marked figure; one written in inline code (`<!-- fig: ...`, as in this docstring's
@@ -286,7 +288,7 @@ def update(registry: dict[str, Figure], runner: Runner, files: list[Path] | None
 
         new_text = SPAN.sub(repl, text)
         if new_text != text:
-            f.write_text(new_text)
+            write_text(f, new_text)  # the output layer: whole or untouched
     return changed
 
 
