@@ -37,7 +37,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from geometry.section import Section
-from geometry.validation import check_choice
+from geometry.validation import ParameterError, check_choice
 from magnetics.materials import MATERIALS, Magnetic, magnetic
 
 FloatArray = NDArray[np.float64]
@@ -119,6 +119,87 @@ def _fine_sets(section: Section) -> tuple[FloatArray, FloatArray]:
     return r, np.unique(zs[(zs >= za - 1e-12) & (zs <= zb + 1e-12)])
 
 
+def _lines(section: Section, h: float, mesh: str) -> tuple[FloatArray, FloatArray]:
+    """The grid's r and z lines at target size ``h`` (cheap: no mesh is built)."""
+    R, z0, z1 = section.r_max, section.z_min, section.z_max
+    pad = 2.0 * max(R, z1 - z0)
+    fr, fz = _fine_sets(section) if mesh == "graded" else (None, None)
+    rs = _axis([x for g in section.regions for x in (g.r0, g.r1)], 0.0, R + pad, h, (0.0, R), fr)
+    zs = _axis([x for g in section.regions for x in (g.z0, g.z1)], z0 - pad, z1 + pad, h,
+               (z0, z1), fz)  # fmt: skip
+    return rs, zs
+
+
+#: bytes a solve needs per grid node and its fixed part: measured peak RSS of one Newton
+#: solve of the paper preset at 0.5/0.25/0.12/0.08 mm (3.6e3 … 7.1e4 nodes: 81 … 376 MB,
+#: 4.4 kB a node; SuperLU's fill grows slowly with the size), with a 35 % margin.
+BYTES_PER_NODE = 6000
+BYTES_FIXED = 100e6
+
+
+#: s of one Newton solve per grid node: the same measurement (10 005 nodes: 2.0 s,
+#: 70 884 nodes: 15.5 s, grid included, one core of a loaded 2-core machine).
+SECONDS_PER_NODE = 2.2e-4
+
+
+def time_estimate(section: Section, size: float, solves: int, mesh: str = "uniform") -> float:
+    """s for ``solves`` FEM solves of ``section`` at element ``size`` (SECONDS_PER_NODE)."""
+    return solves * SECONDS_PER_NODE * memory_estimate(section, size, mesh)[0]
+
+
+def memory_budget() -> float:
+    """Bytes one FEM solve may use: ``MRCLUTCH_FEM_MEMORY_GB`` (default 4 GiB), never more
+    than half the machine's memory nor more than an address-space limit (RLIMIT_AS) allows."""
+    import os
+    import resource
+
+    try:
+        budget = float(os.environ.get("MRCLUTCH_FEM_MEMORY_GB", "4")) * 2**30
+    except ValueError:
+        budget = 4.0 * 2**30
+    if not math.isfinite(budget) or budget <= 0:
+        budget = 4.0 * 2**30
+    try:
+        budget = min(budget, 0.5 * os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        pass
+    soft = resource.getrlimit(resource.RLIMIT_AS)[0]
+    if soft != resource.RLIM_INFINITY:
+        budget = min(budget, 0.6 * soft)
+    return budget
+
+
+def memory_estimate(section: Section, size: float, mesh: str = "uniform") -> tuple[int, float]:
+    """(grid nodes, bytes) of one FEM solve of ``section`` at element ``size`` (m)."""
+    rs, zs = _lines(section, size, mesh)
+    nodes = rs.size * zs.size
+    return nodes, BYTES_FIXED + BYTES_PER_NODE * nodes
+
+
+def check_memory(section: Section, size: float, mesh: str = "uniform") -> None:
+    """Refuse, before any mesh is built, a size whose solve would not fit the budget
+    (``memory_budget``), naming the smallest size that fits."""
+    budget = memory_budget()
+    if not (math.isfinite(size) and size > 0):
+        raise ParameterError(f"FEM element size = {size!r} m: must be finite and > 0")
+    nodes, need = memory_estimate(section, size, mesh)
+    if need <= budget:
+        return
+    lo, hi = size, max(size, 5e-3)  # bisection in log size: fits at hi, not at lo
+    if memory_estimate(section, hi, mesh)[1] > budget:
+        raise ParameterError(f"the FEM needs {need / 2**30:.2g} GiB at any element size here, "
+                             f"above the {budget / 2**30:.2g} GiB budget")  # fmt: skip
+    for _ in range(30):
+        mid = math.sqrt(lo * hi)
+        lo, hi = (lo, mid) if memory_estimate(section, mid, mesh)[1] <= budget else (mid, hi)
+    raise ParameterError(
+        f"FEM element size {size * 1e3:g} mm: {nodes:.3g} grid nodes need about "
+        f"{need / 2**30:.2g} GiB, above the {budget / 2**30:.2g} GiB budget "
+        f"(MRCLUTCH_FEM_MEMORY_GB); the smallest size that fits is "
+        f"{math.ceil(hi * 1e6) / 1e3:g} mm"
+    )
+
+
 def build_grid(
     section: Section,
     size: float | None = None,
@@ -128,17 +209,13 @@ def build_grid(
 ) -> Grid:
     """The grid of ``section`` at target element ``size`` (m) inside the clutch, ``mesh``
     "uniform" (cells ≤ size everywhere inside) or "graded" (module docstring)."""
-    import skfem
-
     check_choice("mesh", mesh, MESHES)
     mats = MATERIALS if materials is None else materials
     h = DEFAULT_SIZE if size is None else float(size)
-    R, z0, z1 = section.r_max, section.z_min, section.z_max
-    pad = 2.0 * max(R, z1 - z0)
-    fr, fz = _fine_sets(section) if mesh == "graded" else (None, None)
-    rs = _axis([x for g in section.regions for x in (g.r0, g.r1)], 0.0, R + pad, h, (0.0, R), fr)
-    zs = _axis([x for g in section.regions for x in (g.z0, g.z1)], z0 - pad, z1 + pad, h,
-               (z0, z1), fz)  # fmt: skip
+    check_memory(section, h, mesh)
+    import skfem
+
+    rs, zs = _lines(section, h, mesh)
     quads = skfem.MeshQuad.init_tensor(rs, zs)
     basis = skfem.Basis(quads, skfem.ElementQuad1(), intorder=2)
 

@@ -8,10 +8,11 @@ import sys
 import time
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from geometry.validation import check_choice, check_int
+from geometry.validation import ParameterError, check_choice, check_int
 from magnetics.error_map import load as load_error_map
 from mrclutch.cli.commands._common import (
     add_design_args,
@@ -143,6 +144,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="like --resume, but recompute the chunks that do not verify (a row lost, "
         "altered or duplicated, a part cut short) instead of refusing",
+    )
+    p.add_argument(
+        "--yes",
+        action="store_true",
+        help="run a sweep of more than 1e8 designs (refused without it: hours of work)",
     )
     p.add_argument("--overwrite", action="store_true", help="replace an existing results file")
     p.add_argument("--workers", type=int, default=0, help="processes (0: in this process)")
@@ -601,7 +607,46 @@ def _report(args: argparse.Namespace) -> int:
     return 0
 
 
-def _verify_options(args: argparse.Namespace, columns: tuple[str, ...]) -> float | None:
+#: A sweep of more designs than this runs only with --yes (issue 32: a 1e8-design grid
+#: is a day of work on one core at the fast path's ~4e3 designs/s).
+MAX_DESIGNS_UNASKED = 10**8
+#: Work estimated longer than this (s) is announced before it starts.
+ANNOUNCE_AFTER_S = 60.0
+
+
+def _say_estimate(spec: Any, evaluator: BatchEvaluator, workers: int) -> float | None:
+    """Time the first designs of the spec (after 8 to warm up; chunks of its chunk size, up
+    to 1024 designs or 0.3 s) and, when the whole sweep is estimated above
+    ANNOUNCE_AFTER_S, say so on stderr (designs, seconds at the measured rate). Returns the estimate (s), None when skipped."""
+    n = spec.n_designs
+    if n <= 1000:  # under a minute at any rate the fast path has (the slowest column: ×8)
+        return None
+    _, fields = spec.chunk(0)
+    evaluator({k: v[:8] for k, v in fields.items()})  # warm: imports, first compiles
+    step = max(1, min(spec.chunk_size, 1024))
+    done, t0 = 0, time.perf_counter()
+    while done < min(1024, n) and time.perf_counter() - t0 < 0.3:
+        evaluator({k: v[done : done + step] for k, v in fields.items()})
+        done += step
+    rate = done / max(time.perf_counter() - t0, 1e-9) * max(1, workers)
+    seconds = n / rate
+    if seconds > ANNOUNCE_AFTER_S:
+        print(f"mrclutch sweep: {n:.3g} designs, about {_duration(seconds)} at "
+              f"{rate:.3g} designs/s (measured on the first {done}, {max(1, workers)} "
+              "worker(s)); going on", file=sys.stderr)  # fmt: skip
+    return seconds
+
+
+def _duration(seconds: float) -> str:
+    if seconds < 120:
+        return f"{seconds:.0f} s"
+    if seconds < 7200:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.1f} h"
+
+
+def _verify_options(args: argparse.Namespace, columns: tuple[str, ...],
+                    base: ClutchDesign | None = None) -> float | None:  # fmt: skip
     """The FEM size (m) for --verify-top, None without it; bad options refused before the
     sweep runs."""
     if args.verify_top is None:
@@ -621,6 +666,14 @@ def _verify_options(args: argparse.Namespace, columns: tuple[str, ...]) -> float
     mm = args.verify_fem_size_mm
     if not (math.isfinite(mm) and 0.02 <= mm <= 5.0):
         raise CLIError(f"--verify-fem-size-mm = {mm:g}: must be in [0.02, 5] mm")
+    if base is not None:  # before the sweep: a size whose solves cannot fit is refused now
+        from geometry.section import build_section
+        from magnetics.fem.grid import check_memory
+
+        try:
+            check_memory(build_section(base.clutch), mm * 1e-3)
+        except ParameterError as exc:
+            raise CLIError(f"--verify-fem-size-mm: {exc}") from None
     return mm * 1e-3
 
 
@@ -630,9 +683,14 @@ def _sweep(args: argparse.Namespace) -> int:
     check_writable("--out", args.results, folder=is_parquet(args.results))
     robust = any(k in ROBUST_COLUMNS for k in args.optional)
     evaluator = (RobustBatchEvaluator if robust else BatchEvaluator)(base, tuple(args.optional))
-    fem_size = _verify_options(args, evaluator.columns)
+    fem_size = _verify_options(args, evaluator.columns, base)
+    if spec.n_designs > MAX_DESIGNS_UNASKED and not args.yes:
+        raise CLIError(f"{spec.n_designs:.3g} designs: more than {MAX_DESIGNS_UNASKED:.0e} "
+                       "(hours to days of work); add --yes to run it")  # fmt: skip
     where = (args.workers, args.scheduler, args.dask_local, args.connect_timeout)
     with sweep_executor(*where) as (executor, workers):
+        if not (args.resume or args.repair):
+            _say_estimate(spec, evaluator, workers)
         res = run_sweep(
             spec,
             args.results,

@@ -6,6 +6,7 @@ Nothing heavy at module level (magnetics, scikit-fem and matplotlib load inside 
 from __future__ import annotations
 
 import argparse
+import sys
 from typing import Any
 
 import numpy as np
@@ -84,6 +85,18 @@ def _torque(args: argparse.Namespace) -> int:
     currents = _parse_currents(args.current)
     clutch = load_clutch(args)
     methods = ("network", "fem") if args.method == "both" else (args.method,)
+    if "fem" in methods and currents.size > 1:  # long FEM work says how long first
+        from geometry.section import build_section
+        from magnetics.fem import DEFAULT_SIZE
+        from magnetics.fem.grid import check_memory, time_estimate
+
+        section = build_section(clutch)
+        check_memory(section, DEFAULT_SIZE)
+        seconds = time_estimate(section, DEFAULT_SIZE, int(currents.size))
+        if seconds > 60:
+            print(f"mrclutch torque: {currents.size} FEM solves at {DEFAULT_SIZE * 1e3:g} mm, "
+                  f"about {seconds / 60:.0f} min (measured rate of the FEM per grid node, "
+                  "magnetics.fem.grid.SECONDS_PER_NODE); going on", file=sys.stderr)  # fmt: skip
     try:
         curves = [torque_curve(clutch, currents, method=m, speed_rpm=args.speed_rpm,
                                temperature=args.fluid_temperature_C) for m in methods]  # fmt: skip
