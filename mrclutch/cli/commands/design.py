@@ -617,7 +617,8 @@ ANNOUNCE_AFTER_S = 60.0
 def _say_estimate(spec: Any, evaluator: BatchEvaluator, workers: int) -> float | None:
     """Time the first designs of the spec (after 8 to warm up; chunks of its chunk size, up
     to 1024 designs or 0.3 s) and, when the whole sweep is estimated above
-    ANNOUNCE_AFTER_S, say so on stderr (designs, seconds at the measured rate). Returns the estimate (s), None when skipped."""
+    ANNOUNCE_AFTER_S, say so on stderr (designs, seconds at the measured rate). Returns
+    the estimate (s), None when skipped."""
     n = spec.n_designs
     if n <= 1000:  # under a minute at any rate the fast path has (the slowest column: ×8)
         return None
