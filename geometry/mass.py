@@ -157,6 +157,51 @@ def check_mesh(mesh: trimesh.Trimesh, name: str) -> None:
         raise ParameterError(f"mesh of {name}: volume {mesh.volume:.3g} <= 0 (inside out)")
 
 
+def winding_number(triangles: np.ndarray, points: np.ndarray, block: int = 4096) -> np.ndarray:
+    """Generalised winding number of closed triangle soup ``triangles`` (F, 3, 3) at
+    ``points`` (P, 3): Σ solid angles / 4π (Van Oosterom & Strackee 1983), 1 inside an
+    outward-oriented closed shell, 0 outside, ½ on its surface."""
+    out = np.zeros(len(points))
+    for k in range(0, len(triangles), block):
+        t = triangles[k : k + block]
+        a, b, c = (t[None, :, i, :] - points[:, None, :] for i in range(3))
+        la, lb, lc = (np.linalg.norm(x, axis=-1) for x in (a, b, c))
+        num = np.einsum("pfi,pfi->pf", a, np.cross(b, c))
+        dot = lambda x, y: np.einsum("pfi,pfi->pf", x, y)  # noqa: E731
+        den = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la
+        out += 2.0 * np.arctan2(num, den).sum(axis=1)
+    return out / (4.0 * np.pi)
+
+
+def check_shells(mesh: trimesh.Trimesh, name: str, samples: int = 256) -> None:
+    """Refuse a mesh whose closed shells overlap (two cubes meshed into one STL): its
+    divergence-theorem volume counts the overlap twice. Each outward shell's vertices,
+    edge midpoints and face centroids (up to ``samples``) are tested against the other
+    shells by their winding number; a cavity (an inward shell, negative volume) is a
+    valid solid and is not tested. Overlaps no sample point reaches (two bars crossing
+    without a vertex inside the other) pass: a bound of this check."""
+    shells = mesh.split(only_watertight=False) if len(mesh.faces) else []
+    if len(shells) < 2:
+        return
+    rng = np.random.default_rng(0)
+    for i, sh in enumerate(shells):
+        if sh.volume <= 0:
+            continue
+        others = [o for j, o in enumerate(shells) if j != i]
+        tri = np.concatenate([o.triangles for o in others])
+        edges = sh.vertices[sh.edges_unique].mean(axis=1)
+        pts = np.concatenate([sh.vertices, edges, sh.triangles_center])
+        if len(pts) > samples:
+            pts = pts[rng.choice(len(pts), samples, replace=False)]
+        w = winding_number(tri, pts)
+        if np.any(w > 0.75):
+            raise ParameterError(
+                f"mesh of {name}: self-intersecting: {len(shells)} closed shells and shell "
+                f"{i + 1} lies partly inside another, so its volume would count the overlap "
+                "twice; merge them into one solid (a boolean union) before weighing"
+            )
+
+
 def weigh_mesh(
     mesh: trimesh.Trimesh, density: float, axis: str = "z", scale: float = MM
 ) -> PartMass:

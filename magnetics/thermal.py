@@ -287,7 +287,9 @@ def time_to_limits(
     w0 = Vi @ (t0 + p)
 
     def temps(t: np.ndarray) -> np.ndarray:
-        e = np.exp(np.minimum(np.outer(lam.real, t), 700.0))  # past e^700 every limit is crossed
+        e = np.exp(
+            np.minimum(np.outer(lam.real, t), 300.0)
+        )  # past e^300 every limit is crossed (e^700 × V w0 overflowed, issue 32)
         return ((V @ (e * w0[:, None])).real - p[:, None]).T
 
     grid = np.concatenate([[0.0], np.logspace(-3, 6, 400)])

@@ -90,6 +90,8 @@ from mrclutch.uncertainty import (
 
 #: Largest actuator delay accepted (s): beyond it no haptic loop renders anything.
 MAX_DELAY = 1.0
+#: rad/s: the slowest input speed accepted (``Operating.__post_init__``).
+MIN_INPUT_SPEED = 1e-6
 #: Where the haptic model's actuator delay comes from (``Operating.delay_source``).
 DELAY_SOURCES: tuple[str, ...] = ("fixed", "geometry")
 
@@ -119,7 +121,9 @@ class Operating:
         j = self.max_current_density
         if j is not None and not (math.isinf(j) and j > 0):
             check_positive("max_current_density", j, " A/m²")
-        check_range("input_speed", self.input_speed, 0.0, 1e5, " rad/s", lo_open=True)
+        # 1e-6 rad/s (1e-5 rpm, a turn in 12 days) is the slowest input: nearer 0 the drag
+        # figures underflow and the stability search finds no scale (1e-300 rpm, issue 32)
+        check_range("input_speed", self.input_speed, MIN_INPUT_SPEED, 1e5, " rad/s")
         check_range("delay", self.delay, 0.0, MAX_DELAY, " s")
         check_range("coil_temperature", self.coil_temperature, -60.0, 250.0, " °C")
         lo, hi = FLUIDS[MRF].temperature_range

@@ -350,7 +350,7 @@ class Evaluation:
             motor = {**dict.fromkeys(mr_m), "actuator": MOTOR, "gearing": None, "note": why}
             zw["motor"] = {**dict.fromkeys(zw["mr"]), "note": why}
             hand["motor"] = {**_nones(hand["mr"]), "note": why}
-        return {
+        out = {
             "design": self.design.name,
             "fidelity": self.fidelity,
             "clutch": self.clutch.as_json(),
@@ -367,6 +367,63 @@ class Evaluation:
             "unavailable": dict(self.unavailable),
             "source": self.source,
         }
+        out["nulls"] = null_notes(out)
+        return out
+
+
+#: Why a figure is NaN (null in JSON) where that is its documented meaning, by key.
+NAN_MEANS: dict[str, str] = {
+    "resonance_hz": "no resonance: the free lever is overdamped (every zero of Eq. 2 is "
+    "real; mrclutch.haptics.model.resonance)",
+    "B_N_s_per_m": "no damping grid: B_top is unbounded (every damper renders passively at "
+    "K = 0), so [0, B_top] cannot be sampled; the intercepts and the area say the rest",
+    "K_max_N_per_m": "no passive K >= 0 at that damping (the Z-width is empty there), or no "
+    "damping grid (B_N_s_per_m null)",
+    "bandwidth_gain": "one side has no bandwidth (the motor unavailable, or no crossing)",
+    "bandwidth_gain_lumped": "one side has no bandwidth (the motor unavailable)",
+}
+NAN_MEANS["K_min_N_per_m"] = NAN_MEANS["K_max_N_per_m"]
+#: What an infinite figure (null in JSON, which has no infinity) means, by key.
+INF_MEANS: dict[str, str] = {
+    "time_to_wire_limit_s": "never: the coil stays below its temperature limit at the peak current",
+    "time_to_fluid_limit_s": "never: the fluid stays below its temperature limit at the "
+    "peak current",
+}
+_UNBOUNDED = "unbounded (inf): no finite limit exists; JSON has no infinity"
+
+
+def null_notes(data: Mapping[str, Any]) -> dict[str, str]:
+    """Every figure of an evaluation's JSON that would be null (None, NaN or ±inf), by its
+    path ("zwidth/mr/K_max_N_per_m[3]" as "zwidth/mr/K_max_N_per_m"), with why: the
+    documented meaning of a NaN or an inf, or the note of an unavailable side. Figures
+    left without a reason would be a bug (tests/mrclutch/test_robust_inputs.py)."""
+    out: dict[str, str] = {}
+
+    def walk(v: Any, path: tuple[str, ...], note: str | None) -> None:
+        if isinstance(v, Mapping):
+            here = v.get("note") if isinstance(v.get("note"), str) else note
+            for k, x in v.items():
+                if k not in ("nulls", "note"):
+                    walk(x, (*path, str(k)), here)
+            return
+        if isinstance(v, (list, tuple, np.ndarray)) and np.ndim(v) > 0:
+            for x in v:
+                walk(x, path, note)
+            return
+        if v is None:
+            why = note or NAN_MEANS.get(path[-1])
+        elif isinstance(v, (float, np.floating)) and math.isnan(v):
+            why = note or NAN_MEANS.get(path[-1])
+        elif isinstance(v, (float, np.floating)) and math.isinf(v):
+            why = INF_MEANS.get(path[-1], _UNBOUNDED)
+        else:
+            return
+        key = "/".join(path)
+        if key not in out:
+            out[key] = why or "not computed (no reason recorded)"
+
+    walk(data, (), None)
+    return out
 
 
 def _nones(d: Mapping[str, Any]) -> dict[str, Any]:

@@ -13,7 +13,9 @@ import argparse
 import importlib
 import os
 import sys
+import warnings
 from collections.abc import Collection, Sequence
+from pathlib import Path
 from typing import Any, TextIO
 
 from mrclutch.cli.errors import CLIError
@@ -152,6 +154,22 @@ def _silence_stdout(stream: TextIO) -> None:
     os.close(devnull)
 
 
+def _report_warnings(command: str, caught: list[warnings.WarningMessage]) -> None:
+    """Numerical libraries' RuntimeWarnings (overflow in an intermediate step) never reach
+    the terminal raw: one line says how many and the first; other warnings are shown as
+    usual. (A command that ends in an error drops them: its one line says why.)"""
+    numeric = [w for w in caught if issubclass(w.category, RuntimeWarning)]
+    for w in caught:
+        if not issubclass(w.category, RuntimeWarning):
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno)
+    if numeric:
+        first = numeric[0]
+        where = f"{Path(first.filename).parent.name}/{Path(first.filename).name}:{first.lineno}"
+        print(f"mrclutch {command}: note: {len(numeric)} numerical warning(s) in intermediate "
+              f"steps (first: {str(first.message).splitlines()[0]}, {where}); the figures "
+              "printed are finite or say why not", file=sys.stderr)  # fmt: skip
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run one command; its exit status (0, 2 for bad input or an output that cannot be
     written, 130 interrupted, 141 standard output closed early)."""
@@ -189,7 +207,9 @@ def _run(argv: Sequence[str] | None) -> int:
                    importlib.import_module("geometry.atomic").OutputError)  # fmt: skip
     try:
         check_outputs(args)
-        code = int(args.func(args) or 0)
+        with warnings.catch_warnings(record=True) as caught:
+            code = int(args.func(args) or 0)
+        _report_warnings(args.command, caught)
         sys.stdout.flush()
         return code
     except StdoutError:

@@ -393,6 +393,18 @@ def felt_impedance(p: HapticParams, frequency: Any = DEFAULT_FREQUENCY) -> FeltI
     return FeltImpedance(b, m)
 
 
+def felt_notes(felt: FeltImpedance, frequency: float = DEFAULT_FREQUENCY) -> list[str]:
+    """Why a felt mass is negative: Im Z_p < 0 is a spring's reactance −k/ω, not a mass's
+    mω (k = −m ω²): the transmission's compliance before a heavily damped actuator."""
+    m = float(felt.mass)
+    if not m < 0:
+        return []
+    k = -m * (TWO_PI * frequency) ** 2
+    return [f"felt mass {m:.3g} kg is negative: at {frequency:g} Hz the unpowered lever's "
+            f"reactance is a spring's (Im Z_p < 0: the transmission's compliance before the "
+            f"damped actuator), felt as about {k:.3g} N/m, not as a mass"]  # fmt: skip
+
+
 # --- figures of one design -----------------------------------------------------------
 
 
@@ -423,4 +435,5 @@ def hand_figures(
         "felt_damping_N_s_per_m": felt.damping,
         "felt_mass_kg": felt.mass,
         "motion": {"amplitude_m": DEFAULT_AMPLITUDE, "frequency_hz": DEFAULT_FREQUENCY},
+        "notes": felt_notes(felt),
     }

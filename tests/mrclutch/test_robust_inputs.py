@@ -215,3 +215,131 @@ def test_workers_beyond_the_cpus_are_capped_and_said(capsys):
     assert capped("--workers", 10_000, said.append) == usable_cpus()
     assert said and "capped" in said[0]
     assert capped("--workers", 1, said.append) == 1 and len(said) == 1
+
+
+# ---- memory, long work (items 5, 7) and answers without holes (item 6) ---------------------
+
+
+def test_a_fem_size_that_cannot_fit_is_refused_with_the_smallest_that_fits(monkeypatch):
+    from geometry.section import build_section
+    from magnetics.fem import grid
+
+    sec = build_section(design_preset("paper").clutch)
+    n1, b1 = grid.memory_estimate(sec, 0.5e-3)
+    n2, b2 = grid.memory_estimate(sec, 0.25e-3)
+    assert n2 > 2 * n1 and b2 - b1 == grid.BYTES_PER_NODE * (n2 - n1)  # linear in nodes
+    monkeypatch.setenv("MRCLUTCH_FEM_MEMORY_GB", str(b2 / 2**30))  # 0.25 mm just fits
+    grid.check_memory(sec, 0.25e-3)
+    with pytest.raises(ParameterError, match="smallest size that fits is") as exc:
+        grid.check_memory(sec, 0.1e-3)
+    fits = float(str(exc.value).rsplit(" is ", 1)[1].split()[0]) * 1e-3
+    assert 0.1e-3 < fits <= 0.26e-3
+    assert grid.memory_estimate(sec, fits)[1] <= b2  # the size named does fit
+    with pytest.raises(ParameterError, match="smallest size"):
+        grid.build_grid(sec, 0.1e-3)  # refused before any mesh is built
+
+
+def test_field_at_a_size_beyond_memory_is_one_line(capsys, tmp_path):
+    png = tmp_path / "f.png"
+    code, _, err = _cli(["field", "--size-mm", "0.02", "--plot", str(png)], capsys)
+    assert code == 2 and "GiB" in err and "smallest size that fits" in err
+    assert not (tmp_path / "f.png").exists()
+
+
+def test_a_sweep_above_the_bound_needs_yes_and_a_long_one_says_how_long(tmp_path, capsys):
+    from mrclutch.cli.commands import design as design_cmd
+    from mrclutch.pipeline import BatchEvaluator
+    from mrclutch.sweep import load_spec
+
+    spec = tmp_path / "s.toml"
+    counts = "count = 216"  # 216³ = 1.0e7 designs, above the 1e7 that runs unasked
+    spec.write_text(f'[sweep]\nmode = "grid"\n[parameters]\ngap_mm = {{min = 0.2, max = 1.0, '
+                    f"{counts}}}\nzone_length_mm = {{min = 4, max = 8, {counts}}}\n"
+                    f"drum_thickness_mm = {{min = 0.1, max = 0.5, {counts}}}\n")  # fmt: skip
+    code, _, err = _cli(["sweep", str(spec), "--out", str(tmp_path / "r.csv")], capsys)
+    assert code == 2 and "--yes" in err and not (tmp_path / "r.csv").exists()
+    sp, _ = load_spec(spec)
+    seconds = design_cmd._say_estimate(sp, BatchEvaluator(design_preset("paper")), 1)
+    err = capsys.readouterr().err
+    assert seconds > 60 and "designs, about" in err and "designs/s" in err
+
+
+def test_every_null_of_an_evaluation_says_why():
+    d = design_preset("paper")
+    big = dataclasses.replace(d.clutch, gap=2e-3, drum_inner_diameter=0.25)
+    wide = dataclasses.replace(d, clutch=big)
+    free = dataclasses.replace(d, clutch=dataclasses.replace(d.clutch, gap=0.1e-3),
+                               operating=dataclasses.replace(d.operating, delay=0.0,
+                                                             input_speed=5000.0))  # fmt: skip
+    for design in (wide, free):
+        data = evaluate(design).as_json()
+        assert data["nulls"]
+        assert not any("no reason" in why for why in data["nulls"].values())
+    assert "overdamped" in data["nulls"]["haptic/resonance_hz"]
+    assert "unbounded" in data["nulls"]["zwidth/mr/B_top_N_s_per_m"]
+
+
+def test_a_negative_felt_mass_is_explained_as_the_spring_it_is():
+    from mrclutch.haptics.hand import FeltImpedance, felt_notes
+
+    assert felt_notes(FeltImpedance(1.0, 0.01)) == []
+    (note,) = felt_notes(FeltImpedance(1.0, -2.0), frequency=2.0)
+    assert "negative" in note and f"{2.0 * (2 * math.pi * 2.0) ** 2:.3g} N/m" in note
+
+
+def test_overlapping_shells_are_refused_and_separate_or_hollow_ones_weighed(tmp_path):
+    trimesh = pytest.importorskip("trimesh")
+    from geometry.mass import check_shells, winding_number
+
+    a = trimesh.creation.box((10, 10, 10))
+    b = a.copy()
+    b.apply_translation((5, 0, 0))
+    with pytest.raises(ParameterError, match="self-intersecting"):
+        check_shells(trimesh.util.concatenate([a, b]), "two")
+    far = a.copy()
+    far.apply_translation((30, 0, 0))
+    check_shells(trimesh.util.concatenate([a, far]), "apart")
+    inner = trimesh.creation.icosphere(2, 2.0)
+    inner.invert()  # a cavity: an inward shell inside the outer one
+    check_shells(trimesh.util.concatenate([trimesh.creation.icosphere(2, 4.0), inner]), "hollow")
+    w = winding_number(a.triangles, np.array([[0, 0, 0], [20, 0, 0]]))
+    assert w == pytest.approx([1.0, 0.0], abs=1e-9)
+
+
+def test_raw_runtime_warnings_become_one_line(capsys, monkeypatch):
+    import warnings
+
+    from mrclutch.cli import main as cli_main
+
+    def noisy(args):
+        for _ in range(5):
+            warnings.warn("overflow encountered in multiply", RuntimeWarning, stacklevel=1)
+        return 0
+
+    monkeypatch.setattr(cli_main, "build_parser", _parser_running(noisy))
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        assert cli_main.main(["haptic"]) == 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "5 numerical warning(s)" in err and "Warning:" not in err
+
+
+def _parser_running(func):
+    import argparse
+
+    def build(*_):
+        p = argparse.ArgumentParser()
+        p.add_argument("command")
+        p.set_defaults(func=func)
+        return p
+
+    return build
+
+
+def test_an_accuracy_below_the_references_own_error_is_answered_with_that_caveat():
+    from mrclutch.trust import REFERENCE_MESH_ERROR, choose
+
+    d = design_preset("paper")
+    assert not any("mesh-converged" in n for n in choose(d, 0.05).notes)
+    assert REFERENCE_MESH_ERROR == pytest.approx(0.0087, abs=1e-4)
+    assert any("mesh-converged" in n for n in choose(d, 1e-300).notes)

@@ -148,7 +148,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--yes",
         action="store_true",
-        help="run a sweep of more than 1e8 designs (refused without it: hours of work)",
+        help="run a sweep of more than 1e7 designs or a --verify-top of more than 1e4 FEM "
+        "solves (refused without it: hours of work)",
     )
     p.add_argument("--overwrite", action="store_true", help="replace an existing results file")
     p.add_argument("--workers", type=int, default=0, help="processes (0: in this process)")
@@ -364,6 +365,11 @@ def _evaluate(args: argparse.Namespace) -> int:
     print(format_evaluation(data))
     for note in data["clutch"]["notes"]:
         print(f"note: {note}")
+    seen = set()
+    for path, why in data.get("nulls", {}).items():  # "—" in the table: why, once per reason
+        if why not in seen and not path.startswith(("motor/", "zwidth/motor", "hand/motor")):
+            seen.add(why)
+            print(f"note: {path} — {why}")
     return 0
 
 
@@ -550,6 +556,7 @@ def format_hand(hand: dict) -> list[str]:
         f"{col(em, 'felt_damping_N_s_per_m')}  N·s/m",
         f"  worst hand for the MR pair: {h['m_kg']:g} kg, {h['b_N_s_per_m']:g} N·s/m, "
         f"{h['k_N_per_m']:g} N/m ({mr['hands_checked']} hands checked)",
+        *(f"  note ({side}): {n}" for side, d in hand.items() for n in d.get("notes") or ()),
     ]
 
 
@@ -607,9 +614,11 @@ def _report(args: argparse.Namespace) -> int:
     return 0
 
 
-#: A sweep of more designs than this runs only with --yes (issue 32: a 1e8-design grid
-#: is a day of work on one core at the fast path's ~4e3 designs/s).
-MAX_DESIGNS_UNASKED = 10**8
+#: A sweep of more designs than this runs only with --yes: above ~40 min on one core at
+#: the fast path's ~4e3 designs/s (specs stop at 1e8 designs, mrclutch.sweep.MAX_DESIGNS).
+MAX_DESIGNS_UNASKED = 10**7
+#: --verify-top beyond this many FEM solves runs only with --yes.
+MAX_FEM_UNASKED = 10**4
 #: Work estimated longer than this (s) is announced before it starts.
 ANNOUNCE_AFTER_S = 60.0
 
@@ -663,19 +672,37 @@ def _verify_options(args: argparse.Namespace, columns: tuple[str, ...],
     if key not in columns:
         raise CLIError(f"--objective {key}: not a column of this sweep ({', '.join(columns)})")
     if args.verify_fem_size_mm is None:
-        return load_error_map().reference_fem_size
+        size = load_error_map().reference_fem_size
+        if base is not None:
+            _check_fem_work(args, base, size)
+        return size
     mm = args.verify_fem_size_mm
     if not (math.isfinite(mm) and 0.02 <= mm <= 5.0):
         raise CLIError(f"--verify-fem-size-mm = {mm:g}: must be in [0.02, 5] mm")
     if base is not None:  # before the sweep: a size whose solves cannot fit is refused now
-        from geometry.section import build_section
-        from magnetics.fem.grid import check_memory
-
-        try:
-            check_memory(build_section(base.clutch), mm * 1e-3)
-        except ParameterError as exc:
-            raise CLIError(f"--verify-fem-size-mm: {exc}") from None
+        _check_fem_work(args, base, mm * 1e-3)
     return mm * 1e-3
+
+
+def _check_fem_work(args: argparse.Namespace, base: ClutchDesign, size: float) -> None:
+    """--verify-top's FEM solves: memory checked, more than MAX_FEM_UNASKED need --yes,
+    above a minute (at the FEM's measured rate per node) said on stderr."""
+    from geometry.section import build_section
+    from magnetics.fem.grid import check_memory, time_estimate
+
+    section = build_section(base.clutch)
+    try:
+        check_memory(section, size)
+    except ParameterError as exc:
+        raise CLIError(f"--verify-fem-size-mm: {exc}") from None
+    n = args.verify_top
+    if n > MAX_FEM_UNASKED and not args.yes:
+        raise CLIError(f"--verify-top {n}: more than {MAX_FEM_UNASKED} FEM solves; add --yes")
+    seconds = time_estimate(section, size, n)
+    if seconds > ANNOUNCE_AFTER_S:
+        print(f"mrclutch sweep: --verify-top {n}: {n} FEM solves at {size * 1e3:g} mm, about "
+              f"{_duration(seconds)} on one worker at the FEM's measured rate per grid node; "
+              "going on", file=sys.stderr)  # fmt: skip
 
 
 def _sweep(args: argparse.Namespace) -> int:

@@ -19,7 +19,15 @@ from geometry.export import (
     sidecar_path,
     step_solids,
 )
-from geometry.mass import analytic_mass, brep_mass, check_mesh, mesh_mass, weigh_mesh, weigh_shape
+from geometry.mass import (
+    analytic_mass,
+    brep_mass,
+    check_mesh,
+    check_shells,
+    mesh_mass,
+    weigh_mesh,
+    weigh_shape,
+)
 from geometry.params import DrumClutch
 from geometry.section import OUTPUT_PARTS, build_section
 from geometry.validation import ParameterError, check_positive
@@ -261,6 +269,7 @@ def _weigh_file(args: argparse.Namespace) -> int:
         name = path.stem
         rho = _densities(args, [name], hint=_stl_hint(path))[name]
         check_mesh(mesh, name)
+        check_shells(mesh, name)
         pm = weigh_mesh(mesh, rho, args.axis)
         results[name] = {"mass_kg": pm.mass, "inertia_kg_m2": pm.inertia, "density_kg_m3": rho}
         method = "mesh"

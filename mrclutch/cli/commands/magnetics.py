@@ -6,6 +6,7 @@ Nothing heavy at module level (magnetics, scikit-fem and matplotlib load inside 
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from typing import Any
 
@@ -20,7 +21,12 @@ from magnetics.fem import FEMConvergenceError, solve_fem
 from magnetics.network import flux_linkage as network_flux_linkage
 from magnetics.network import network_from_regions
 from magnetics.torque import torque_curve
-from mrclutch.cli.commands._common import add_design_args, load_clutch, print_json
+from mrclutch.cli.commands._common import (
+    add_design_args,
+    load_clutch,
+    load_design_args,
+    print_json,
+)
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.plots.magnetics import plot_field, plot_torque
 
@@ -171,11 +177,21 @@ def _field(args: argparse.Namespace) -> int:
     size = None
     if args.size_mm is not None:
         size = check_range("--size-mm", args.size_mm, 0.02, 5.0, " mm") * 1e-3
-    section = build_section(load_clutch(args))
+    design = load_design_args(args)
+    section = build_section(design.clutch)
     try:
         sol = solve_fem(section, args.current, size=size)
     except FEMConvergenceError as exc:
         raise CLIError(str(exc)) from None
     plot_field(section, sol, args.plot)  # through the output layer
     print(f"wrote {args.plot}: |B| max {sol.b.max():.3g} T, {sol.iterations} Newton iterations")
+    limit = design.current_limit
+    if abs(args.current) > limit:  # a field the clutch cannot carry: say why it is so high
+        c = design.clutch
+        j = abs(args.current) / (math.pi * c.wire_diameter**2 / 4) * 1e-6
+        amps = abs(args.current)
+        print(f"note: {amps:g} A is {amps / limit:.3g}× the design's current limit "
+              f"({limit:.3g} A): {j:.3g} A/mm² in the copper, which the wire does not "
+              "survive; past the steel's saturation (about 2 T) the rest of |B| is the "
+              f"air-core field of {c.coil_turns * amps:.3g} ampere-turns")  # fmt: skip
     return 0
