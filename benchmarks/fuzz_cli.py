@@ -2,24 +2,45 @@
 
     python benchmarks/fuzz_cli.py [--n 10000] [--seed 0] [--workers 2] [--mem-gb 4]
 
-Each input is either a design file whose values are drawn from extremes (0, negative, NaN,
-±inf, 1e±300, huge integers, fractions for integer fields, strings, booleans) run through a
-fast command (``evaluate --fidelity fast``, ``haptic``, ``torque``, ``scale``, ``inertia``
-is left out: CAD takes seconds), or random flags and values for those commands. The
-reference fidelity, FEM and the file-writing options are left out for speed (their bad
-input is covered by tests/mrclutch/test_cli_errors.py).
+Input classes (``CLASSES``, drawn with their weights; each input's class is in its record):
+
+* ``extremes``: a design file whose values are drawn from extremes (0, negative, NaN, ±inf,
+  1e±300, huge integers, fractions for integer fields, strings, booleans) run through a
+  fast command (``evaluate --fidelity fast``, ``torque``, rarely ``scale``: seconds), or
+  random flags and values for the analytic commands;
+* ``structure``: design files whose *structure* is wrong (issue 32): ``base`` as a list or
+  a table, a section as a string or an array, arrays nested past the parser, names as
+  tables, control characters and stray bytes, empty or truncated TOML;
+* ``files``: a FIFO, a device (/dev/zero, /dev/null), a directory, a file over the size
+  limit given as the design file or the sweep spec;
+* ``options``: options that only the edge may refuse: ``optimize --vary`` with inf/NaN/
+  reversed bounds, ``--seed`` out of 32 bits, ``sweep --connect-timeout`` non-finite,
+  ``field --size-mm`` / ``--verify-fem-size-mm`` too small for memory, ``--accuracy``;
+* ``valid``: a valid design (a few keys drawn inside their ranges: 1–20 drums, large
+  diameters, extreme but accepted operating points and transmissions) through
+  ``evaluate --json``: it must answer (exit 0) and every null must have its reason
+  under ``nulls`` (or a ``note`` beside it); its design file must also round-trip
+  (``design_to_toml`` → ``load_design``);
+* ``spec``: a tiny sweep spec, fuzzed, with ``--out`` in a folder of its own: a refusal
+  leaves no file there, an answer leaves a complete one (a row per design).
 
 Counted, per input:
 
 * ``traceback``: an exception escaping ``main`` (anything but SystemExit 0/2, or a return
   code other than 0, 2, 3 and 130);
+* ``refused``: a valid design (``load_design`` accepts it) refused (exit 2), or a design
+  file that does not load back to the same design;
 * ``nan``: ``nan`` printed (text or JSON) without any ``note`` in the output;
+* ``null``: a null in ``evaluate --json`` without a reason (``nulls`` or a ``note``);
+* ``partial``: a file left behind by a refused command, or an incomplete sweep file;
 * ``memory``: MemoryError, or the worker killed; each worker runs under
   ``resource.setrlimit(RLIMIT_AS)`` so a blowup fails fast instead of swapping;
-* ``slow``: an input that took more than ``--timeout`` seconds (SIGALRM).
+* ``slow``: an input that took more than ``--timeout`` seconds (SIGALRM): a hang.
 
 Workers are child processes (this script with ``--child``); the parent restarts a worker
 after a crash at the next input and prints the counts and a few examples of each class.
+``run_input`` (one input, in process) is what tests/mrclutch/test_fuzz_sample.py runs on a
+small sample.
 """
 
 from __future__ import annotations
@@ -39,6 +60,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -111,6 +133,265 @@ def make_input(rng: random.Random, keys: dict[str, list[str]], folder: Path, k: 
     return argv
 
 
+#: Input classes and their weights (most inputs are refused in milliseconds; ``valid``
+#: evaluates a design, ~0.3 s).
+CLASSES = {"extremes": 0.15, "structure": 0.27, "files": 0.05, "options": 0.2,
+           "valid": 0.2, "spec": 0.13}  # fmt: skip
+
+#: Wrong structures for a design file: (section or key, TOML text) pieces.
+BAD_VALUES = ['["paper"]', '{a = 1}', "[[1], [2]]", "1", "true", '"x"', "1979-05-27",
+              "[" * 40 + "]" * 40, '"\\u0000"', '"a\\nb"', "{}", "[]", "-inf", "nan"]  # fmt: skip
+SECTION_NAMES = ("clutch", "operating", "transmission", "support", "amplifier",
+                 "laminations", "name", "sweep", "parameters")  # fmt: skip
+
+
+def make_structure(rng: random.Random, keys: dict[str, list[str]], folder: Path, k: int
+                   ) -> list[str]:  # fmt: skip
+    """A design file with a structural mismatch, through evaluate or torque."""
+    kind = rng.randrange(7)
+    if kind == 0:  # base of the wrong type
+        text = f"[clutch]\nbase = {rng.choice(BAD_VALUES)}\n"
+    elif kind == 1:  # a section given as a value
+        sec = rng.choice(SECTION_NAMES)
+        text = f'{sec} = {rng.choice(BAD_VALUES)}\n[clutch]\nbase = "paper"\n'
+        if sec == "clutch":
+            text = f"clutch = {rng.choice(BAD_VALUES)}\n"
+    elif kind == 2:  # deep nesting (past the parser or past MAX_DEPTH)
+        depth = rng.choice([9, 20, 500, 5000, 100000])
+        key = rng.choice(keys["clutch"])
+        text = f'[clutch]\nbase = "paper"\n{key} = ' + "[" * depth + "1" + "]" * depth + "\n"
+    elif kind == 3:  # a key's value of the wrong shape
+        sec = rng.choice([s for s in SECTIONS if s in keys])
+        key = rng.choice(keys[sec])
+        text = (
+            ('[clutch]\nbase = "paper"\n' if sec != "clutch" else "")
+            + f"[{sec}]\n"
+            + ('base = "paper"\n' if sec == "clutch" else "")
+            + f"{key} = {rng.choice(BAD_VALUES)}\n"
+        )
+    elif kind == 4:  # control characters, stray bytes, names
+        junk = "".join(chr(rng.randrange(0, 0x80)) for _ in range(rng.randint(1, 12)))
+        text = (
+            f'name = {json.dumps(junk)}\n[clutch]\nbase = "paper"\n'
+            if rng.random() < 0.5
+            else f'[clutch]\nbase = "paper"\n{junk}\n'
+        )
+    elif kind == 5:  # truncated or empty
+        full = '[clutch]\nbase = "paper"\ngap_mm = 0.5\n[operating]\nmax_current_A = 5\n'
+        text = full[: rng.randrange(len(full))]
+    else:  # tables nested as sections
+        text = '[clutch]\nbase = "paper"\n[clutch.sub]\na = 1\n[operating.x.y]\nz = 2\n'
+    path = folder / f"s{k}.toml"
+    if rng.random() < 0.1:
+        path.write_bytes(text.encode() + bytes(rng.randrange(256) for _ in range(8)))
+    else:
+        path.write_text(text)
+    return [rng.choice(["evaluate", "torque", "evaluate"]), str(path)]
+
+
+def make_files(rng: random.Random, folder: Path, k: int) -> list[str]:
+    """A design file or spec that is not a small regular file."""
+    kind = rng.randrange(5)
+    if kind == 0:
+        path = folder / f"fifo{k}"
+        os.mkfifo(path)
+    elif kind == 1:
+        path = Path(rng.choice(["/dev/zero", "/dev/null", "/dev/urandom"]))
+    elif kind == 2:
+        path = folder / f"dir{k}.toml"
+        path.mkdir()
+    elif kind == 3:
+        path = folder / f"big{k}.toml"
+        with open(path, "wb") as f:  # sparse: the size without the bytes
+            f.truncate((1 << 20) + rng.randrange(1, 1 << 30))
+    else:
+        path = folder / f"missing{k}.toml"
+    if rng.random() < 0.3:
+        return ["sweep", str(path), "--out", str(folder / f"out{k}" / "r.csv")]
+    return [rng.choice(["evaluate", "torque", "scale"]), str(path)]
+
+
+def make_options(rng: random.Random, folder: Path, k: int) -> list[str]:
+    """Options only the edge may refuse (none of them may start long work)."""
+    bad = ["inf", "-inf", "nan", "-1", "0", "1e999", "1e-300", "x", ""]
+    kind = rng.randrange(6)
+    if kind == 0:
+        name = rng.choice(["gap_mm", "zone_length_mm", "n_drums", "bogus_mm", "gap"])
+        lo, hi = rng.choice([*bad, "0.2", "1"]), rng.choice([*bad, "0.1"])
+        return ["optimize", "--vary", f"{name}={lo}:{hi}", "--no-verify"]
+    if kind == 1:
+        seed = rng.choice(["-1", str(2**32), str(10**23), "1.5", "x", "-99999999999"])
+        return ["optimize", "--seed", seed, "--no-verify"]
+    spec = folder / f"o{k}.toml"
+    spec.write_text('[sweep]\nmode = "grid"\n[parameters]\n'
+                    "gap_mm = {min = 0.5, max = 0.7, count = 2}\n")  # fmt: skip
+    out = str(folder / f"out{k}" / "r.csv")
+    if kind == 2:
+        return ["sweep", str(spec), "--out", out, "--scheduler", "tcp://127.0.0.1:9",
+                "--connect-timeout", rng.choice(["inf", "nan", "-1", "0", "1e9"])]  # fmt: skip
+    if kind == 3:
+        size = rng.choice(["0.02", "0.021", "0.001", "1e-300", "nan", "inf", "-1", "6", "0"])
+        return ["field", "--size-mm", size, "--plot", str(folder / f"out{k}" / "f.png")]
+    if kind == 4:
+        size = rng.choice(["0.02", "0.021", "0.01", "nan", "inf", "6", "-1"])
+        return ["sweep", str(spec), "--out", out, "--verify-top", rng.choice(["1", "0", "-3"]),
+                "--verify-fem-size-mm", size]  # fmt: skip
+    return ["evaluate", "--accuracy", rng.choice(["0", "1", "-1", "nan", "inf", "2", "x"])]
+
+
+#: Keys a valid design draws from, each with values its validation accepts.
+VALID_KEYS = {
+    "clutch": {"n_drums": [str(n) for n in range(1, 21)],
+               "gap_mm": ["0.1", "0.3", "1", "2"], "drum_inner_diameter_mm": ["6", "30", "250"],
+               "zone_length_mm": ["2", "6", "20"], "drum_thickness_mm": ["0.1", "0.3", "1"],
+               "coil_turns": ["20", "140", "600"], "wire_diameter_mm": ["0.1", "0.321", "1"]},
+    "operating": {"input_speed_rpm": ["0.001", "1", "530", "10000", "50000"],
+                  "max_current_A": ["0.01", "1", "7", "50", "1000"],
+                  "delay_ms": ["0", "0.01", "1", "10", "500"],
+                  "fluid_temperature_C": ["-40", "20", "130"],
+                  "max_current_density_A_per_mm2": ["1", "30", "inf"],
+                  "coil_temperature_C": ["-60", "20", "200"],
+                  "peak_duration_s": ["0.001", "1", "1000"]},
+    "transmission": {"lever_mm": ["1", "10", "170", "2000"], "gearing": ["0.01", "1", "100"],
+                     "k_N_per_m": ["1", "4000", "1e7"], "b_N_s_per_m": ["0", "20", "1e4"],
+                     "m2_g": ["0.1", "14", "1e5"], "workspace_mm": ["1", "50", "2000"]},
+    "amplifier": {"supply_voltage_V": ["1", "24", "1000"],
+                  "current_bandwidth_Hz": ["10", "2000", "1e7"]},
+}  # fmt: skip
+
+
+def make_valid(rng: random.Random, folder: Path, k: int) -> list[str]:
+    """A design file of valid values (a few keys), through evaluate --json."""
+    lines: dict[str, list[str]] = {"clutch": ['base = "paper"']}
+    for _ in range(rng.randint(1, 4)):
+        sec = rng.choice(list(VALID_KEYS))
+        key = rng.choice(list(VALID_KEYS[sec]))
+        if not any(ln.startswith(f"{key} =") for ln in lines.get(sec, [])):
+            lines.setdefault(sec, []).append(f"{key} = {rng.choice(VALID_KEYS[sec][key])}")
+    text = "".join(f"[{s}]\n" + "\n".join(v) + "\n" for s, v in lines.items())
+    path = folder / f"v{k}.toml"
+    path.write_text(text)
+    return ["evaluate", str(path), "--json"]
+
+
+def make_spec(rng: random.Random, folder: Path, k: int) -> list[str]:
+    """A tiny sweep spec (a few designs), fuzzed; --out in a folder of its own."""
+    params = []
+    for name in rng.sample(["gap_mm", "drum_thickness_mm", "n_drums", "zone_length_mm"],
+                           rng.randint(1, 2)):  # fmt: skip
+        lo = rng.choice(["0.2", "1", "4", "0", "-1", "nan", "inf", "1e300"])
+        hi = rng.choice(["0.5", "2", "8", "inf", "0.1", "1e300"])
+        count = rng.choice(["1", "2", "3", "0", "-1", "2.5", "1e9"])
+        params.append(f"{name} = {{min = {lo}, max = {hi}, count = {count}}}")
+    head = rng.choice(['mode = "grid"', 'mode = "random"\nsamples = 3', 'mode = "x"',
+                       'mode = "grid"\nchunk_size = 0',
+                       'mode = "grid"\nbase = ["paper"]'])  # fmt: skip
+    spec = folder / f"p{k}.toml"
+    spec.write_text(f"[sweep]\n{head}\n[parameters]\n" + "\n".join(params) + "\n")
+    return ["sweep", str(spec), "--out", str(folder / f"out{k}" / "r.csv"), "--no-progress"]
+
+
+def make_any(rng: random.Random, keys: dict[str, list[str]], folder: Path, k: int
+             ) -> tuple[str, list[str]]:  # fmt: skip
+    """(class, argv) of input k."""
+    cls = rng.choices(list(CLASSES), weights=list(CLASSES.values()))[0]
+    if cls == "extremes":
+        return cls, make_input(rng, keys, folder, k)
+    if cls == "structure":
+        return cls, make_structure(rng, keys, folder, k)
+    if cls == "files":
+        return cls, make_files(rng, folder, k)
+    if cls == "options":
+        return cls, make_options(rng, folder, k)
+    if cls == "valid":
+        return cls, make_valid(rng, folder, k)
+    return cls, make_spec(rng, folder, k)
+
+
+def nulls_unexplained(data: Any) -> list[str]:
+    """Paths of nulls in an evaluate JSON that neither ``nulls`` nor a ``note`` explains."""
+    reasons = data.get("nulls", {}) if isinstance(data, dict) else {}
+    out: list[str] = []
+
+    def walk(v: Any, path: tuple[str, ...], noted: bool) -> None:
+        if isinstance(v, dict):
+            noted = noted or isinstance(v.get("note"), str)
+            for key, x in v.items():
+                if key not in ("nulls", "note"):
+                    walk(x, (*path, str(key)), noted)
+        elif isinstance(v, list):
+            for x in v:
+                walk(x, path, noted)
+        elif v is None and not noted:
+            key = "/".join(path)
+            if not reasons.get(key) or "no reason" in reasons[key]:
+                out.append(key)
+
+    walk(data, (), False)
+    return out
+
+
+def check_input(cls: str, argv: list[str], code: int, text: str, folder: Path
+                ) -> tuple[str, str] | None:  # fmt: skip
+    """The issue-32 checks on one finished input: (class, detail) of a failure, or None."""
+    out_dirs = [
+        Path(a).parent for a in argv if "/out" in a and Path(a).parent.name.startswith("out")
+    ]
+    if code != 0:
+        for d in out_dirs:  # a refused command leaves nothing behind
+            left = [p.name for p in d.iterdir()] if d.exists() else []
+            if left:
+                return "partial", f"{argv[0]} exit {code} left {left[:3]}"
+    elif argv[0] == "sweep" and out_dirs:
+        csv = out_dirs[0] / "r.csv"
+        spec_rows = _spec_designs(argv[1])
+        rows = csv.read_bytes().count(b"\n") - 1 if csv.exists() else -1
+        if spec_rows is not None and rows != spec_rows:
+            return "partial", f"sweep wrote {rows} rows for {spec_rows} designs"
+    if cls != "valid":
+        return None
+    from geometry.validation import ParameterError
+    from mrclutch.design import design_from_mapping, design_to_toml, load_design
+
+    try:
+        design = load_design(argv[1])
+    except ParameterError:  # the draw crossed a rule between keys: not a valid design
+        return None
+    if code != 0:
+        return "refused", f"valid design refused (exit {code})"
+    back = design_from_mapping(__import__("tomllib").loads(design_to_toml(design)))
+    if design_to_toml(back) != design_to_toml(design) or back.name != design.name:
+        return "refused", "design file does not round-trip"
+    missing = nulls_unexplained(json.loads(text))
+    if missing:
+        return "null", f"null without a reason: {missing[0]}"
+    return None
+
+
+def _spec_designs(path: str) -> int | None:
+    from mrclutch.sweep import load_spec
+
+    try:
+        return load_spec(path)[0].n_designs
+    except Exception:
+        return None
+
+
+def run_input(cls: str, argv: list[str], timeout: float, folder: Path) -> tuple[str, str]:
+    """(class, detail) of one input: ``run_one``'s, then ``check_input``'s."""
+    result = run_one(argv, timeout)
+    if result[0] not in ("ok", "nan"):
+        return result[:2]
+    code, text = int(result[1]), result[2]
+    try:
+        bad = check_input(cls, argv, code, text, folder)
+    except Exception as exc:  # a check that cannot even load a "valid" design
+        return "refused", f"{type(exc).__name__}: {str(exc)[:120]}"
+    if bad:
+        return bad
+    return result[:2]
+
+
 def run_one(argv: list[str], timeout: float) -> tuple[str, str]:
     """(class, detail) of one call of main: ok, traceback, nan, memory or slow."""
     from mrclutch.cli.main import main
@@ -129,10 +410,13 @@ def run_one(argv: list[str], timeout: float) -> tuple[str, str]:
         code = exc.code if isinstance(exc.code, int) else 2
         if code not in (0, 2):
             return "traceback", f"SystemExit({exc.code!r})"
+        return "ok", str(code), out.getvalue()  # type: ignore[return-value]
     except MemoryError:
         return "memory", "MemoryError"
     except TimeoutError as exc:
         return "slow", f"{argv[0]}: {exc}"
+    except RecursionError:
+        return "traceback", "RecursionError"
     except Exception as exc:
         return "traceback", f"{type(exc).__name__}: {str(exc)[:160]}"
     finally:
@@ -144,7 +428,7 @@ def run_one(argv: list[str], timeout: float) -> tuple[str, str]:
     if NAN.search(text) and "note" not in text.lower():
         line = next(ln for ln in text.splitlines() if NAN.search(ln))
         return "nan", line.strip()[:160]
-    return "ok", str(code)
+    return "ok", str(code), text  # type: ignore[return-value]
 
 
 def child(args: argparse.Namespace) -> None:
@@ -159,14 +443,14 @@ def child(args: argparse.Namespace) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         for k in range(args.start, args.stop):
             rng = random.Random(f"{args.seed}-{k}")
-            argv = make_input(rng, keys, Path(tmp), k)
+            kind, argv = make_any(rng, keys, Path(tmp), k)
             t = time.perf_counter()
-            cls, detail = run_one(argv, args.timeout)
-            rec = {"k": k, "class": cls, "detail": detail, "argv": argv,
+            cls, detail = run_input(kind, argv, args.timeout, Path(tmp))
+            rec = {"k": k, "class": cls, "detail": detail, "argv": argv, "kind": kind,
                    "s": time.perf_counter() - t}  # fmt: skip
-            files = [a for a in argv if a.endswith(".toml")]
-            if cls != "ok" and files:
-                rec["design"] = Path(files[0]).read_text()
+            files = [a for a in argv if a.endswith(".toml") and Path(a).is_file()]
+            if cls != "ok" and files and Path(files[0]).stat().st_size < 4096:
+                rec["design"] = Path(files[0]).read_text(errors="replace")
             report.write(json.dumps(rec) + "\n")
             report.flush()
 
@@ -203,7 +487,9 @@ def parent(args: argparse.Namespace) -> int:
     from concurrent.futures import ThreadPoolExecutor
 
     t0 = time.perf_counter()
-    counts = {"ok": 0, "traceback": 0, "nan": 0, "memory": 0, "slow": 0}
+    counts = {"ok": 0, "traceback": 0, "refused": 0, "nan": 0, "null": 0, "partial": 0,
+              "memory": 0, "slow": 0}  # fmt: skip
+    kinds: dict[str, int] = {}
     examples: dict[str, dict[str, list]] = {c: {} for c in counts}
     step = math.ceil(args.n / args.workers)
     ranges = [(s, min(s + step, args.n)) for s in range(0, args.n, step)]
@@ -211,6 +497,7 @@ def parent(args: argparse.Namespace) -> int:
         parts = list(pool.map(lambda r: run_range(args, *r), ranges))
     for rec in (r for part in parts for r in part):
         counts[rec["class"]] += 1
+        kinds[rec.get("kind", "?")] = kinds.get(rec.get("kind", "?"), 0) + 1
         if rec["class"] != "ok":
             ex = examples[rec["class"]].setdefault(rec["detail"][:90], [0, rec])
             ex[0] += 1
@@ -218,6 +505,7 @@ def parent(args: argparse.Namespace) -> int:
     dt = time.perf_counter() - t0
     print(f"{total} fuzzed inputs in {dt:.0f} s ({total / dt:.0f}/s), seed {args.seed}, "
           f"RLIMIT_AS {args.mem_gb:g} GiB")  # fmt: skip
+    print("  inputs by class: " + ", ".join(f"{k} {v}" for k, v in sorted(kinds.items())))
     for c, n in counts.items():
         print(f"  {c:<10} {n}")
     for c, exs in examples.items():
@@ -228,7 +516,7 @@ def parent(args: argparse.Namespace) -> int:
     slowest = sorted((r for part in parts for r in part), key=lambda r: -r.get("s", 0))[:3]
     for r in slowest:
         print(f"slowest: {r.get('s', 0):.1f} s  mrclutch {' '.join(r.get('argv') or [])}")
-    bad = counts["traceback"] + counts["nan"] + counts["memory"]
+    bad = sum(n for c, n in counts.items() if c not in ("ok", "slow")) + counts["slow"]
     return 1 if bad else 0
 
 

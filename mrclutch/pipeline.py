@@ -58,6 +58,7 @@ from mrclutch.haptics.actuator import (
 from mrclutch.haptics.delay import lag_stable_stiffness
 from mrclutch.haptics.hand import backdrive_force, hand_figures
 from mrclutch.haptics.model import (
+    StabilitySearchError,
     max_passive_stiffness,
     max_stable_stiffness,
     metrics_batch,
@@ -380,9 +381,15 @@ NAN_MEANS: dict[str, str] = {
     "K_max_N_per_m": "no passive K >= 0 at that damping (the Z-width is empty there), or no "
     "damping grid (B_N_s_per_m null)",
     "bandwidth_gain": "one side has no bandwidth (the motor unavailable, or no crossing)",
+    "max_stable_K_N_per_m": "unknown: the stability scan cannot resolve this loop (it would "
+    "need more than 2e6 frequencies a step: an extreme transmission or delay)",
+    "max_stable_K_torque_delay_N_per_m": "unknown: the stability scan cannot resolve this "
+    "loop with that delay, or the lags are not finite",
     "bandwidth_gain_lumped": "one side has no bandwidth (the motor unavailable)",
 }
 NAN_MEANS["K_min_N_per_m"] = NAN_MEANS["K_max_N_per_m"]
+NAN_MEANS["max_stable_K_typed_delay_N_per_m"] = NAN_MEANS["max_stable_K_N_per_m"]
+NAN_MEANS["max_stable_K_lags_N_per_m"] = NAN_MEANS["max_stable_K_torque_delay_N_per_m"]
 #: What an infinite figure (null in JSON, which has no infinity) means, by key.
 INF_MEANS: dict[str, str] = {
     "time_to_wire_limit_s": "never: the coil stays below its temperature limit at the peak current",
@@ -476,7 +483,8 @@ def evaluate(
     names = ZWIDTH_SIDES[: len(sides)]
     zws = {side: {key: zw[key][i] if np.ndim(zw[key]) > 1 else float(zw[key][i])
                   for key in ZWIDTH_KEYS} for i, side in enumerate(names)}  # fmt: skip
-    hand = {side: hand_figures(p, k) for side, p in zip(names, sides, strict=True)}
+    hand = {side: _hand_or_why(p, k, unavailable, side)
+            for side, p in zip(names, sides, strict=True)}  # fmt: skip
     gearing = em_tr.gearing if em_tr is not None else None
     return Evaluation(design, fidelity, fig, mr, em, gearing, mr_m, em_m, budget, zws, hand,
                       response_figures(design, resp, mr, unavailable), resp,
@@ -514,6 +522,28 @@ def with_measured(design: ClutchDesign, mr: HapticParams, current: float, source
         return mr, source
     names = {"m1": "m1", "b1": "b1", "delay": "delay", "f_max": "torque"}
     return replace(mr, **new), f"measured ({', '.join(names[k] for k in new)}) + {source}"
+
+
+def _hand_or_why(p: HapticParams, k: float, unavailable: dict[str, str], side: str
+                 ) -> dict[str, Any]:  # fmt: skip
+    """``hand_figures``, or (where the stability scan cannot resolve the loop) the same keys
+    None with a note, the reason also in ``unavailable``."""
+    try:
+        return hand_figures(p, k)
+    except StabilitySearchError as exc:
+        why = f"the hand figures are unknown: {exc}"
+        unavailable[f"hand_{side}"] = why
+        return {**_nones(HAND_KEYS), "notes": [], "note": why}
+
+
+#: The keys of ``hand_figures`` (nested), for a side whose figures are unavailable.
+HAND_KEYS: dict[str, Any] = {
+    "K_N_per_m": 0, "coupled_stable": 0, "max_stable_K_all_hands_N_per_m": 0,
+    "worst_hand": {"m_kg": 0, "b_N_s_per_m": 0, "k_N_per_m": 0}, "hands_checked": 0,
+    "max_stable_K_hands_off_N_per_m": 0, "max_passive_K_N_per_m": 0, "backdrive_force_N": 0,
+    "felt_damping_N_s_per_m": 0, "felt_mass_kg": 0,
+    "motion": {"amplitude_m": 0, "frequency_hz": 0},
+}  # fmt: skip
 
 
 def response_figures(design: ClutchDesign, resp: Any, mr: HapticParams,

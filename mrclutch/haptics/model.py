@@ -601,7 +601,7 @@ def _scan_imaginary_axis(
             break
         n = math.ceil(w_end / step) + 1
         if n > MAX_GRID:  # an absurd delay or stiffness: refuse rather than fill memory
-            raise ParameterError(
+            raise StabilitySearchError(
                 f"stability search: delay {tau:.3g} s needs more than {MAX_GRID:.0e} "
                 "frequencies per scan step; not a haptic loop"
             )
@@ -654,10 +654,16 @@ def _crossings(
     return wc[order], Kc[order], dirs[order]
 
 
+class StabilitySearchError(ParameterError):
+    """The stability scan would need more than MAX_GRID frequencies per step."""
+
+
 def max_stable_stiffness(p: HapticParams) -> Any:
     """Largest K [N/m] such that the free closed loop is stable for every K in (0, K]:
     the first crossing gain at which the count of right-half-plane roots turns positive
-    (module docstring; exact for a pure delay). inf if no crossing destabilises.
+    (module docstring; exact for a pure delay). inf if no crossing destabilises; NaN where
+    the scan would need more than MAX_GRID frequencies a step (StabilitySearchError: an
+    extreme transmission or delay), so the limit is unknown.
     Vectorised fields are handled design by design (slower than the numeric metrics)."""
     if p.shape:
         n = int(np.prod(p.shape))
@@ -665,7 +671,10 @@ def max_stable_stiffness(p: HapticParams) -> Any:
             **{f: np.ravel(np.broadcast_to(getattr(p, f), p.shape)) for f in _FIELDS}
         )
         return np.array([max_stable_stiffness(flat.item(i)) for i in range(n)]).reshape(p.shape)
-    _, Kc, dirs = _crossings(p)
+    try:
+        _, Kc, dirs = _crossings(p)
+    except StabilitySearchError:  # the scan cannot resolve this loop: the limit is unknown
+        return math.nan
     count = np.cumsum(2 * dirs)
     bad = np.nonzero(count > 0)[0]
     return float(Kc[bad[0]]) if bad.size else math.inf

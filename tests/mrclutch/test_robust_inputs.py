@@ -343,3 +343,14 @@ def test_an_accuracy_below_the_references_own_error_is_answered_with_that_caveat
     assert not any("mesh-converged" in n for n in choose(d, 0.05).notes)
     assert REFERENCE_MESH_ERROR == pytest.approx(0.0087, abs=1e-4)
     assert any("mesh-converged" in n for n in choose(d, 1e-300).notes)
+
+
+def test_a_loop_the_stability_scan_cannot_resolve_is_answered_with_that_reason():
+    d = design_preset("paper")
+    tr = dataclasses.replace(d.transmission, b=1e4, lever=2.0)
+    amp = dataclasses.replace(d.amplifier, current_bandwidth_hz=1e7)
+    data = evaluate(dataclasses.replace(d, transmission=tr, amplifier=amp)).as_json()
+    assert "stability search" in data["hand"]["mr"]["note"]
+    assert data["hand"]["mr"]["coupled_stable"] is None
+    assert data["haptic"]["bandwidth_hz"] > 0
+    assert not any("no reason" in why for why in data["nulls"].values())

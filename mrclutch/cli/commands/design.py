@@ -531,6 +531,8 @@ def format_zwidth(zw: dict) -> list[str]:
 def format_hand(hand: dict) -> list[str]:
     """Stability with a hand holding the lever, and the force felt in free motion."""
     mr, em = hand["mr"], hand["motor"]
+    if mr.get("note"):  # the MR side's hand figures are unavailable: say why, once
+        return ["With a hand on the lever (mrclutch.haptics.hand)", f"  {mr['note']}"]
     mo = mr["motion"]
     h = mr["worst_hand"]
     yes = {True: "yes", False: "no", None: "—"}
