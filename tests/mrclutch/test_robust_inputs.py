@@ -354,3 +354,19 @@ def test_a_loop_the_stability_scan_cannot_resolve_is_answered_with_that_reason()
     assert data["hand"]["mr"]["coupled_stable"] is None
     assert data["haptic"]["bandwidth_hz"] > 0
     assert not any("no reason" in why for why in data["nulls"].values())
+
+
+def test_no_valid_sweep_row_has_an_infinite_delay():
+    rng = np.random.default_rng(3)
+    n = 100
+    fields = {
+        "n_drums": rng.integers(1, 21, n).astype(float),
+        "gap": rng.uniform(0.1e-3, 2e-3, n),
+        "drum_inner_diameter": rng.uniform(6e-3, 60e-3, n),
+        "coil_turns": rng.integers(20, 400, n).astype(float),
+        "wire_diameter": rng.uniform(0.1e-3, 1e-3, n),
+    }
+    out = evaluate_batch(fields, design_preset("paper"))
+    ok = out["valid"] == 1
+    assert ok.sum() > n // 4
+    assert np.all(np.isfinite(out["torque_delay_s"][ok]))
