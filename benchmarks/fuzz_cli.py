@@ -135,8 +135,8 @@ def make_input(rng: random.Random, keys: dict[str, list[str]], folder: Path, k: 
 
 #: Input classes and their weights (most inputs are refused in milliseconds; ``valid``
 #: evaluates a design, ~0.3 s).
-CLASSES = {"extremes": 0.15, "structure": 0.27, "files": 0.05, "options": 0.2,
-           "valid": 0.2, "spec": 0.13}  # fmt: skip
+CLASSES = {"extremes": 0.12, "structure": 0.33, "files": 0.06, "options": 0.22,
+           "valid": 0.13, "spec": 0.14}  # fmt: skip
 
 #: Wrong structures for a design file: (section or key, TOML text) pieces.
 BAD_VALUES = ['["paper"]', '{a = 1}', "[[1], [2]]", "1", "true", '"x"', "1979-05-27",
