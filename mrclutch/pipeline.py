@@ -388,6 +388,11 @@ NAN_MEANS: dict[str, str] = {
     "bandwidth_gain_lumped": "one side has no bandwidth (the motor unavailable)",
 }
 NAN_MEANS["K_min_N_per_m"] = NAN_MEANS["K_max_N_per_m"]
+NAN_MEANS["delay"] = (
+    "the delay's range is not given: it spans the typed delay and the torque "
+    "response's equivalent delay at the corners (mrclutch.robust)"
+)
+NAN_MEANS["fluid_temperature"] = "the fluid's temperature range is not given: the operating one"
 NAN_MEANS["max_stable_K_typed_delay_N_per_m"] = NAN_MEANS["max_stable_K_N_per_m"]
 NAN_MEANS["max_stable_K_lags_N_per_m"] = NAN_MEANS["max_stable_K_torque_delay_N_per_m"]
 #: What an infinite figure (null in JSON, which has no infinity) means, by key.

@@ -63,6 +63,7 @@ from mrclutch.pipeline import (
     FIDELITIES,
     BatchEvaluator,
     evaluate,
+    null_notes,
 )
 from mrclutch.robust import ROBUST_COLUMNS, RobustBatchEvaluator, verdicts_json
 from mrclutch.sweep import is_parquet, load_spec, run_sweep
@@ -359,6 +360,7 @@ def _evaluate(args: argparse.Namespace) -> int:
         raise CLIError(f"--accuracy = {args.accuracy}: need 0 < accuracy < 1 (relative)")
     ev = evaluate(design, args.fidelity, accuracy=args.accuracy)
     data = verdicts_json(ev, robust=not args.no_uncertainty)
+    data["nulls"] = null_notes(data)  # the verdicts' sections too
     if args.json:
         print_json(data)
         return 0
