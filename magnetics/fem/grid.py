@@ -29,6 +29,8 @@ from __future__ import annotations
 import functools
 import itertools
 import math
+import os
+import resource
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -150,9 +152,6 @@ def time_estimate(section: Section, size: float, solves: int, mesh: str = "unifo
 def memory_budget() -> float:
     """Bytes one FEM solve may use: ``MRCLUTCH_FEM_MEMORY_GB`` (default 4 GiB), never more
     than half the machine's memory nor more than an address-space limit (RLIMIT_AS) allows."""
-    import os
-    import resource
-
     try:
         budget = float(os.environ.get("MRCLUTCH_FEM_MEMORY_GB", "4")) * 2**30
     except ValueError:
