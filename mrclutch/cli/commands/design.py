@@ -12,8 +12,10 @@ from typing import Any
 
 import numpy as np
 
+from geometry.section import build_section
 from geometry.validation import ParameterError, check_choice, check_int
 from magnetics.error_map import load as load_error_map
+from magnetics.fem.grid import check_memory, time_estimate
 from mrclutch.cli.commands._common import (
     add_design_args,
     atomic_path,
@@ -691,9 +693,6 @@ def _verify_options(args: argparse.Namespace, columns: tuple[str, ...],
 def _check_fem_work(args: argparse.Namespace, base: ClutchDesign, size: float) -> None:
     """--verify-top's FEM solves: memory checked, more than MAX_FEM_UNASKED need --yes,
     above a minute (at the FEM's measured rate per node) said on stderr."""
-    from geometry.section import build_section
-    from magnetics.fem.grid import check_memory, time_estimate
-
     section = build_section(base.clutch)
     try:
         check_memory(section, size)

@@ -17,7 +17,8 @@ from geometry.validation import ParameterError, check_choice, check_range
 from magnetics.circuit import path_from_section
 from magnetics.drag import ROOM_TEMPERATURE
 from magnetics.dynamics import flux_linkage
-from magnetics.fem import FEMConvergenceError, solve_fem
+from magnetics.fem import DEFAULT_SIZE, FEMConvergenceError, solve_fem
+from magnetics.fem.grid import check_memory, time_estimate
 from magnetics.network import flux_linkage as network_flux_linkage
 from magnetics.network import network_from_regions
 from magnetics.torque import torque_curve
@@ -92,10 +93,6 @@ def _torque(args: argparse.Namespace) -> int:
     clutch = load_clutch(args)
     methods = ("network", "fem") if args.method == "both" else (args.method,)
     if "fem" in methods and currents.size > 1:  # long FEM work says how long first
-        from geometry.section import build_section
-        from magnetics.fem import DEFAULT_SIZE
-        from magnetics.fem.grid import check_memory, time_estimate
-
         section = build_section(clutch)
         check_memory(section, DEFAULT_SIZE)
         seconds = time_estimate(section, DEFAULT_SIZE, int(currents.size))
