@@ -439,6 +439,13 @@ def child(args: argparse.Namespace) -> None:
 
     warnings.simplefilter("ignore")
     keys = preset_keys()
+    # untimed warm-up: the first evaluation compiles the network's numba kernel (tens of
+    # seconds on a loaded machine); a SIGALRM inside that compile leaves numba's dispatcher
+    # half-built for the rest of the worker
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        from mrclutch.cli.main import main
+
+        main(["evaluate", "--json"])
     report = sys.stdout
     with tempfile.TemporaryDirectory() as tmp:
         for k in range(args.start, args.stop):

@@ -350,7 +350,7 @@ def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> Clutc
         raise ParameterError(f"{where}: support.bearing = {bearing!r}: must be a string")
     sup = _read_table(sup_table, _SUPPORT_KEYS, f"{where}: support")
     if "bearings" in sup:
-        if sup["bearings"] != int(sup["bearings"]):
+        if not math.isfinite(sup["bearings"]) or sup["bearings"] != int(sup["bearings"]):
             raise ParameterError(f"{where}: support.bearings = {sup['bearings']:g}: whole number")
         sup["bearings"] = int(sup["bearings"])
     with _file_key(sup_table, _SUPPORT_KEYS, f"{where}: support"):

@@ -40,7 +40,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from geometry import regions
-from geometry.params import INTEGER_FIELDS, LENGTH_FIELDS, broadcast_fields, valid
+from geometry.params import (
+    INTEGER_FIELDS,
+    LENGTH_FIELDS,
+    LENGTH_RANGES,
+    broadcast_fields,
+    valid,
+)
 from geometry.validation import (
     ParameterError,
     check_choice,
@@ -433,6 +439,12 @@ def parse_bounds(specs: Sequence[str]) -> dict[str, tuple[float, float]]:
             raise ParameterError(f"--vary {s!r}: LO and HI must be numbers (mm)") from None
         if not (math.isfinite(a) and math.isfinite(b) and 0 < a < b):
             raise ParameterError(f"--vary {s!r}: need finite 0 < LO < HI (mm)")
+        lo_ok, hi_ok = (r[1] for r in LENGTH_RANGES if r[0] == name[:-3]), (
+            r[2] for r in LENGTH_RANGES if r[0] == name[:-3])  # fmt: skip
+        least, most = next(lo_ok), next(hi_ok)
+        if a * 1e-3 < least or b * 1e-3 > most:  # the optimiser would only see invalid rows
+            raise ParameterError(f"--vary {s!r}: {name} must stay within [{least * 1e3:g}, "
+                                 f"{most * 1e3:g}] mm")  # fmt: skip
         out[name[:-3]] = (a * 1e-3, b * 1e-3)
     return out
 

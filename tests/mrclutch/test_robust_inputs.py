@@ -141,6 +141,8 @@ def _cli(argv, capsys):
         ('operating = "x"\n[clutch]\nbase = "paper"\n', "operating"),
         ('transmission = [1]\n[clutch]\nbase = "paper"\n', "transmission"),
         ('name = {a = 1}\n[clutch]\nbase = "paper"\n', "name"),
+        ('[clutch]\nbase = "paper"\n[support]\nbearings = -inf\n', "support.bearings"),
+        ('[clutch]\nbase = "paper"\n[support]\nbearings = nan\n', "support.bearings"),
         ('[clutch]\nbase = "paper"\ngap_mm = ' + "[" * 12 + "1" + "]" * 12 + "\n", "gap_mm"),
         ('[clutch]\nbase = "paper"\ngap_mm = ' + "[" * 50000 + "]" * 50000 + "\n", "nested"),
     ],
@@ -178,6 +180,7 @@ def test_a_fifo_a_device_and_a_huge_file_are_refused_at_once(tmp_path, capsys):
     [
         (["optimize", "--vary", "gap_mm=0.2:inf"], "finite"),
         (["optimize", "--vary", "gap_mm=nan:1"], "finite"),
+        (["optimize", "--vary", "zone_length_mm=1e-300:0.1"], "must stay within"),
         (["optimize", "--seed", "-1"], "--seed"),
         (["optimize", "--seed", str(10**23)], "--seed"),
         (

@@ -842,6 +842,9 @@ def _optimize_inputs(args: argparse.Namespace) -> tuple[ClutchDesign, tuple[int,
     ).resolved(base)
     if args.verify_top is not None and args.verify_top < 1:
         raise CLIError(f"--verify-top = {args.verify_top}: must be >= 1")
+    check_int("--seed", args.seed, 0, MAX_SEED)
+    if args.vary:
+        parse_bounds(args.vary)  # bad bounds refused before any work
     return base, drums, cons
 
 
@@ -856,7 +859,6 @@ def _optimize(args: argparse.Namespace) -> int:
         if given:
             raise CLIError(f"{opt}: only for the Pareto set (without --objective)")
     check_int("--tries", args.tries, 1, MAX_CANDIDATES)
-    check_int("--seed", args.seed, 0, MAX_SEED)
     t0 = time.perf_counter()
     opt = optimize(
         base,
