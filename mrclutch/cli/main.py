@@ -44,8 +44,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
                "plots, HTML"),
     "sweep": (_DESIGN, "evaluate a grid or random sample of designs on the fast path (CSV or "
               "Parquet)"),
-    "optimize": (_DESIGN, "maximise rendering bandwidth (area, Z-width or transparency) "
-                 "under torque, mass, envelope and stability/passivity limits"),
+    "optimize": (_DESIGN, "the trade-offs (a Pareto set: rendering bandwidth, transparency, "
+                 "continuous torque, mass) or one objective, under the builder's limits"),
     "scale": ("mrclutch.cli.commands.scaling", "reach k× torque by more drums, longer drums "
               "or a larger diameter (Fig. 7b)"),
     "fidelity": ("mrclutch.cli.commands.fidelity", "speed against accuracy: time and error of "
