@@ -101,7 +101,7 @@ def test_a_design_file_written_loads_back_to_the_same_design(
     for f in dataclasses.fields(d):
         if f.name != "name":
             a, b = getattr(back, f.name), getattr(d, f.name)
-            if b is None:  # an optional table not in the file ([uncertainty], [measured])
+            if b is None:  # an optional table not in the file (`[uncertainty]`, `[measured]`)
                 assert a is None, f.name
                 continue
             for g in dataclasses.fields(a):
