@@ -372,3 +372,39 @@ def test_cli_drops_members_failing_at_reference_and_says_how_many(monkeypatch, c
     out = capsys.readouterr().out
     assert "Pareto set: 2 members meet every limit at reference fidelity; 1 of 3 dropped" in out
     assert "#2 dropped at reference fidelity: not passive at K" in out
+
+
+def test_robust_members_hold_their_K_over_declared_ranges():
+    """Issue 30's robust item on ranges a design can meet: the manufacturing tolerances of
+    the default process (runout as eccentricity, tolerance on the gap and the walls) with
+    the fluid, delay and bench pinned. Each member's worst-case largest stable and passive
+    K, recomputed independently by ``robust_columns_batch``, is at least its K."""
+    from mrclutch.optimize import robust_verdict
+    from mrclutch.robust import robust_columns_batch
+    from mrclutch.uncertainty import Uncertainty
+
+    pr = PAPER.process
+    unc = Uncertainty(viscosity_spread=0.0, fluid_temperature=(20.0, 20.0),
+                      gap_tolerance=pr.tolerance, runout=pr.runout,
+                      drum_thickness_tolerance=pr.tolerance, delay=(1e-3, 1e-3),
+                      yield_stress_spread=0.0, bh_spread=0.0)  # fmt: skip
+    base = replace(PAPER, uncertainty=unc)
+    ps = pareto(base, members=5, robust=robust_verdict(base), **QUICK)
+    assert ps.members and ps.robust.startswith("worst case")
+    w = robust_columns_batch(_fields([m.design for m in ps.members]), base, unc)
+    K = np.array([m.row["K_N_per_m"] for m in ps.members])
+    assert np.all(w["max_stable_K_worst_N_per_m"] >= K)
+    assert np.all(w["max_passive_K_worst_N_per_m"] >= K)
+    # the same search on the nominal verdict keeps members the worst case refuses
+    nominal = pareto(base, members=5, **QUICK)
+    wn = robust_columns_batch(_fields([m.design for m in nominal.members]), base, unc)
+    kn = np.array([m.row["K_N_per_m"] for m in nominal.members])
+    assert np.any(wn["max_passive_K_worst_N_per_m"] < kn)
+
+
+def test_robust_flag_under_the_default_ranges_says_why_nothing_passes(monkeypatch, capsys):
+    _quick_pareto(monkeypatch, members=2)
+    assert main(["optimize", "--no-verify", "--robust", "--drums", "2"]) == 2
+    err = capsys.readouterr().err
+    assert "stable and passive at its K over the uncertainty ranges" in err
+    assert err.count("\n") == 1

@@ -998,6 +998,10 @@ def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...]
                 seed=args.seed, members=args.members,
                 robust=robust_verdict(base) if args.robust else None)  # fmt: skip
     t_fast = time.perf_counter() - t0
+    if not ps.members and ps.dropped_robust:
+        raise CLIError(f"no design of the front is stable and passive at its K over the "
+                       f"uncertainty ranges ({ps.dropped_robust} checked, all failed); "
+                       "declare narrower ranges ([uncertainty]) or drop --robust")  # fmt: skip
     if not ps.members:
         raise CLIError("no design meets the constraints in the search box; relax a limit")
     refs: list[dict | None] = [None] * len(ps.members)
