@@ -44,8 +44,8 @@ CASES: dict[str, tuple[list[str], dict[str, str], bool]] = {
     "report": ([], {}, False),  # test_report.py: test_every_report_file_is_in_help_and_readme
     "sweep": (["spec.toml", "--out", "r.csv", "--pareto", "p.png", "--verify-top", "1",
                "--no-progress"], {"r.csv": "RESULTS.csv", "p.png": "FILE.png"}, False),
-    "optimize": (["--drums", "2", "--no-verify", "--out", "best.toml"],
-                 {"best.toml": "DESIGN.toml"}, True),
+    "optimize": (["--drums", "2", "--no-verify", "--designs", "set", "--plot", "front.png"],
+                 {"set": "DIR", "front.png": "FILE.png"}, True),
     "scale": ([], {}, False),
     "fidelity": ([], {}, True),  # the docs' figures' run, shared: test_fidelity_files_…
 }  # fmt: skip
