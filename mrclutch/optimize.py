@@ -56,9 +56,11 @@ from geometry.validation import (
 )
 from magnetics import thermal
 from mrclutch.design import ClutchDesign, current_limit
+from mrclutch.haptics.actuator import HapticParams
+from mrclutch.haptics.model import bandwidth, max_passive_stiffness
 from mrclutch.pipeline import FLUID_LIMIT, evaluate_batch
 from mrclutch.process import MAX_ECCENTRICITY
-from mrclutch.robust import robust_columns_batch
+from mrclutch.robust import hand_box_batch, robust_columns_batch
 from mrclutch.uncertainty import Uncertainty, default_uncertainty
 
 #: objective → the evaluate_batch column it reads.
@@ -332,8 +334,10 @@ def optimize(
         fields = {k: x[i] for i, k in enumerate(names)}
         fields["n_drums"] = np.full(x.shape[1], n, dtype=np.int64)
         evaluations += x.shape[1]
-        return evaluate_rows(fields, base, cons, stability=stability,
-                             zwidth=objective == "zwidth")  # fmt: skip
+        r = evaluate_rows(fields, base, cons, stability=stability, zwidth=objective == "zwidth")
+        if robust is not None:
+            r.update(robust.proxy(fields, base, r))
+        return r  # fmt: skip
 
     def violation(x: np.ndarray, n: int, r: dict[str, np.ndarray], stability: bool) -> np.ndarray:
         v = cons.violation(r)
@@ -379,8 +383,11 @@ def optimize(
         if robust is not None and np.any(v == 0):
             ok = np.flatnonzero(v == 0)
             sub = {k: a[ok] for k, a in r.items()}
-            sub.update(robust({k: x[ok] for k, x in _pop_fields(pop, n).items()}, base))
+            sub.update(robust.full({k: x[ok] for k, x in _pop_fields(pop, n).items()}, base,
+                                   sub))  # fmt: skip
             v[ok] = cons.violation(sub)
+            for k in (key, "K_N_per_m"):
+                r[k][ok] = sub[k]
         value = sign * np.asarray(r[key], dtype=float)
         score = np.where((v == 0) & ~np.isnan(value), value, -np.inf)
         order = [int(j) for j in np.argsort(-score, kind="stable") if np.isfinite(score[j])]
@@ -593,15 +600,23 @@ def pareto(
 
         def _evaluate(self, x: np.ndarray, out: dict, *args: Any, **kwargs: Any) -> None:
             f = fields_of(x)
-            r = evaluate_rows(f, base, cons, zwidth=zw)
+            r = rows(f)
             seen.append((x.copy(), r))
             out["F"] = objective_matrix(r)
             g = np.stack(list(cons.terms(r).values()), -1)
             out["G"] = np.minimum(g, 1e30)
 
+    def rows(f: Mapping[str, np.ndarray], stability: bool = False,
+             c: Constraints = cons) -> dict[str, np.ndarray]:  # fmt: skip
+        """evaluate_rows, K and the bandwidth at the worst case's K where ``robust``."""
+        r = evaluate_rows(f, base, c, stability=stability, zwidth=zw)
+        if robust is not None:
+            r.update(robust.proxy(f, base, r))
+        return r
+
     one = {k: np.array([box[k][0]]) for k in names}
     one["n_drums"] = np.array([counts[0]])
-    _probe = evaluate_rows(one, base, cons, zwidth=zw)
+    _probe = rows(one)
     minimize(Clutches(), NSGA2(pop_size=pop_size), ("n_gen", generations), seed=seed,
              verbose=False)  # fmt: skip
     x_all = np.concatenate([x for x, _ in seen])
@@ -636,7 +651,7 @@ def pareto(
             break
         todo = nd[stable_ok[nd] < 0]
         if todo.size and cons.stable:
-            r = evaluate_rows(fields_of(x_ok[todo]), base, nominal, stability=True, zwidth=zw)
+            r = rows(fields_of(x_ok[todo]), stability=True, c=nominal)
             good = r["K_N_per_m"] < r["max_stable_K_N_per_m"] * (1 - 1e-9)
             stable_ok[todo] = good
         elif todo.size:
@@ -653,9 +668,9 @@ def pareto(
             break
         if todo.size and robust is not None:
             fl = fields_of(x_ok[todo])
-            r = {**evaluate_rows(fl, base, nominal, zwidth=zw), **robust(fl, base)}
-            g = cons.terms(r)
-            robust_ok[todo] = np.all([g[k] <= 0 for k in ROBUST_COLUMNS if k in g], axis=0)
+            r = rows(fl, stability=cons.stable)
+            r.update(robust.full(fl, base, r))
+            robust_ok[todo] = cons.violation(r) == 0
         elif todo.size:
             robust_ok[todo] = 1
         bad = pick[robust_ok[pick] == 0]
@@ -667,16 +682,17 @@ def pareto(
     pick = pick[np.argsort(f_all[pick, 0], kind="stable")]  # best rendering first
     f_front, x_front = f_all[nd], x_ok[nd]
     front = {c: -s * f_front[:, i] for i, (_, c, s) in enumerate(objectives)}
-    how = ("nominal (--robust: the worst case over the uncertainty ranges)" if robust is None
-           else f"worst case over the uncertainty ranges: {drop_r} front designs failed it "
-           f"(of {int(np.sum(robust_ok >= 0))} checked)")  # fmt: skip
+    how = ("nominal (K = K_max; without --nominal: the worst case over the uncertainty "
+           "ranges)" if robust is None else "worst case over the uncertainty ranges: each "
+           "renders K = min(K_max, worst-case largest passive and stable K), its bandwidth "
+           f"at that K; {drop_r} front designs failed the full check")  # fmt: skip
     if not pick.size:
         return ParetoSet((), objectives, 0, evaluations, drop_s, drop_r, box, source, counts,
                          how, front)  # fmt: skip
     fl = fields_of(x_ok[pick])
-    r_pick = evaluate_rows(fl, base, cons, stability=cons.stable, zwidth=zw)
+    r_pick = rows(fl, stability=cons.stable)
     if robust is not None:
-        r_pick.update(robust(fl, base))
+        r_pick.update(robust.full(fl, base, r_pick))
     out_members = []
     for j in range(len(pick)):
         values = {k: float(fl[k][j]) for k in names}
@@ -722,14 +738,67 @@ def process_uncertainty(base: ClutchDesign) -> Uncertainty:
     return replace(default_uncertainty(base), runout=pr.runout, gap_tolerance=pr.tolerance)
 
 
-def robust_verdict(base: ClutchDesign, uncertainty: Uncertainty | None = None) -> Any:
-    """The worst-case verdict for ``pareto(robust=...)`` and ``optimize(robust=...)``:
-    (fields, base) ↦ the worst-case largest stable and passive K over ``uncertainty``
-    (None: ``process_uncertainty(base)``), ``robust.robust_columns_batch``."""
-    unc = uncertainty if uncertainty is not None else process_uncertainty(base)
+@dataclass(frozen=True)
+class WorstCase:
+    """The haptic verdict over the uncertainty ranges, for ``pareto`` and ``optimize``.
 
-    def worst(fields: Mapping[str, ArrayLike], design: ClutchDesign) -> dict[str, np.ndarray]:
-        cols = robust_columns_batch(fields, design, unc)
-        return {c: cols[c] for c in ROBUST_COLUMNS.values()}
+    Over ranges this wide no clutch keeps its K_max = F_max/d passive (docs/optimize.md),
+    so a design renders the largest K the worst case allows, K = min(K_max, worst-case
+    largest passive K, worst-case largest stable K), and its bandwidth is taken at that K
+    (``bandwidth_hz`` of its rows; K_max stays under ``K_max_N_per_m``).
 
-    return worst
+    * ``proxy`` (every design of the search): the worst-case passive K at the corner
+      (m1⁺, b1⁻, τ⁺) of the hand box without the geometry's tolerance corners (no extra
+      fast-path evaluation; passivity is monotone there: ``mrclutch.robust``);
+    * ``full`` (the members): ``robust_columns_batch``, the tolerance corners and the
+      bounded search of the stable K included; K is taken again from it, so every member
+      holds its K over the ranges by construction."""
+
+    uncertainty: Uncertainty
+
+    def _box(self, fields: Mapping[str, ArrayLike], base: ClutchDesign,
+             r: Mapping[str, np.ndarray]) -> Any:  # fmt: skip
+        """The hand box without the geometry's tolerance corners (no fast-path run)."""
+        unc = replace(self.uncertainty, gap_tolerance=0.0, drum_thickness_tolerance=0.0)
+        return hand_box_batch(fields, base, unc, nominal=r)
+
+    @staticmethod
+    def _at(box: Any, r: Mapping[str, np.ndarray], k_cap: np.ndarray) -> dict[str, np.ndarray]:
+        """K = min(K_max, k_cap) and the nominal bandwidth at it."""
+        k_max = np.asarray(r["K_max_N_per_m"] if "K_max_N_per_m" in r else r["K_N_per_m"],
+                           dtype=float)  # fmt: skip
+        k = np.minimum(k_max, k_cap)  # NaN (no finite worst case) stays NaN: refused
+        ok = np.isfinite(k) & (k > 0) & box.valid
+        bw = np.full(k.shape, np.nan)
+        if ok.any():
+            nom = box.nominal
+            sub = HapticParams(*(np.asarray(getattr(nom, f))[ok] if np.ndim(getattr(nom, f))
+                                 else getattr(nom, f) for f in ("m1", "b1", "k", "b", "m2")),
+                               delay=np.asarray(nom.delay)[ok])  # fmt: skip
+            bw[ok] = bandwidth(sub, k[ok])
+        return {"K_max_N_per_m": k_max, "K_N_per_m": k, "bandwidth_hz": bw}
+
+    def proxy(self, fields: Mapping[str, ArrayLike], base: ClutchDesign,
+              r: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:  # fmt: skip
+        box = self._box(fields, base, r)
+        kp = np.full(box.valid.shape, np.nan)
+        ok = box.valid
+        if ok.any():
+            (_, _, mhi), (_, blo, _), (_, _, thi) = box.m1, box.b1, box.delay
+            sub = HapticParams(mhi[ok], blo[ok], box.k[ok], box.b[ok], box.m2[ok],
+                               delay=thi[ok])  # fmt: skip
+            kp[ok] = max_passive_stiffness(sub)
+        return self._at(box, r, kp)
+
+    def full(self, fields: Mapping[str, ArrayLike], base: ClutchDesign,
+             r: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:  # fmt: skip
+        cols = robust_columns_batch(fields, base, self.uncertainty)
+        ks, kp = cols["max_stable_K_worst_N_per_m"], cols["max_passive_K_worst_N_per_m"]
+        out = self._at(self._box(fields, base, r), r, np.minimum(kp, ks) * (1 - 1e-6))
+        return {**out, **{c: cols[c] for c in ROBUST_COLUMNS.values()}}
+
+
+def robust_verdict(base: ClutchDesign, uncertainty: Uncertainty | None = None) -> WorstCase:
+    """The worst case for ``pareto(robust=...)`` and ``optimize(robust=...)`` over
+    ``uncertainty`` (None: ``process_uncertainty(base)``)."""
+    return WorstCase(uncertainty if uncertainty is not None else process_uncertainty(base))

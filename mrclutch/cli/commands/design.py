@@ -28,6 +28,8 @@ from mrclutch.cli.executors import sweep_executor
 from mrclutch.cli.plots.design import pareto_plot, pareto_set_plot
 from mrclutch.cli.report import write_report
 from mrclutch.design import ClutchDesign, design_from_mapping, design_preset, design_to_toml
+from mrclutch.haptics.actuator import HapticParams
+from mrclutch.haptics.model import bandwidth
 from mrclutch.optimize import (
     CONTINUOUS,
     DEFAULT_MEMBERS,
@@ -322,11 +324,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--no-verify", action="store_true", help="skip the reference-fidelity check")
     p.add_argument(
-        "--robust",
+        "--nominal",
         action="store_true",
-        help="require each design stable and passive at its K over the uncertainty ranges "
-        "(worst case, mrclutch.robust; the process's runout and tolerance as the "
-        "manufacturing ranges), not only at the nominal inputs; docs/optimize.md",
+        help="Pareto set: take the nominal haptic verdict at K = K_max instead of the worst "
+        "case over the uncertainty ranges (by default each member renders the largest K it "
+        "keeps stable and passive over them: docs/optimize.md); --objective is nominal",
     )
     p.add_argument(
         "--workers",
@@ -867,7 +869,6 @@ def _optimize(args: argparse.Namespace) -> int:
         bounds=parse_bounds(args.vary) if args.vary else None,
         drum_counts=drums,
         seed=args.seed,
-        robust=robust_verdict(base) if args.robust else None,
     )
     t_fast = time.perf_counter() - t0
     if not opt.feasible:
@@ -996,12 +997,12 @@ def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...]
     ps = pareto(base, rendering=args.rendering, constraints=cons,
                 bounds=parse_bounds(args.vary) if args.vary else None, drum_counts=drums,
                 seed=args.seed, members=args.members,
-                robust=robust_verdict(base) if args.robust else None)  # fmt: skip
+                robust=None if args.nominal else robust_verdict(base))  # fmt: skip
     t_fast = time.perf_counter() - t0
     if not ps.members and ps.dropped_robust:
         raise CLIError(f"no design of the front is stable and passive at its K over the "
                        f"uncertainty ranges ({ps.dropped_robust} checked, all failed); "
-                       "declare narrower ranges ([uncertainty]) or drop --robust")  # fmt: skip
+                       "declare narrower ranges ([uncertainty]) or give --nominal")  # fmt: skip
     if not ps.members:
         raise CLIError("no design meets the constraints in the search box; relax a limit")
     refs: list[dict | None] = [None] * len(ps.members)
@@ -1011,6 +1012,9 @@ def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...]
         refs = list(_reference_all([m.design for m in ps.members], args.workers))
         t_ref = time.perf_counter() - t1
     rows = []
+    if not args.nominal:  # the verdict at the K each member renders
+        refs = [at_K(ev, m.row["K_N_per_m"]) if ev is not None else None
+                for m, ev in zip(ps.members, refs, strict=True)]  # fmt: skip
     for i, (m, ev) in enumerate(zip(ps.members, refs, strict=True), 1):
         viol = requirement_violations(ev, cons, m.design) if ev is not None else []
         rows.append(_member_json(i, m, ev, viol))
@@ -1037,6 +1041,12 @@ def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...]
                 tmp.write_text(design_to_toml(replace(m.design, name=path.stem)))
             written.append(str(path))
     paper = _paper_beside(base, "fast" if args.no_verify else "reference")
+    if not args.nominal:
+        pd = replace(design_preset("paper"), operating=base.operating,
+                     transmission=base.transmission, process=base.process)  # fmt: skip
+        pf = {k: np.array([getattr(pd.clutch, k)]) for k in (*ps.box, "n_drums")}
+        prow = evaluate_rows(pf, pd, cons)
+        paper = at_K(paper, float(robust_verdict(pd).full(pf, pd, prow)["K_N_per_m"][0]))
     if args.plot:
         pareto_set_plot(ps, [r["member"] for r in kept], paper, args.plot)
     data = {
@@ -1102,6 +1112,7 @@ def _explain_json(ev: dict) -> dict:
     return {
         "bandwidth_hz": h["bandwidth_hz"], "bandwidth_lumped_hz": h["bandwidth_lumped_hz"],
         "resonance_hz": h["resonance_hz"], "K_N_per_m": h["K_N_per_m"],
+        "K_max_N_per_m": h["K_max_N_per_m"] if "K_max_N_per_m" in h else h["K_N_per_m"],
         "m1_kg": h["m1_kg"], "m2_kg": h["m2_kg"], "k_N_per_m": h["k_N_per_m"],
         "b1_N_s_per_m": h["b1_N_s_per_m"],
         "b1_terms": {t["name"]: t["value"] for t in b["terms"]},
@@ -1121,6 +1132,22 @@ def _paper_beside(base: ClutchDesign, fidelity: str) -> dict:
     return evaluate(paper, fidelity).as_json()
 
 
+def at_K(ev: dict, K: float) -> dict:
+    """``Evaluation.as_json()`` with the MR pair rendering ``K`` instead of K_max: K, the
+    passive verdict (K at most the largest passive K) and the bandwidths at it (the full
+    response's, ``haptics.model.bandwidth``, and Eq. 1's); the largest stable and passive K
+    do not depend on K. K_max stays under ``K_max_N_per_m``."""
+    h = dict(ev["haptic"])
+    p = HapticParams(h["m1_kg"], h["b1_N_s_per_m"], h["k_N_per_m"], h["b_N_s_per_m"],
+                     h["m2_kg"], delay=h["delay_s"])  # fmt: skip
+    h.update(K_max_N_per_m=h.get("K_max_N_per_m", h["K_N_per_m"]), K_N_per_m=K,
+             passive=bool(K <= h["max_passive_K_N_per_m"]),
+             bandwidth_hz=float(bandwidth(p, K)),
+             bandwidth_lumped_hz=math.sqrt(K / (h["m1_kg"] + h["m2_kg"])) / (2 * math.pi),
+             )  # fmt: skip
+    return {**ev, "haptic": h}
+
+
 def explain(ev: dict, paper: dict, label: str) -> str:
     """How a design's bandwidth and resonance relate, where its damping comes from (the
     b1 budget) and its thermal rating, beside the paper preset's."""
@@ -1138,11 +1165,13 @@ def explain(ev: dict, paper: dict, label: str) -> str:
     lines = [
         f"\n{label} beside the paper preset ({a['fidelity']} / {p['fidelity']} fidelity):",
         f"  {'':<44}{label:>12}{'paper':>12}",
-        row("bandwidth at K = K_max, full response (Hz)", a["bandwidth_hz"], p["bandwidth_hz"]),
+        row("bandwidth at the K rendered, full response (Hz)", a["bandwidth_hz"],
+            p["bandwidth_hz"]),
         row("bandwidth, lumped √(K/(m1+m2)) (Hz)", a["bandwidth_lumped_hz"],
             p["bandwidth_lumped_hz"]),
         row("system resonance at K = 0 (Hz)", a["resonance_hz"], p["resonance_hz"]),
-        row("K = K_max (N/m)", a["K_N_per_m"], p["K_N_per_m"]),
+        row("K rendered (N/m)", a["K_N_per_m"], p["K_N_per_m"]),
+        row("K_max = F_max/d (N/m)", a["K_max_N_per_m"], p["K_max_N_per_m"]),
         row("b1 at the hand (N·s/m)", a["b1_N_s_per_m"], p["b1_N_s_per_m"]),
         row("  share from the drum-gap films", film(a), film(p), ".0%"),
         row("continuous current (A)", a["continuous_current_A"], p["continuous_current_A"]),
