@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from geometry.materials import COIL, COLOUR, MRF, STAINLESS, STEEL
+from geometry.materials import COIL, COLOUR, DEFAULT_CHOICE, MRF, STAINLESS, STEEL, MaterialChoice
 from geometry.section import PARTS, Region, Section, build_section
 from geometry.validation import ParameterError, check_finite
 
@@ -33,7 +33,8 @@ MM_PER_M = 1000.0
 
 #: Display colours (RGB 0..1) by material, shared by the STEP assembly and the 3-D view.
 MATERIAL_COLOURS = COLOUR
-#: Colour of a part in the STEP assembly: its dominant material's colour.
+#: Colour of a part in the STEP assembly: its dominant material's colour (the defaults;
+#: ``part_material`` for a design's own choice).
 PART_MATERIAL: dict[str, str] = {
     "rotor": STEEL,
     "shaft": STAINLESS,
@@ -42,6 +43,12 @@ PART_MATERIAL: dict[str, str] = {
     "coil": COIL,
     "fluid": MRF,
 }
+
+
+def part_material(part: str, materials: MaterialChoice = DEFAULT_CHOICE) -> str:
+    """The dominant material of a part, whose colour the part takes in the STEP assembly."""
+    return {"rotor": materials.drums, "shaft": materials.hub, "input": materials.drums,
+            "housing": materials.shell, "coil": COIL, "fluid": materials.fluid}[part]  # fmt: skip
 
 
 def _profile(regions: Iterable[Region]) -> Any:
@@ -135,6 +142,7 @@ def assembly(
     clutch: DrumClutch,
     parts: dict[str, Any] | None = None,
     materials: dict[tuple[str, str], Any] | None = None,
+    choice: MaterialChoice = DEFAULT_CHOICE,
 ) -> Any:
     """A build123d Compound whose children are the parts, labelled and coloured.
 
@@ -156,7 +164,7 @@ def assembly(
                 subs.append(sub)
             shape = Compound(children=subs)
         shape.label = name
-        shape.color = Color(*MATERIAL_COLOURS[PART_MATERIAL[name]])
+        shape.color = Color(*MATERIAL_COLOURS[part_material(name, choice)])
         children.append(shape)
     return Compound(children=children, label="mr_drum_clutch")
 

@@ -35,6 +35,7 @@ from geometry.cad import (
     tessellate,
 )
 from geometry.mass import check_mesh
+from geometry.materials import DEFAULT_CHOICE, LABEL, MaterialChoice
 from geometry.params import DrumClutch
 from geometry.section import build_section
 from geometry.validation import ParameterError, check_positive
@@ -155,7 +156,14 @@ def write_materials(step: Path, solids: list[tuple[str, str, str, float, float]]
         "step": step.name,
         "units": {"density": "kg/m3", "volume": "mm3", "lengths": "mm"},
         "solids": [
-            {"part": p, "name": n, "material": m, "density_kg_m3": rho, "volume_mm3": v}
+            {
+                "part": p,
+                "name": n,
+                "material": m,
+                "label": LABEL.get(m, m),
+                "density_kg_m3": rho,
+                "volume_mm3": v,
+            }
             for p, n, m, rho, v in solids
         ],
     }
@@ -189,8 +197,10 @@ def export_clutch(
     *,
     angular_tolerance: float = 0.5,
     check: bool = True,
+    materials: MaterialChoice = DEFAULT_CHOICE,
 ) -> ExportResult:
-    """Write ``clutch.step`` and ``<part>.stl`` into ``out_dir`` and check the round trip.
+    """Write ``clutch.step`` and ``<part>.stl`` into ``out_dir`` and check the round trip;
+    every part is made of (and coloured as) the material ``materials`` chooses for it.
 
     A write that fails (OutputError: disk full, read-only) removes the files this call
     wrote and the folder when this call made it: an export is whole or absent."""
@@ -201,7 +211,7 @@ def export_clutch(
     created = not out.exists()
     written: list[Path] = []
     try:
-        return _export(clutch, out, tolerance, angular_tolerance, check, written)
+        return _export(clutch, out, tolerance, angular_tolerance, check, written, materials)
     except OutputError:
         for p in written:
             p.unlink(missing_ok=True)
@@ -214,11 +224,12 @@ def export_clutch(
 
 
 def _export(clutch: DrumClutch, out: Path, tolerance: float, angular_tolerance: float,
-            check: bool, written: list[Path]) -> ExportResult:  # fmt: skip
-    section = build_section(clutch)
+            check: bool, written: list[Path],
+            materials: MaterialChoice = DEFAULT_CHOICE) -> ExportResult:  # fmt: skip
+    section = build_section(clutch, materials)
     parts = part_solids(clutch, section)
     mats = material_solids(clutch, section)
-    step = write_step(assembly(clutch, parts, mats), out / "clutch.step")
+    step = write_step(assembly(clutch, parts, mats, materials), out / "clutch.step")
     written.append(step)
     solids = []
     for part in parts:

@@ -1,45 +1,212 @@
-"""The clutch's materials: their names (keyed once, here) and densities, each with its source.
+"""The clutch's materials: one registry of data files, their names, kinds and densities.
 
-Every region of the section (``geometry.regions``) names one of these materials; the
-magnetic and rheological properties of the same names are in ``magnetics.materials``.
-Sources: docs/references.md.
+Every material is one TOML file in ``geometry/data/materials/`` (the registry): its name,
+kind (``steel``: a magnetic steel; ``nonmagnetic``: μr = 1; ``fluid``: an MR fluid), label,
+display colour, density, electrical conductivity, thermal data and, by kind, its B–H
+table or its rheology, each number with its source (docs/references.md) and a list of the
+values that could not be read in a source (``unverified``). This module reads what the
+geometry needs (names, kinds, densities, labels, colours); ``magnetics.materials`` reads
+the B–H curves, the yield stress and the viscosity from the same files.
+
+A design chooses a material per part (``MaterialChoice``: the fluid and the materials of
+the core, drums, shell, bands, housing and hub); the region table writes the chosen names
+on its regions (``geometry.regions.table``) and every model reads them from there.
 """
 
 from __future__ import annotations
 
 import math
+import re
+import tomllib
 from collections.abc import Mapping
+from dataclasses import dataclass, fields
+from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
-STEEL = "steel_1018"  # the magnetic yoke and the drums' active zones
-STAINLESS = "stainless_304"  # hub, shaft, end caps, sleeve, the drums' non-magnetic band
-COIL = "coil"  # copper wire smeared with its bonding epoxy over the coil window
-MRF = "mrf_132dg"  # the MR fluid
+from geometry.validation import ParameterError
 
+STEEL = "steel_1018"  # the default magnetic yoke and the drums' active zones
+STAINLESS = "stainless_304"  # the default hub, shaft, end caps, sleeve and drum bands
+COIL = "coil"  # copper wire smeared with its bonding epoxy over the coil window
+MRF = "mrf_132dg"  # the default MR fluid
+
+#: The folder of the registry's data files.
+DATA = Path(__file__).parent / "data" / "materials"
+#: Kinds of material, and what each part may be made of.
+KINDS: tuple[str, ...] = ("steel", "nonmagnetic", "fluid")
+
+_RECORDS: dict[str, Mapping[str, Any]] = {}
+_DENSITY: dict[str, float] = {}
+_LABEL: dict[str, str] = {COIL: "coil (Cu + epoxy)"}
+_COLOUR: dict[str, tuple[float, float, float]] = {COIL: (0.85, 0.45, 0.15)}
+_KIND: dict[str, str] = {}
+_BUILTIN: set[str] = set()
+
+#: Every material's data file, parsed (name -> its TOML table; read-only views).
+RECORDS: Mapping[str, Mapping[str, Any]] = MappingProxyType(_RECORDS)
 #: kg/m³. The coil's density depends on its fill: see ``coil_density``.
-DENSITY: Mapping[str, float] = MappingProxyType(
-    {
-        STEEL: 7870.0,  # AISI 1018, FEMM 4.2 material library [femm-matlib] [materials]
-        STAINLESS: 8000.0,  # AISI 304/316 [materials]
-        MRF: 3050.0,  # LORD MRF-132DG datasheet, ≈ 3.05 g/cm³ [lord-mrf132dg]
-    }
-)
+DENSITY: Mapping[str, float] = MappingProxyType(_DENSITY)
 #: How a person reads each material's name, and its display colour (RGB 0..1): the STEP
 #: assembly, the 3-D view and the section plot share them.
-LABEL: Mapping[str, str] = MappingProxyType(
-    {STEEL: "steel 1018", STAINLESS: "stainless 304", COIL: "coil (Cu + epoxy)", MRF: "MRF-132DG"}
-)
-COLOUR: Mapping[str, tuple[float, float, float]] = MappingProxyType(
-    {
-        STEEL: (0.45, 0.47, 0.52),
-        STAINLESS: (0.80, 0.82, 0.85),
-        COIL: (0.85, 0.45, 0.15),
-        MRF: (0.15, 0.15, 0.18),
-    }
-)
+LABEL: Mapping[str, str] = MappingProxyType(_LABEL)
+COLOUR: Mapping[str, tuple[float, float, float]] = MappingProxyType(_COLOUR)
+#: The kind of every registered material (``KINDS``).
+KIND: Mapping[str, str] = MappingProxyType(_KIND)
 DENSITY_COPPER = 8960.0  # [materials]
 DENSITY_EPOXY = 1200.0  # bonding epoxy of an epoxy-bonded coil (typical 1.1–1.3 g/cm³)
+
+
+def canonical(name: str) -> str:
+    """The registry key of a material name as people write it: lower case, runs of spaces,
+    dashes and dots as one underscore ("MRF-140CG" -> "mrf_140cg", "Hiperco 50" ->
+    "hiperco_50")."""
+    return re.sub(r"[\s\-.]+", "_", str(name).strip().lower())
+
+
+def _number(where: str, key: str, value: Any, lo: float, hi: float) -> float:
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        raise ParameterError(f"{where}: {key} = {value!r}: must be a finite number")
+    if not lo <= value <= hi:
+        raise ParameterError(f"{where}: {key} = {value!r}: must be in [{lo:g}, {hi:g}]")
+    return float(value)
+
+
+def check_record(rec: Mapping[str, Any], where: str) -> dict[str, Any]:
+    """The geometry's fields of one material record, checked (name, kind, label, colour,
+    density, conductivity, thermal data); ParameterError names the field."""
+    name = rec.get("name")
+    if not isinstance(name, str) or canonical(name) != name or not name:
+        raise ParameterError(f"{where}: name = {name!r}: must be lower case, '_' for spaces")
+    kind = rec.get("kind")
+    if kind not in KINDS:
+        raise ParameterError(f"{where}: kind = {kind!r}: must be one of {', '.join(KINDS)}")
+    out = dict(rec)
+    out["density"] = _number(where, "density", rec.get("density"), 1.0, 3e4)
+    out["conductivity"] = _number(where, "conductivity", rec.get("conductivity"), 0.0, 1e9)
+    out["specific_heat"] = _number(where, "specific_heat", rec.get("specific_heat"), 1.0, 1e5)
+    out["thermal_conductivity"] = _number(
+        where, "thermal_conductivity", rec.get("thermal_conductivity"), 1e-3, 1e4
+    )
+    col = rec.get("colour", (0.5, 0.5, 0.5))
+    if not (isinstance(col, list | tuple) and len(col) == 3
+            and all(isinstance(c, int | float) and 0 <= c <= 1 for c in col)):  # fmt: skip
+        raise ParameterError(f"{where}: colour = {col!r}: must be three numbers in [0, 1]")
+    out["colour"] = tuple(float(c) for c in col)
+    out["label"] = str(rec.get("label", name))
+    unv = rec.get("unverified", [])
+    if not isinstance(unv, list) or not all(isinstance(u, str) for u in unv):
+        raise ParameterError(f"{where}: unverified = {unv!r}: must be a list of field names")
+    return out
+
+
+def register(rec: Mapping[str, Any], where: str, builtin: bool = False) -> str:
+    """Add one checked material record to the registry; a user's material may not take a
+    built-in name (nor its label's). Returns its name."""
+    out = check_record(rec, where)
+    name = out["name"]
+    if not builtin and name in _BUILTIN:
+        raise ParameterError(f"{where}: name = {name!r}: a built-in material has this name")
+    _RECORDS[name] = MappingProxyType(out)
+    _DENSITY[name] = out["density"]
+    _LABEL[name] = out["label"]
+    _COLOUR[name] = out["colour"]
+    _KIND[name] = out["kind"]
+    if builtin:
+        _BUILTIN.add(name)
+    return name
+
+
+def _load_builtin() -> None:
+    for path in sorted(DATA.glob("*.toml")):
+        with path.open("rb") as f:
+            rec = tomllib.load(f)
+        if rec.get("name") != path.stem:
+            raise ParameterError(
+                f"{path.name}: name = {rec.get('name')!r}: must be the file's stem"
+            )
+        register(rec, path.name, builtin=True)
+
+
+_load_builtin()
+
+
+def known(kind: str) -> tuple[str, ...]:
+    """The registered materials of one kind, sorted."""
+    return tuple(sorted(n for n, k in _KIND.items() if k == kind))
+
+
+def conductivity(name: str) -> float:
+    """S/m at 20 °C of a registered material (0 for the coil: its eddy currents are the
+    amplifier's business)."""
+    return 0.0 if name == COIL else float(_RECORDS[name]["conductivity"])
+
+
+#: The parts a design chooses a material for, and the kind each must be.
+SLOTS: Mapping[str, str] = MappingProxyType(
+    {
+        "fluid": "fluid",
+        "core": "steel",
+        "drums": "steel",  # the drums' steel in the active zones
+        "shell": "steel",  # the poles and the back iron
+        "bands": "nonmagnetic",  # the drums' non-magnetic bands
+        "housing": "nonmagnetic",  # end caps and the coil's sleeve
+        "hub": "nonmagnetic",  # the output hub and shaft
+    }
+)
+
+
+@dataclass(frozen=True)
+class MaterialChoice:
+    """The material of each part (registry names; ``SLOTS`` says which kind each takes).
+    Names are accepted as people write them (``canonical``); an unknown name, or one of the
+    wrong kind, is refused with the list of the known ones."""
+
+    fluid: str = MRF
+    core: str = STEEL
+    drums: str = STEEL
+    shell: str = STEEL
+    bands: str = STAINLESS
+    housing: str = STAINLESS
+    hub: str = STAINLESS
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            raw = getattr(self, f.name)
+            name = canonical(raw) if isinstance(raw, str) else raw
+            kind = SLOTS[f.name]
+            if name not in _KIND or _KIND[name] != kind:
+                raise ParameterError(
+                    f"materials.{f.name} = {raw!r}: unknown {kind}; known: {', '.join(known(kind))}"
+                )
+            object.__setattr__(self, f.name, name)
+
+    @classmethod
+    def from_mapping(cls, table: Mapping[str, Any], where: str = "materials") -> MaterialChoice:
+        """From a design file's ``[materials]`` table (unknown keys refused)."""
+        bad = sorted(set(table) - set(SLOTS))
+        if bad:
+            raise ParameterError(f"{where}.{bad[0]}: unknown key ({', '.join(SLOTS)})")
+        for k, v in table.items():
+            if not isinstance(v, str):
+                raise ParameterError(f"{where}.{k} = {v!r}: must be a material name (a string)")
+        return cls(**dict(table))
+
+    def as_dict(self) -> dict[str, str]:
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+    @property
+    def default(self) -> bool:
+        """True for the materials every figure was measured with (1018, 304, MRF-132DG)."""
+        return self == DEFAULT_CHOICE
+
+    @property
+    def magnetic(self) -> tuple[str, str, str, str]:
+        """(fluid, core, drums, shell): what the magnetic models depend on."""
+        return self.fluid, self.core, self.drums, self.shell
+
+
+DEFAULT_CHOICE = MaterialChoice()
 
 
 def copper_fraction(turns: Any, wire_diameter: Any, window_area: Any) -> Any:

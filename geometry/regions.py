@@ -38,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from geometry.materials import COIL, DENSITY, MRF, STAINLESS, STEEL, coil_density
+from geometry.materials import COIL, DEFAULT_CHOICE, DENSITY, MaterialChoice, coil_density
 
 Fields = Mapping[str, Any]  # DrumClutch field name -> float or array (SI)
 
@@ -120,19 +120,42 @@ class RegionSpec:
     z1: str
     film: str = ""  # "cylinder" | "face" | "" (not a sheared film)
     walls: tuple[str, str] = ("", "")  # cylinder films: (inner, outer) wall names
+    #: what the region is to the models, whatever its material: "steel" (magnetic),
+    #: "nonmagnetic", "coil" or "fluid"; ``slot`` is the part whose material it takes
+    #: (``geometry.materials.SLOTS``; "coil" for the coil)
+    role: str = ""
+    slot: str = ""
 
 
-@functools.lru_cache(maxsize=32)
-def table(n: int) -> tuple[RegionSpec, ...]:
-    """Every rectangle of a clutch with ``n`` output drums (see the module docstring)."""
+_ROLE = {
+    "fluid": "fluid",
+    "core": "steel",
+    "drums": "steel",
+    "shell": "steel",
+    "bands": "nonmagnetic",
+    "housing": "nonmagnetic",
+    "hub": "nonmagnetic",
+    "coil": "coil",
+}
+
+
+@functools.lru_cache(maxsize=256)
+def table(n: int, materials: MaterialChoice = DEFAULT_CHOICE) -> tuple[RegionSpec, ...]:
+    """Every rectangle of a clutch with ``n`` output drums (see the module docstring), each
+    made of the material ``materials`` chooses for its part."""
     if int(n) != n or n < 1:
         raise ValueError(f"n_drums = {n!r}: the table needs an integer >= 1")
+    choice = materials.as_dict()
+    choice["coil"] = COIL
+
+    def R(name: str, part: str, slot: str, *rest: Any) -> RegionSpec:
+        return RegionSpec(name, part, choice[slot], *rest, role=_ROLE[slot], slot=slot)
+
     last = 2 * n - 1  # the outermost gap, between output drum n and the shell's poles
     hub_r, pole = rho(4 * n - 2), rho(4 * n - 1)
-    R = RegionSpec
     rows: list[RegionSpec] = [
-        R("shaft", "shaft", STAINLESS, "axis", "shaft", "shaft_tip", "hub_back"),
-        R("hub", "rotor", STAINLESS, "shaft", hub_r, "hub_front", "hub_back"),
+        R("shaft", "shaft", "hub", "axis", "shaft", "shaft_tip", "hub_back"),
+        R("hub", "rotor", "hub", "shaft", hub_r, "hub_front", "hub_back"),
     ]
     drums: dict[str, list[tuple[int, int]]] = {"out": [], "in": []}
     for j in range(n_layers(n)):
@@ -145,47 +168,49 @@ def table(n: int) -> tuple[RegionSpec, ...]:
                                         ("in", "input", "zone_A0", "cap_back")):  # fmt: skip
         for i, j in drums[kind]:
             for seg, mat, z0, z1 in (
-                ("A", STEEL, z_first, "zone_A1"),
-                ("band", STAINLESS, "zone_A1", "zone_B0"),
-                ("B", STEEL, "zone_B0", z_last),
+                ("A", "drums", z_first, "zone_A1"),
+                ("band", "bands", "zone_A1", "zone_B0"),
+                ("B", "drums", "zone_B0", z_last),
             ):
                 rows.append(R(f"{kind}{i}_{seg}", part, mat, rho(j), rho(j + 1), z0, z1))
     # Housing: the steel core and shell (poles + back iron over the coil) with the coil
     # between them, joined by stainless end caps.
     rows += [
-        R("core", "housing", STEEL, "axis", rho(0), "zone_A0", "cap_back"),
-        R("shell_A", "housing", STEEL, pole, "outer", "cap_front", "zone_A1"),
-        R("shell_back", "housing", STEEL, "coil_out", "outer", "zone_A1", "zone_B0"),
-        R("shell_B", "housing", STEEL, pole, "outer", "zone_B0", "cap_back"),
-        R("sleeve", "housing", STAINLESS, pole, "coil_in", "zone_A1", "zone_B0"),
-        R("cap_front", "housing", STAINLESS, "bore", "outer", "front", "cap_front"),
-        R("cap_back", "housing", STAINLESS, "axis", "outer", "cap_back", "back"),
-        R("coil", "coil", COIL, "coil_in", "coil_out", "zone_A1", "zone_B0"),
+        R("core", "housing", "core", "axis", rho(0), "zone_A0", "cap_back"),
+        R("shell_A", "housing", "shell", pole, "outer", "cap_front", "zone_A1"),
+        R("shell_back", "housing", "shell", "coil_out", "outer", "zone_A1", "zone_B0"),
+        R("shell_B", "housing", "shell", pole, "outer", "zone_B0", "cap_back"),
+        R("sleeve", "housing", "housing", pole, "coil_in", "zone_A1", "zone_B0"),
+        R("cap_front", "housing", "housing", "bore", "outer", "front", "cap_front"),
+        R("cap_back", "housing", "housing", "axis", "outer", "cap_back", "back"),
+        R("coil", "coil", "coil", "coil_in", "coil_out", "zone_A1", "zone_B0"),
     ]
     # Sheared cylindrical gaps: wetted where both walls face each other.
     for k in range(2 * n):
         inner = "core" if k == 0 else (f"out{(k + 1) // 2}" if k % 2 else f"in{k // 2}")
         outer = "shell" if k == last else (f"in{(k + 1) // 2}" if k % 2 else f"out{k // 2 + 1}")
         z0 = "hub_back" if k == last else "zone_A0"
-        rows.append(R(f"gap{k}", "fluid", MRF, rho(2 * k), rho(2 * k + 1), z0, "zone_B1",
+        rows.append(R(f"gap{k}", "fluid", "fluid", rho(2 * k), rho(2 * k + 1), z0, "zone_B1",
                       "cylinder", (inner, outer)))  # fmt: skip
     # Axial films between an output face and an input face (disk shear), end clearance high.
-    rows.append(R("film_hub_front", "fluid", MRF, "bore", hub_r, "cap_front", "hub_front", "face"))
-    rows.append(R("film_hub_core", "fluid", MRF, "axis", rho(0), "hub_back", "zone_A0", "face"))
+    rows.append(
+        R("film_hub_front", "fluid", "fluid", "bore", hub_r, "cap_front", "hub_front", "face")
+    )
+    rows.append(R("film_hub_core", "fluid", "fluid", "axis", rho(0), "hub_back", "zone_A0", "face"))
     for i, j in drums["in"]:
-        rows.append(R(f"film_in{i}_tip", "fluid", MRF, rho(j), rho(j + 1), "hub_back", "zone_A0",
-                      "face"))  # fmt: skip
+        rows.append(R(f"film_in{i}_tip", "fluid", "fluid", rho(j), rho(j + 1), "hub_back",
+                      "zone_A0", "face"))  # fmt: skip
     for i, j in drums["out"]:
-        rows.append(R(f"film_out{i}_tip", "fluid", MRF, rho(j), rho(j + 1), "zone_B1", "cap_back",
-                      "face"))  # fmt: skip
+        rows.append(R(f"film_out{i}_tip", "fluid", "fluid", rho(j), rho(j + 1), "zone_B1",
+                      "cap_back", "face"))  # fmt: skip
     # The rest of the cavity (r < pole, cap_front < z < cap_back) is unsheared fluid.
-    rows.append(R("fluid_bore", "fluid", MRF, "shaft", "bore", "cap_front", "hub_front"))
-    rows.append(R("fluid_rim", "fluid", MRF, hub_r, pole, "cap_front", "hub_back"))
+    rows.append(R("fluid_bore", "fluid", "fluid", "shaft", "bore", "cap_front", "hub_front"))
+    rows.append(R("fluid_rim", "fluid", "fluid", hub_r, pole, "cap_front", "hub_back"))
     for k in range(2 * n):
         if k != last:
-            rows.append(R(f"fluid_gap{k}_front", "fluid", MRF, rho(2 * k), rho(2 * k + 1),
+            rows.append(R(f"fluid_gap{k}_front", "fluid", "fluid", rho(2 * k), rho(2 * k + 1),
                           "hub_back", "zone_A0"))  # fmt: skip
-        rows.append(R(f"fluid_gap{k}_back", "fluid", MRF, rho(2 * k), rho(2 * k + 1), "zone_B1",
+        rows.append(R(f"fluid_gap{k}_back", "fluid", "fluid", rho(2 * k), rho(2 * k + 1), "zone_B1",
                       "cap_back"))  # fmt: skip
     return tuple(rows)
 
@@ -203,6 +228,8 @@ class Regions:
     specs: tuple[RegionSpec, ...]
     at: Mapping[str, Any]
     fields: Fields
+    #: the material of each part (its names are the ones on ``specs``)
+    materials: MaterialChoice = DEFAULT_CHOICE
 
     def __iter__(self) -> Iterator[RegionSpec]:
         return iter(self.specs)
@@ -252,9 +279,10 @@ class Regions:
         return self.at["back"] - self.at["shaft_tip"]
 
 
-def evaluate(p: Fields, n: int) -> Regions:
-    """The region table of ``n``-drum clutches at the designs ``p`` (floats or arrays)."""
-    return Regions(n, table(n), stations(p, n), p)
+def evaluate(p: Fields, n: int, materials: MaterialChoice = DEFAULT_CHOICE) -> Regions:
+    """The region table of ``n``-drum clutches at the designs ``p`` (floats or arrays), made
+    of ``materials``."""
+    return Regions(n, table(n, materials), stations(p, n), p, materials)
 
 
 # ---- arrays of designs of several drum counts: one batch per topology ----------------------------
@@ -265,22 +293,44 @@ def by_drum_count(n_drums: np.ndarray, ok: np.ndarray | None = None) -> dict[int
     return {int(v): np.flatnonzero(keep & (n == v)) for v in np.unique(n[keep])}
 
 
+def by_topology(
+    n_drums: np.ndarray,
+    ok: np.ndarray | None = None,
+    materials: MaterialChoice | np.ndarray = DEFAULT_CHOICE,
+) -> dict[tuple[int, MaterialChoice], np.ndarray]:
+    """Row indices of each (drum count, material choice): one batch per region table.
+    ``materials``: one choice for every row, or an object array of S choices."""
+    if isinstance(materials, MaterialChoice):
+        return {(n, materials): rows for n, rows in by_drum_count(n_drums, ok).items()}
+    mats = np.asarray(materials, dtype=object)
+    out: dict[tuple[int, MaterialChoice], np.ndarray] = {}
+    for choice in dict.fromkeys(mats.tolist()):  # first-seen order
+        sel = mats == choice
+        keep = sel if ok is None else sel & np.asarray(ok, bool)
+        for n, rows in by_drum_count(n_drums, keep).items():
+            out[(n, choice)] = rows
+    return out
+
+
 def per_topology(
     p: Mapping[str, np.ndarray],
     ok: np.ndarray,
     fn: Callable[[Regions, np.ndarray], Mapping[str, Any]],
+    materials: MaterialChoice | np.ndarray = DEFAULT_CHOICE,
 ) -> dict[str, np.ndarray]:
-    """``fn(regions, rows)`` on the region table of every drum count in ``p`` (1-D arrays of
-    S designs; ``rows`` are the group's row indices), its outputs (arrays of the group's
+    """``fn(regions, rows)`` on the region table of every drum count (and material choice:
+    ``materials``, one for all rows or an object array of S) in ``p`` (1-D arrays of S
+    designs; ``rows`` are the group's row indices), its outputs (arrays of the group's
     size, or (size, …)) scattered back to S rows; rows not ``ok`` are NaN."""
     size = np.asarray(p["n_drums"]).size
     out: dict[str, np.ndarray] = {}
-    groups = by_drum_count(p["n_drums"], ok)
+    groups = by_topology(p["n_drums"], ok, materials)
     if not groups:  # no valid design: one empty batch still names the outputs
-        groups = {1: np.zeros(0, dtype=np.intp)}
-    for n, rows in groups.items():
+        first = materials if isinstance(materials, MaterialChoice) else DEFAULT_CHOICE
+        groups = {(1, first): np.zeros(0, dtype=np.intp)}
+    for (n, choice), rows in groups.items():
         sub = {k: v[rows] for k, v in p.items()}
-        for key, val in fn(evaluate(sub, n), rows).items():
+        for key, val in fn(evaluate(sub, n, choice), rows).items():
             val = np.broadcast_to(np.asarray(val, dtype=float), (rows.size, *np.shape(val)[1:]))
             if key not in out:
                 out[key] = np.full((size, *val.shape[1:]), np.nan)

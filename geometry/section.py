@@ -18,6 +18,7 @@ from types import MappingProxyType
 from typing import Literal
 
 from geometry import regions as table
+from geometry.materials import DEFAULT_CHOICE, MaterialChoice
 from geometry.params import DrumClutch
 from geometry.regions import OUTPUT_PARTS, PARTS, ZONES, Regions
 
@@ -36,6 +37,8 @@ class Region:
     r1: float
     z0: float
     z1: float
+    #: "steel" (magnetic), "nonmagnetic", "coil" or "fluid" (``geometry.regions``)
+    role: str = ""
 
     @property
     def area(self) -> float:
@@ -103,6 +106,11 @@ class Section:
     #: the evaluated region table this section views (None for a hand-made section)
     table: Regions | None = None
 
+    @property
+    def materials(self) -> MaterialChoice:
+        """The material of each part (the default for a hand-made section)."""
+        return DEFAULT_CHOICE if self.table is None else self.table.materials
+
     def part(self, name: str) -> tuple[Region, ...]:
         return tuple(r for r in self.regions if r.part == name)
 
@@ -133,10 +141,10 @@ class Section:
         return 2 * self.r_max, self.z_max - self.z_min
 
 
-def build_section(c: DrumClutch) -> Section:
-    """The region table (geometry/regions.py) evaluated at one design."""
-    rg = table.evaluate(vars(c), c.n_drums)
-    regs = tuple(Region(sp.name, sp.part, sp.material, *rg.bounds(sp)) for sp in rg)
+def build_section(c: DrumClutch, materials: MaterialChoice = DEFAULT_CHOICE) -> Section:
+    """The region table (geometry/regions.py) evaluated at one design made of ``materials``."""
+    rg = table.evaluate(vars(c), c.n_drums, materials)
+    regs = tuple(Region(sp.name, sp.part, sp.material, *rg.bounds(sp), sp.role) for sp in rg)
     gaps = tuple(Gap(int(sp.name[3:]), *rg.bounds(sp), *sp.walls) for sp in rg.films("cylinder"))
     faces = tuple(
         FaceGap(sp.name.removeprefix("film_"), r0, r1, z1 - z0)

@@ -90,8 +90,10 @@ class MagneticPath:
     leak_permeance: FloatArray
     band_len: FloatArray
     band_reluctance: FloatArray
-    steel: str = STEEL
+    steel: str = STEEL  # the drums' steel
     fluid: str = FLUID
+    core_steel: str = STEEL
+    shell_steel: str = STEEL  # the poles and the back iron
 
     @property
     def gap_r_mid(self) -> FloatArray:
@@ -148,7 +150,7 @@ def path_from_regions(rg: Regions, materials: Mapping[str, Magnetic] | None = No
     def box(sp):  # type: ignore[no-untyped-def]
         return at[sp.r0], at[sp.r1], at[sp.z0], at[sp.z1]
 
-    steels = [sp for sp in rg if sp.material == STEEL]
+    steels = [sp for sp in rg if sp.role == "steel"]
     gaps = rg.films("cylinder")
     zones = [(name, at[a], at[b]) for name, a, b in ZONES]
     gap_r0, gap_r1, gap_len, labels = [], [], [], []
@@ -184,7 +186,7 @@ def path_from_regions(rg: Regions, materials: Mapping[str, Magnetic] | None = No
     # the pole radius (series layers: Σ ln(ro/ri)/μ).
     (_, za0, za1), (_, zb0, _) = zones
     band = zb0 - za1
-    mu_f = magnetic(FLUID, mats).mu_initial
+    mu_f = magnetic(rg.materials.fluid, mats).mu_initial
     fluid_area = nonmag = window = np.zeros(size)
     rc, rp = core[1], pole_a[0]
     for sp in rg:
@@ -192,9 +194,9 @@ def path_from_regions(rg: Regions, materials: Mapping[str, Magnetic] | None = No
         spans = (a0 <= za1) & (a1 >= zb0) & (r0 >= rc)
         area = np.pi * (r1**2 - r0**2)
         layer = spans & (r1 <= rp)
-        if sp.material == FLUID:
+        if sp.role == "fluid":
             fluid_area = fluid_area + np.where(layer, area, 0.0)
-        elif sp.material != STEEL:
+        elif sp.role != "steel":
             nonmag = nonmag + np.where(layer, area, 0.0)
         window = window + np.where(spans & ~layer & (r1 <= back[0]), area, 0.0)
     stack = lambda xs: np.stack(xs, axis=1) if xs else np.zeros((size, 0))  # noqa: E731
@@ -212,7 +214,8 @@ def path_from_regions(rg: Regions, materials: Mapping[str, Magnetic] | None = No
         back_area=np.pi * (back[1] ** 2 - back[0] ** 2), back_len=zc[1] - zc[0],
         leak_permeance=_leak_permeance(mu_f, band, fluid_area, nonmag, window),
         band_len=band, band_reluctance=band_series_reluctance(rg, mats),
-        steel=STEEL, fluid=FLUID,
+        steel=rg.materials.drums, fluid=rg.materials.fluid, core_steel=rg.materials.core,
+        shell_steel=rg.materials.shell,
     )  # fmt: skip
 
 
@@ -321,12 +324,12 @@ def _mmf(
     steel, fluid = magnetic(path.steel, mats), magnetic(path.fluid, mats)
     g, dg = _sum_h(fluid, phi, kn.gap_k, kn.gap_w, kn.gap_wk)
     d, dd = _sum_h(steel, phi, kn.drum_k, kn.drum_w, kn.drum_wk)
-    c, dc = _sum_h(steel, phi, kn.core_k, kn.core_w, kn.core_wk)
+    c, dc = _sum_h(magnetic(path.core_steel, mats), phi, kn.core_k, kn.core_w, kn.core_wk)
     radial = g + d
     stack = radial + c
     dstack = dg + dd + dc
     shell = phi + kn.leak * stack
-    s, ds = _sum_h(steel, shell, kn.shell_k, kn.shell_w, kn.shell_wk)
+    s, ds = _sum_h(magnetic(path.shell_steel, mats), shell, kn.shell_k, kn.shell_w, kn.shell_wk)
     return {"gaps": g, "radial": radial, "stack": stack, "phi_shell": shell,
             "total": stack + s, "dstack": dstack, "dshell": ds,
             "dtotal": dstack + ds * (1.0 + kn.leak * dstack)}  # fmt: skip
@@ -442,7 +445,6 @@ def solve_path(
     b = np.abs(phi)[:, :, None] / (2 * np.pi * rmid * path.gap_len)[:, None, :]
     b = np.where(path.gap_mask[:, None, :], b, 0.0)
     h = magnetic(path.fluid, mats).h_of_b(b)
-    steel = magnetic(path.steel, mats)
     shell = np.abs(parts["phi_shell"])
     sb = {
         "core": np.abs(phi) / path.core_area[:, None],
@@ -453,9 +455,11 @@ def solve_path(
         "pole_B": shell / (2 * np.pi * path.pole_r0[:, 1] * path.pole_len[:, 1])[:, None],
         "back_iron": shell / path.back_area[:, None],
     }  # fmt: skip
-    if isinstance(steel, BHCurve):
-        sat = {k: steel.mu_r_differential(v) < SATURATION_MU_R for k, v in sb.items()}
-    else:
-        sat = {k: np.zeros(v.shape, bool) for k, v in sb.items()}
+    steel_of = {"core": path.core_steel, "drums": path.steel}
+    sat = {}
+    for k, v in sb.items():
+        mat = magnetic(steel_of.get(k, path.shell_steel), mats)
+        sat[k] = (mat.mu_r_differential(v) < SATURATION_MU_R if isinstance(mat, BHCurve)
+                  else np.zeros(v.shape, bool))  # fmt: skip
     return CircuitResult(np.array(cur), phi, parts["phi_shell"], path.gap_label, rmid,
                          path.gap_len, b, h, 0.5 * parts["radial"], sb, sat)  # fmt: skip

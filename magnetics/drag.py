@@ -109,8 +109,16 @@ class Term:
     source: str
 
 
-def fluid_of(fluid: MRFluid | None) -> MRFluid:
-    return FLUIDS[MRF] if fluid is None else fluid
+def fluid_of(fluid: MRFluid | None, rg: Regions | None = None) -> MRFluid:
+    """``fluid``, or else the fluid ``rg``'s materials choose (MRF-132DG without ``rg``)."""
+    if fluid is not None:
+        return fluid
+    return FLUIDS[MRF if rg is None else rg.materials.fluid]
+
+
+def _density(fl: MRFluid) -> float:
+    """kg/m³ of a fluid (the registry's)."""
+    return DENSITY[fl.name]
 
 
 def film_coefficients(rg: Regions, viscosity: Any) -> tuple[list[Any], list[Any]]:
@@ -167,7 +175,7 @@ def drag_terms(
     fluid ``temperature`` (°C) (module docstring)."""
     sup = Support() if support is None else support
     w = np.asarray(slip_speed, dtype=float)
-    eta = fluid_of(fluid).viscosity_at(temperature)
+    eta = fluid_of(fluid, rg).viscosity_at(temperature)
     c_gap, c_face = film_coefficients(rg, eta)
     c_g, c_f = sum(c_gap), sum(c_face)
     m_rr, m_sl = bearing_moment(sup, rg.fields["shaft_radius"], w)
@@ -192,8 +200,8 @@ def totals(terms: Mapping[str, Term]) -> tuple[Any, Any]:
 def taylor_ratio(rg: Regions, slip_speed: Any, temperature: Any, fluid: MRFluid | None = None
                  ) -> Any:  # fmt: skip
     """Largest Ta / 1708 over the cylindrical films: < 1 laminar Couette [taylor1923]."""
-    fl = fluid_of(fluid)
-    nu = fl.viscosity_at(temperature) / DENSITY[MRF]
+    fl = fluid_of(fluid, rg)
+    nu = fl.viscosity_at(temperature) / _density(fl)
     worst = 0.0
     for sp in rg.films("cylinder"):
         r0, r1, _, _ = rg.bounds(sp)
@@ -222,7 +230,7 @@ def coupled_fluid_inertia(rg: Regions) -> Any:
     """Inertia [kg·m²] the fluid adds to the output rotor (module docstring): for a
     cylindrical film 2πρL ∫ r³ s² dr with s linear from the input wall (0) to the output
     wall (1); 1/3 of every other fluid region's own inertia ρπ(r1⁴ − r0⁴)Δz/2."""
-    rho = DENSITY[MRF]
+    rho = DENSITY[rg.materials.fluid]
     total: Any = 0.0
     for sp in rg:
         if sp.part != "fluid":
@@ -246,7 +254,8 @@ def quasi_steady_hz(rg: Regions, temperature: Any, fluid: MRFluid | None = None)
     penetration depth √(2ν/ω) (Stokes' second problem [white-viscous]): f = ν/(π h²) of the
     widest film. Below it the carried fluid's linear profile (``coupled_fluid_inertia``)
     holds; above it less fluid follows the output."""
-    nu = fluid_of(fluid).viscosity_at(temperature) / DENSITY[MRF]
+    fl = fluid_of(fluid, rg)
+    nu = fl.viscosity_at(temperature) / _density(fl)
     widest = 0.0
     for sp in rg.films("cylinder"):
         r0, r1, _, _ = rg.bounds(sp)
@@ -302,7 +311,7 @@ def clutch_drag(
     fluid: MRFluid | None = None,
 ) -> Drag:
     """Every drag term of one design (``rg`` evaluated on floats), with its checks."""
-    fl = fluid_of(fluid)
+    fl = fluid_of(fluid, rg)
     eta = fl.viscosity_at(temperature)
     w = float(slip_speed)
     terms = drag_terms(rg, w, temperature, support, fl)

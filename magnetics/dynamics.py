@@ -76,6 +76,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from geometry.materials import STEEL, conductivity
 from geometry.regions import Regions
 from geometry.validation import ParameterError, check_choice, check_nonnegative, check_range
 from magnetics.circuit import MagneticPath, _kernels, _mmf, path_from_regions, solve_flux
@@ -85,8 +86,8 @@ from magnetics.thermal import coil_resistance
 FloatArray = NDArray[np.float64]
 
 #: S/m, AISI 1018 at 20 °C: ρ = 1.59e-7 Ω·m at 0 °C and 2.19e-7 at 100 °C [matweb-1018],
-#: linear between them: 1.71e-7 Ω·m → 5.8e6 S/m.
-STEEL_CONDUCTIVITY = 5.8e6
+#: linear between them: 1.71e-7 Ω·m → 5.8e6 S/m (the registry's, steel_1018.toml).
+STEEL_CONDUCTIVITY = conductivity(STEEL)
 #: s, first-order lag of the fluid's chain formation: an assumption ("sub-millisecond",
 #: module docstring, [kubik2022]).
 FLUID_RESPONSE_TIME = 0.25e-3
@@ -349,7 +350,7 @@ def eddy_parts(
     path: MagneticPath,
     current: ArrayLike,
     laminations: Laminations | None = None,
-    sigma: float = STEEL_CONDUCTIVITY,
+    sigma: float | None = None,
     materials: Mapping[str, Magnetic] | None = None,
     flux: ArrayLike | None = None,
 ) -> dict[str, EddyPart]:
@@ -359,9 +360,12 @@ def eddy_parts(
     in both zones together), ``poles``, ``back_iron``. The gap flux's eddy time constant is
     the sum of the parts' ``contribution``."""
     lam = Laminations() if laminations is None else laminations
-    check_nonnegative("sigma", sigma, " S/m")
     mats = MATERIALS if materials is None else materials
-    steel = magnetic(path.steel, mats)
+    # each part's own steel and conductivity (the registry's), or ``sigma`` for all
+    part_steel = {"core": path.core_steel, "drums": path.steel, "shell": path.shell_steel}
+    sig = {k: conductivity(v) if sigma is None else sigma for k, v in part_steel.items()}
+    for v in sig.values():
+        check_nonnegative("sigma", v, " S/m")
     size = path.turns.size
     kn = _kernels(path)
     if flux is None:
@@ -375,31 +379,33 @@ def eddy_parts(
     d_total = r_st + r_sh * (1.0 + p * r_st)
     dd_st, dd_sh = (1.0 + p * r_sh) / d_total, (1.0 + p * r_st) / d_total  # ∂D/∂R_i / D
 
-    def rows(k: FloatArray, wk: FloatArray, flux: FloatArray) -> tuple[FloatArray, FloatArray]:
+    def rows(k: FloatArray, wk: FloatArray, flux: FloatArray,
+             which: str) -> tuple[FloatArray, FloatArray]:  # fmt: skip
         """Incremental reluctance (J, S) and incremental μ (J, S) of each kernel row."""
+        steel = magnetic(part_steel[which], mats)
         _, dh = steel.h_dh(np.ascontiguousarray(k * flux[None, :, :]))
         return (wk * dh)[:, :, 0], 1.0 / np.maximum(dh[:, :, 0], 1e-30)
 
     def part(shape: str, diff_len: FloatArray, r: FloatArray, mu: FloatArray,
-             dd: FloatArray) -> EddyPart:  # fmt: skip
+             dd: FloatArray, sigma: float) -> EddyPart:  # fmt: skip
         rsum = r.sum(0)
         mu_w = np.sum(r * mu, 0) / np.where(rsum > 0, rsum, 1.0)
         tau1 = diffusion_time_constant(shape, mu_w, sigma, diff_len)
         mean = diffusion_mean_delay(shape, tau1)
         return EddyPart(shape, np.asarray(diff_len, float), tau1, mean, dd * rsum)
 
-    r_c, mu_c = rows(kn.core_k, kn.core_wk, phi)
-    r_d, mu_d = rows(kn.drum_k, kn.drum_wk, phi)
-    r_s, mu_s = rows(kn.shell_k, kn.shell_wk, phi_sh)
+    r_c, mu_c = rows(kn.core_k, kn.core_wk, phi, "core")
+    r_d, mu_d = rows(kn.drum_k, kn.drum_wk, phi, "drums")
+    r_s, mu_s = rows(kn.shell_k, kn.shell_wk, phi_sh, "shell")
     out: dict[str, EddyPart] = {}
     radius = np.sqrt(path.core_area / np.pi)
     if lam.core > 0:
-        out["core"] = part("slab", np.full(size, lam.core), r_c, mu_c, dd_st)
+        out["core"] = part("slab", np.full(size, lam.core), r_c, mu_c, dd_st, sig["core"])
     else:
-        out["core"] = part("cylinder", radius, r_c, mu_c, dd_st)
+        out["core"] = part("cylinder", radius, r_c, mu_c, dd_st, sig["core"])
     # drums: per wall (its own thickness), then one entry with the weighted sums
     t_d = (path.drum_r1 - path.drum_r0).T  # (D, S)
-    tau_rows = diffusion_time_constant("slab", mu_d, sigma, t_d)
+    tau_rows = diffusion_time_constant("slab", mu_d, sig["drums"], t_d)
     mean_rows = diffusion_mean_delay("slab", tau_rows)
     rsum = r_d.sum(0)
     safe = np.where(rsum > 0, rsum, 1.0)
@@ -416,8 +422,8 @@ def eddy_parts(
     else:
         d_pole = 2.0 * np.max(pole_len, axis=0)  # driven on the coil face only: d = 2l
         d_back = 2.0 * back_t  # driven on the coil face only: d = 2t
-    out["poles"] = part("slab", d_pole, r_s[poles], mu_s[poles], dd_sh)
-    out["back_iron"] = part("slab", d_back, r_s[-1:], mu_s[-1:], dd_sh)
+    out["poles"] = part("slab", d_pole, r_s[poles], mu_s[poles], dd_sh, sig["shell"])
+    out["back_iron"] = part("slab", d_back, r_s[-1:], mu_s[-1:], dd_sh, sig["shell"])
     return out
 
 

@@ -13,15 +13,17 @@ from __future__ import annotations
 
 import functools
 import math
+import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from geometry.materials import COIL, MRF, STAINLESS, STEEL
+from geometry.materials import COIL, KIND, MRF, RECORDS, STAINLESS, STEEL, check_record, register
 from geometry.validation import ParameterError, check_positive
 
 MU0 = 4e-7 * math.pi  # vacuum permeability, H/m (pre-2019 SI value; differs by 5e-10)
@@ -218,28 +220,6 @@ class BHCurve:
 
 Magnetic = LinearMaterial | BHCurve
 
-# AISI 1018 steel. Source: FEMM 4.2 material library (matlib.dat, "1018 Steel"),
-# [femm-matlib] (docs/references.md).
-STEEL_1018 = BHCurve(
-    STEEL,
-    (0.2503, 0.925, 1.25, 1.39, 1.525, 1.71, 1.87, 1.955, 2.02, 2.11, 2.225, 2.43),
-    (238.7, 795.8, 1591.6, 2387.3, 3978.9, 7957.8, 15915.5, 23873.0, 39789.0, 79578.0,
-     159155.0, 318310.0),
-    "FEMM 4.2 matlib.dat '1018 Steel'",
-)  # fmt: skip
-
-# LORD MRF-132DG. Source: manufacturer's B–H curve as digitised in the public FEMM
-# material "LORD MRF 132-DG" [femm-matlib]; H converted kA/m → A/m.
-MRF_132DG_BH = BHCurve(
-    MRF,
-    (0.103, 0.160, 0.229, 0.309, 0.372, 0.424, 0.481, 0.556, 0.607, 0.682, 0.722, 0.785,
-     0.831, 0.877, 0.917, 0.951, 0.974, 0.997),
-    tuple(1e3 * h for h in (12.1, 19.7, 30.2, 43.9, 57.5, 66.5, 80.2, 95.3, 116.4, 139.1,
-                            154.3, 178.4, 198.1, 222.3, 243.5, 263.1, 279.8, 290.4)),
-    "LORD MRF-132DG datasheet B–H, digitised (FEMM 'LORD MRF 132-DG')",
-)  # fmt: skip
-
-
 _CARLSON_K = 6.33e-6  # m/A, Carlson's field scale in τy = τ_max·tanh(k·H) [carlson]
 # ∫_u^∞ tanh(t)/t² dt = Q(ln u), and S(v) = e^v·Q(v), tabulated in v on [_S_LO, _S_HI]:
 # S' = S − tanh(e^v); below the table S = e^v·(Q∞ − v) to e^{3v}/6 (tanh t = t − t³/3 …,
@@ -373,39 +353,144 @@ class MRFluid:
         return float(out) if np.ndim(out) == 0 else out
 
 
-# MRF-132DG rheology. Source: Carlson closed form (LORD) [carlson], φ = 0.32, C = 1.0
-# (hydrocarbon carrier); η = 0.112 Pa·s at 40 °C [lord-mrf132dg] (slope 800–1200 1/s).
-# Chosen over interpolating the three datasheet points 4.64/13.77/23.47 kPa at
-# 18/46/80 kA/m because it saturates physically (~48 kPa) beyond the points; it is
-# +17 %, −1 %, −4.6 % off those points (tests/magnetics/test_materials.py).
-# The carrier is "hydrocarbon" [lord-mrf132dg], grade not disclosed: its temperature
-# law is taken as a 4 mm²/s poly-alpha-olefin's, ν = 19.0 / 4.1 mm²/s at 40 / 100 °C
-# [pao4] (the least certain input of the drag: docs/drag.md). Thermal conductivity
-# 0.25–1.06 W/(m·K) (middle taken) and specific heat 0.80 J/(g·K) at 25 °C [lord-mrf132dg].
-MRF_132DG = MRFluid(
-    MRF, 0.32, 1.0, 0.112, "Carlson/LORD closed form; datasheet η", 40.0,
-    ((40.0, 19.0e-6), (100.0, 4.1e-6)), "PAO 4 (assumed carrier grade)",
-)  # fmt: skip
+# ---- the registry: one data file per material (geometry/data/materials, sources there) ----
+_CARLSON_BH_H = np.geomspace(2e3, 4e5, 40)  # A/m: where Carlson's B(H) is tabulated
 
-#: Datasheet yield stress of MRF-132DG [lord-mrf132dg] (H in A/m, τy in Pa), comparison only.
-MRF_132DG_DATASHEET_TAU = ((18e3, 4.64e3), (46e3, 13.77e3), (80e3, 23.47e3))
+
+def carlson_b(phi: float, h: ArrayLike) -> FloatArray:
+    """Carlson's fluid B–H, B = 1.91·φ^1.133·(1 − e^(−10.97·μ0·H)) + μ0·H [T] [carlson]."""
+    h = np.asarray(h, dtype=float)
+    return 1.91 * phi**1.133 * -np.expm1(-10.97 * MU0 * h) + MU0 * h  # [carlson]
+
+
+def _bh_of(rec: Mapping[str, Any], where: str) -> BHCurve:
+    """The B–H curve of a record's ``[bh]`` table: points ``b``, ``h`` or ``model =
+    "carlson"`` (a fluid's closed form at its ``phi``)."""
+    bh = rec.get("bh")
+    if not isinstance(bh, Mapping):
+        raise ParameterError(f"{where}: [bh]: missing (a table with b and h, or model)")
+    src = str(bh.get("source", ""))
+    if bh.get("model") == "carlson":
+        h = _CARLSON_BH_H
+        return BHCurve(rec["name"], tuple(carlson_b(float(rec["phi"]), h)), tuple(h), src)
+    if "model" in bh:
+        raise ParameterError(f"{where}: [bh].model = {bh['model']!r}: only 'carlson' is known")
+    b, h = bh.get("b"), bh.get("h")
+    for key, v in (("b", b), ("h", h)):
+        if not isinstance(v, list) or not all(
+            isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x) for x in v
+        ):
+            raise ParameterError(f"{where}: [bh].{key}: must be a list of finite numbers")
+    try:
+        return BHCurve(rec["name"], tuple(map(float, b)), tuple(map(float, h)), src)
+    except ParameterError as e:
+        raise ParameterError(f"{where}: [bh]: {e}") from None
+
+
+def _fluid_of(rec: Mapping[str, Any], where: str) -> MRFluid:
+    """The rheology of a fluid record (``MRFluid``), every field checked."""
+    name = rec["name"]
+
+    def num(key: str) -> float:
+        v = rec.get(key)
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+            raise ParameterError(f"{where}: {key} = {v!r}: must be a finite number")
+        return float(v)
+
+    phi = num("phi")
+    if not 0.0 < phi < 0.64:  # random close packing of spheres bounds it
+        raise ParameterError(
+            f"{where}: phi = {phi:g}: the iron volume fraction must be in (0, 0.64)"
+        )
+    visc = num("viscosity")
+    if visc <= 0:
+        raise ParameterError(f"{where}: viscosity = {visc:g} Pa·s: must be > 0")
+    pts = rec.get("carrier_points")
+    tr = rec.get("temperature_range")
+    try:
+        cp = tuple((float(t), float(nu)) for t, nu in pts)
+        lo, hi = (float(t) for t in tr)
+    except (TypeError, ValueError):
+        raise ParameterError(
+            f"{where}: carrier_points and temperature_range: need [[°C, m²/s], [°C, m²/s]] "
+            "and [lo, hi] °C"
+        ) from None
+    if len(cp) != 2 or not lo < hi:
+        raise ParameterError(f"{where}: carrier_points: two points; temperature_range: lo < hi")
+    try:
+        return MRFluid(name, phi, num("carrier_c"), visc, str(rec.get("rheology_source", "")),
+                       num("viscosity_temperature"), (cp[0], cp[1]), str(rec.get("carrier", "")),
+                       (lo, hi), num("thermal_conductivity"), num("specific_heat"))  # fmt: skip
+    except ParameterError as e:
+        raise ParameterError(f"{where}: {e}") from None
+
+
+_MATERIALS: dict[str, Magnetic] = {}
+_FLUIDS: dict[str, MRFluid] = {}
+#: S/m at 20 °C of every registered material (the eddy-current delay's σ).
+CONDUCTIVITY: Mapping[str, float] = MappingProxyType(
+    {n: float(r["conductivity"]) for n, r in RECORDS.items()}
+)
+
+
+def _add(rec: Mapping[str, Any], where: str) -> None:
+    name, kind = rec["name"], rec["kind"]
+    if kind == "nonmagnetic":
+        _MATERIALS[name] = LinearMaterial(name, 1.0, "non-magnetic, μr = 1")
+        return
+    _MATERIALS[name] = _bh_of(rec, where)
+    if kind == "fluid":
+        _FLUIDS[name] = _fluid_of(rec, where)
+
+
+for _name, _rec in RECORDS.items():
+    _add(_rec, f"{_name}.toml")
 
 AIR = LinearMaterial("air", 1.0, "vacuum")
-STAINLESS_304 = LinearMaterial(STAINLESS, 1.0, "austenitic, μr≈1 [materials]")
 COIL_MATERIAL = LinearMaterial(COIL, 1.0, "copper + epoxy, μr≈1 [materials]")
+_MATERIALS[COIL] = COIL_MATERIAL
+_MATERIALS["air"] = AIR
 
-#: Magnetic materials keyed by the section's material names.
-MATERIALS: Mapping[str, Magnetic] = MappingProxyType(
-    {
-        STEEL: STEEL_1018,
-        MRF: MRF_132DG_BH,
-        STAINLESS: STAINLESS_304,
-        COIL: COIL_MATERIAL,
-        "air": AIR,
-    }
-)
+#: Magnetic materials keyed by the section's material names (the whole registry).
+MATERIALS: Mapping[str, Magnetic] = MappingProxyType(_MATERIALS)
 #: MR fluids' rheology keyed by the section's fluid material names.
-FLUIDS: Mapping[str, MRFluid] = MappingProxyType({MRF: MRF_132DG})
+FLUIDS: Mapping[str, MRFluid] = MappingProxyType(_FLUIDS)
+
+# The defaults every figure before the library was measured with, by their old names.
+STEEL_1018 = _MATERIALS[STEEL]
+MRF_132DG_BH = _MATERIALS[MRF]
+STAINLESS_304 = _MATERIALS[STAINLESS]
+MRF_132DG = _FLUIDS[MRF]
+#: Datasheet yield stress of MRF-132DG [lord-mrf132dg] (H in A/m, τy in Pa), comparison only.
+MRF_132DG_DATASHEET_TAU = tuple(zip(RECORDS[MRF]["tau_y"]["h"], RECORDS[MRF]["tau_y"]["tau"],
+                                    strict=True))  # fmt: skip
+
+
+def load_fluid(path: str | Path) -> str:
+    """Read a user's fluid from a TOML file with the fields of a built-in fluid's data file
+    (geometry/data/materials/mrf_132dg.toml), check every field (a B–H table that is not
+    increasing, a viscosity ≤ 0 … end in a ParameterError naming it) and add it to the
+    registry under its ``name``. Returns the name."""
+    p = Path(path)
+    where = p.name
+    try:
+        with p.open("rb") as f:
+            rec = tomllib.load(f)
+    except OSError as e:
+        raise ParameterError(f"{where}: cannot read the fluid file ({e.strerror})") from None
+    except tomllib.TOMLDecodeError as e:
+        raise ParameterError(f"{where}: not valid TOML ({e})") from None
+    rec = {"kind": "fluid", "conductivity": 0.0, **rec}
+    if rec["kind"] != "fluid":
+        raise ParameterError(f"{where}: kind = {rec['kind']!r}: a fluid file must be a fluid")
+    checked = check_record(rec, where)
+    name = checked["name"]
+    if name in _MATERIALS and name not in RECORDS:
+        raise ParameterError(f"{where}: name = {name!r}: taken")
+    bh, fluid = _bh_of(checked, where), _fluid_of(checked, where)  # all checks before adding
+    register(checked, where)
+    _MATERIALS[name], _FLUIDS[name] = bh, fluid
+    return name
 
 
 def magnetic(name: str, materials: Mapping[str, Magnetic] | None = None) -> Magnetic:
@@ -420,8 +505,11 @@ def magnetic(name: str, materials: Mapping[str, Magnetic] | None = None) -> Magn
 
 
 def linear_materials(steel_mu_r: float, fluid_mu_r: float) -> Mapping[str, Magnetic]:
-    """The registry with linear steel and fluid (for closed-form tests)."""
+    """The registry with every steel and fluid linear (for closed-form tests)."""
     d = dict(MATERIALS)
-    d[STEEL] = LinearMaterial(STEEL, steel_mu_r, "linear test steel")
-    d[MRF] = LinearMaterial(MRF, fluid_mu_r, "linear test fluid")
+    for name, kind in KIND.items():
+        if kind == "steel":
+            d[name] = LinearMaterial(name, steel_mu_r, "linear test steel")
+        elif kind == "fluid":
+            d[name] = LinearMaterial(name, fluid_mu_r, "linear test fluid")
     return MappingProxyType(d)

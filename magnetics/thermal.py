@@ -49,27 +49,25 @@ from geometry.materials import (
     DENSITY,
     DENSITY_COPPER,
     DENSITY_EPOXY,
-    MRF,
-    STAINLESS,
-    STEEL,
+    RECORDS,
     copper_fraction,
 )
 from geometry.regions import Regions, layer, n_layers, rho
-from magnetics.materials import FLUIDS
 
 RHO_CU_20 = 1.72e-8  # Ω·m at 20 °C [materials] (docs/references.md)
 ALPHA_CU = 0.00393  # 1/K, copper resistivity temperature coefficient [materials]
 
-#: J/(kg·K) [incropera] Table A.1 (plain carbon steel, AISI 304, pure copper); epoxy
-#: typical; the fluid [lord-mrf132dg].
+#: J/(kg·K): every registered material's (its data file: [incropera] Table A.1 for the
+#: steels, AISI 304 and aluminium; the fluids' sheets), copper [incropera], epoxy typical.
 SPECIFIC_HEAT: Mapping[str, float] = MappingProxyType(
-    {STEEL: 434.0, STAINLESS: 477.0, "copper": 385.0, "epoxy": 1100.0,
-     MRF: FLUIDS[MRF].specific_heat}
+    {**{n: float(r["specific_heat"]) for n, r in RECORDS.items()},
+     "copper": 385.0, "epoxy": 1100.0}
 )  # fmt: skip
-#: W/(m·K) [incropera] Table A.1; epoxy + wire enamel typical; the fluid [lord-mrf132dg].
+#: W/(m·K): every registered material's (its data file), copper [incropera], epoxy + wire
+#: enamel typical.
 CONDUCTIVITY: Mapping[str, float] = MappingProxyType(
-    {STEEL: 60.5, STAINLESS: 14.9, "copper": 401.0, "epoxy": 0.2,
-     MRF: FLUIDS[MRF].thermal_conductivity}
+    {**{n: float(r["thermal_conductivity"]) for n, r in RECORDS.items()},
+     "copper": 401.0, "epoxy": 0.2}
 )  # fmt: skip
 EMISSIVITY = 0.3  # machined steel, typical 0.2–0.4 [incropera]
 SIGMA = 5.670374419e-8  # W/(m²·K⁴), Stefan–Boltzmann
@@ -139,10 +137,12 @@ def network(rg: Regions, ambient: float = 20.0, fluid_limit: float = 130.0) -> N
                        + (1 - frac) * DENSITY_EPOXY * SPECIFIC_HEAT["epoxy"])  # fmt: skip
             cap["coil"] = cap["coil"] + c
             continue
-        c = vol * DENSITY[sp.material] * SPECIFIC_HEAT[sp.material]
+        c = vol * DENSITY[sp.material] * RECORDS[sp.material]["specific_heat"]
         node = "housing" if sp.part == "housing" and sp.name != "core" else "core"
         cap[node] = cap[node] + c
     # conductances
+    k_of = lambda name: float(RECORDS[name]["thermal_conductivity"])  # noqa: E731
+    mat = rg.materials
     k_m = CONDUCTIVITY["epoxy"]
     k_w = k_m * (1 + frac) / (1 - frac)  # aligned cylinders, transverse [rayleigh1892]
     band = p["band_length"]
@@ -151,15 +151,15 @@ def network(rg: Regions, ambient: float = 20.0, fluid_limit: float = 130.0) -> N
     stack = 0.0  # K·m/W: the fluid/drum stack per unit length, core → poles
     for j in range(n_layers(rg.n)):
         kind = layer(j)[0]
-        k = CONDUCTIVITY[MRF] if kind == "gap" else CONDUCTIVITY[STEEL]
+        k = k_of(mat.fluid) if kind == "gap" else k_of(mat.drums)
         stack = stack + np.log(at[rho(j + 1)] / at[rho(j)]) / (2 * np.pi * k)
-    r_coil_core = (_wall(r_ci, r_cm, k_w, band) + _wall(pole, r_ci, CONDUCTIVITY[STAINLESS], band)
+    r_coil_core = (_wall(r_ci, r_cm, k_w, band) + _wall(pole, r_ci, k_of(mat.housing), band)
                    + stack / band)  # fmt: skip
     r_coil_housing = _wall(r_cm, r_co, k_w, band)
     t_cap = p["end_cap_thickness"]
     r_core = rg.core_radius
-    r_cap = (t_cap / 2) / (CONDUCTIVITY[STAINLESS] * np.pi * r_core**2) + _wall(
-        r_core, rg.outer_radius, CONDUCTIVITY[STAINLESS], t_cap
+    r_cap = (t_cap / 2) / (k_of(mat.housing) * np.pi * r_core**2) + _wall(
+        r_core, rg.outer_radius, k_of(mat.housing), t_cap
     )
     g_core_housing = 2 * p["zone_length"] / stack + 1 / r_cap
     diameter = 2 * rg.outer_radius

@@ -35,6 +35,16 @@ the key name too::
     core_mm = 0
     shell_mm = 0
 
+    [materials]              # optional: per part, from the registry (geometry/materials.py)
+    fluid = "MRF-140CG"      # MRF-122EG, MRF-132DG (default), MRF-140CG
+    # fluid_file = "my_fluid.toml"   # or a user's fluid (the fields of a registry file)
+    core = "Hiperco 50"      # steels: steel_1018 (default), steel_1010, pure_iron,
+    drums = "steel 1018"     #   steel_1117, hiperco_50, stainless_430
+    shell = "Hiperco 50"
+    bands = "stainless 304"  # non-magnetic: stainless_304 (default), aluminium_6061, pla
+    housing = "stainless 304"
+    hub = "stainless 304"
+
     [transmission]           # optional, defaults: the paper's MR bench (170 mm lever)
     lever_mm = 170
     gearing = 1.0
@@ -67,12 +77,12 @@ from typing import Any
 import numpy as np
 
 from geometry import regions
-from geometry.materials import MRF
+from geometry.materials import MRF, MaterialChoice
 from geometry.params import DrumClutch, preset
 from geometry.validation import ParameterError, check_choice, check_positive, check_range
 from magnetics.drag import ROOM_TEMPERATURE, Support
 from magnetics.dynamics import Amplifier, Laminations, supply_current
-from magnetics.materials import FLUIDS
+from magnetics.materials import FLUIDS, load_fluid
 from magnetics.thermal import adiabatic_current_density
 from mrclutch.haptics.actuator import MR_170, MR_DELAY, Transmission
 from mrclutch.inputs import read_toml
@@ -162,8 +172,14 @@ class ClutchDesign:
     uncertainty: Uncertainty | None = None
     #: what a bench measured (None: nothing)
     measured: Measured | None = None
-
     process: Process = field(default_factory=Process)  # what the workshop holds (optimize)
+    #: the material of each part (the fluid's range bounds ``operating.fluid_temperature``)
+    materials: MaterialChoice = field(default_factory=MaterialChoice)
+
+    def __post_init__(self) -> None:
+        lo, hi = FLUIDS[self.materials.fluid].temperature_range
+        check_range("fluid_temperature", self.operating.fluid_temperature, lo, hi,
+                    f" °C ({self.materials.fluid}'s range)")  # fmt: skip
 
     @property
     def ranges(self) -> Uncertainty:
@@ -294,7 +310,7 @@ def _short(v: Any) -> str:
 def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> ClutchDesign:
     """Build a design from a parsed design file (see the module docstring)."""
     known = {"clutch", "operating", "transmission", "support", "amplifier", "laminations",
-             "uncertainty", "measured", "process", "name"}  # fmt: skip
+             "uncertainty", "measured", "process", "materials", "name"}  # fmt: skip
     for key in data:
         if key not in known and not isinstance(data[key], dict):
             raise ParameterError(f"{where}: {key}: not in a table; dimensions go under [clutch]")
@@ -323,9 +339,10 @@ def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> Clutc
     tr_table = data["transmission"] if "transmission" in data else {}
     sup_table = dict(data["support"]) if "support" in data else {}
     proc_table = data["process"] if "process" in data else {}
+    mat_table = data["materials"] if "materials" in data else {}
     for name, t in (("operating", op_table), ("transmission", tr_table), ("support", sup_table),
                     ("amplifier", amp_table), ("laminations", lam_table),
-                    ("process", proc_table)):  # fmt: skip
+                    ("process", proc_table), ("materials", mat_table)):  # fmt: skip
         if not isinstance(t, dict):
             raise ParameterError(f"{where}: [{name}] must be a table")
     source = op_table.pop("delay_source", "fixed")
@@ -357,9 +374,10 @@ def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> Clutc
         support = Support(bearing=bearing, **sup)  # type: ignore[arg-type]
     with _file_key(proc_table, PROCESS_KEYS, f"{where}: process"):
         process = Process(**_read_table(proc_table, PROCESS_KEYS, f"{where}: process"))
+    materials = _materials(dict(mat_table), where)
     name = data["name"] if "name" in data else Path(where).stem
     design = ClutchDesign(clutch, operating, transmission, str(name), support, amplifier,
-                          laminations, process=process)  # fmt: skip
+                          laminations, process=process, materials=materials)  # fmt: skip
     if "uncertainty" in data:
         unc = uncertainty_from_mapping(data["uncertainty"], f"{where}: uncertainty",
                                        base=default_uncertainty(design))  # fmt: skip
@@ -368,6 +386,20 @@ def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> Clutc
         meas = measured_from_mapping(data["measured"], f"{where}: measured", source=str(where))
         design = replace(design, measured=meas)
     return design
+
+
+def _materials(table: dict[str, Any], where: str) -> MaterialChoice:
+    """The ``[materials]`` table: registry names per part; ``fluid_file`` (a path relative
+    to the design file) reads a user's fluid (``magnetics.materials.load_fluid``)."""
+    if "fluid_file" in table:
+        file = table.pop("fluid_file")
+        if not isinstance(file, str):
+            raise ParameterError(f"{where}: materials.fluid_file = {file!r}: must be a path")
+        if "fluid" in table:
+            raise ParameterError(f"{where}: materials: give fluid or fluid_file, not both")
+        path = Path(file) if Path(file).is_absolute() else Path(where).parent / file
+        table["fluid"] = load_fluid(path)
+    return MaterialChoice.from_mapping(table, f"{where}: materials")
 
 
 def load_design(path: str | Path) -> ClutchDesign:
@@ -403,6 +435,8 @@ def design_to_toml(design: ClutchDesign) -> str:
         lines += [f"{k} = {_toml(_si(getattr(obj, n), f))}" for k, (n, f) in keys.items()]
     lines += ["", "[transmission]"]
     lines += [f"{k} = {_toml(_si(getattr(tr, n), f))}" for k, (n, f) in _TRANSMISSION_KEYS.items()]
+    lines += ["", "[materials]"]
+    lines += [f"{k} = {_toml(v)}" for k, v in design.materials.as_dict().items()]
     sup = design.support
     lines += ["", "[support]", f"bearing = {_toml(sup.bearing)}"]
     lines += [f"{k} = {_toml(_si(getattr(sup, n), f))}" for k, (n, f) in _SUPPORT_KEYS.items()]

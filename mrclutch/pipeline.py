@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike
 
 from geometry import regions
 from geometry.mass import MassReport, analytic_mass, brep_mass, region_mass
-from geometry.materials import MRF
+from geometry.materials import DEFAULT_CHOICE, MRF, SLOTS, MaterialChoice
 from geometry.params import broadcast_fields, preset, valid
 from geometry.section import build_section
 from geometry.validation import ParameterError, check_choice
@@ -67,7 +67,7 @@ from mrclutch.haptics.model import (
 from mrclutch.haptics.zwidth import ZWIDTH_KEYS
 from mrclutch.haptics.zwidth import zwidth as zwidth_of
 from mrclutch.outputs import SWEEP_COLUMNS, SWEEP_OPTIONAL
-from mrclutch.trust import choose, circuit_trust
+from mrclutch.trust import choose, circuit_trust, material_trust
 
 FIDELITIES: tuple[str, ...] = ("fast", "reference")
 #: Stated relative error of the fast path's rendering bandwidth against the reference
@@ -82,6 +82,12 @@ FAST_BANDWIDTH_ERROR = 0.05
 
 #: °C: the fluid's upper temperature limit, the maker's operating range [lord-mrf132dg].
 FLUID_LIMIT = FLUIDS[MRF].temperature_range[1]
+
+
+def fluid_limit(materials: MaterialChoice) -> float:
+    """°C, the hottest the chosen fluid may run (its maker's range)."""
+    return FLUIDS[materials.fluid].temperature_range[1]
+
 
 #: The motor of the paper's equal-force comparison (Fig. 7c).
 MOTOR = "maxon-136206"
@@ -163,7 +169,7 @@ def clutch_figures(
     quantity needs an FEM) are added to the figures' notes."""
     check_choice("fidelity", fidelity, FIDELITIES)
     c, op = design.clutch, design.operating
-    section = build_section(c)
+    section = build_section(c, design.materials)
     fem_size = None
     extra: tuple[str, ...] = ()
     if accuracy is not None:
@@ -178,7 +184,9 @@ def clutch_figures(
         inertia_method = "analytic" if fidelity == "fast" else "brep"
         torque_method = "network" if fidelity == "fast" else "fem"
         if torque_method == "network":  # never a silent wrong number (issue 6)
-            extra = circuit_trust(c, "network", design.current_limit)
+            extra = circuit_trust(c, "network", design.current_limit) + material_trust(
+                design.materials
+            )
     if inertia_method == "analytic":
         mass = analytic_mass(section)
     else:
@@ -227,18 +235,19 @@ def thermal_figures(design: ClutchDesign, rg: regions.Regions, path: Any, off_to
     closed forms as the sweeps' continuous torque, plus the transient at the peak current
     holding the peak torque while slipping at the input speed."""
     op = design.operating
-    net = thermal.network(rg, op.ambient_temperature, FLUID_LIMIT)
+    limit = fluid_limit(rg.materials)
+    net = thermal.network(rg, op.ambient_temperature, limit)
     # the chords through the default torque model's curve (the network), as the sweeps
     ladder = network_from_regions(rg)
     i_c, t_c = continuous_torque(net, path, op.input_speed, off_torque,
-                                 op.wire_temperature_limit, FLUID_LIMIT,
+                                 op.wire_temperature_limit, limit,
                                  torque_at=network_yield_at(ladder))  # fmt: skip
     t_wire, t_fluid = thermal.time_to_limits(
         net,
         design.current_limit,
         peak_torque * op.input_speed,
         op.wire_temperature_limit,
-        FLUID_LIMIT,
+        limit,
     )
     return {
         "continuous_current_A": float(np.ravel(i_c)[0]),
@@ -459,7 +468,7 @@ def evaluate(
     if accuracy is not None:
         fidelity = f"accuracy={accuracy:g}"
     resp = torque_response(
-        build_section(design.clutch).table,
+        build_section(design.clutch, design.materials).table,
         fig.max_current,
         design.amplifier,
         design.laminations,
@@ -642,6 +651,31 @@ def hand_budget(design: ClutchDesign, fig: ClutchFigures, mr: HapticParams,
 # ---- the vectorised fast path for sweeps -----------------------------------------------
 
 
+def material_rows(
+    fields: Mapping[str, Any], base: MaterialChoice
+) -> tuple[dict[str, Any], MaterialChoice | np.ndarray]:
+    """Split a batch's material columns (``SLOTS`` names: ``fluid``, ``core`` …, each a
+    name or an array of names) from its dimensions: (the dimensions, one MaterialChoice
+    for every row or an object array of them, one per row). Names are checked here
+    (unknown ones refused with the known list)."""
+    cols = {k: v for k, v in fields.items() if k in SLOTS}
+    rest = {k: v for k, v in fields.items() if k not in SLOTS}
+    if not cols:
+        return rest, base
+    arrs = {k: np.asarray(v, dtype=object) for k, v in cols.items()}
+    shape = np.broadcast_shapes(*(a.shape for a in arrs.values()))
+    flat = {k: np.broadcast_to(a, shape).ravel() for k, a in arrs.items()}
+    cache: dict[tuple[Any, ...], MaterialChoice] = {}
+    out = np.empty(int(np.prod(shape)), dtype=object)
+    keys = tuple(flat)
+    for i in range(out.size):
+        combo = tuple(flat[k][i] for k in keys)
+        if combo not in cache:
+            cache[combo] = replace(base, **dict(zip(keys, combo, strict=True)))
+        out[i] = cache[combo]
+    return rest, out.reshape(shape)
+
+
 @dataclass(frozen=True)
 class BatchEvaluator:
     """Picklable fast-path evaluator of arrays of designs around a base ClutchDesign.
@@ -698,7 +732,14 @@ def evaluate_batch(
     Designs that fail DrumClutch's validation get ``valid = 0`` and NaN outputs; no invalid
     number reaches a solver."""
     base = base if base is not None else ClutchDesign()
+    fields, mats = material_rows(fields, base.materials)
+    if not isinstance(mats, MaterialChoice):  # the material columns set the batch's shape too
+        drums = np.asarray(fields.get("n_drums", base.clutch.n_drums))
+        fields = {**fields, "n_drums": np.broadcast_to(drums, np.broadcast_shapes(
+            drums.shape, mats.shape))}  # fmt: skip
     p = broadcast_fields(fields, base.clutch)
+    if not isinstance(mats, MaterialChoice):
+        mats = np.broadcast_to(mats, np.shape(p["n_drums"])).ravel()
     ok = valid(p)
     op = base.operating
     current = np.array(np.broadcast_to(current_limit(op, p["wire_diameter"]), ok.shape), float)
@@ -722,14 +763,17 @@ def evaluate_batch(
                                coil_temperature=op.coil_temperature,
                                flux_peak=flux[:, 0])  # fmt: skip
         out["torque_delay"] = resp.equivalent_delay
-        net = thermal.network(rg, op.ambient_temperature, FLUID_LIMIT)
+        limit = fluid_limit(rg.materials)
+        net = thermal.network(rg, op.ambient_temperature, limit)
         out["continuous_torque"] = continuous_torque(
             net, path, op.input_speed, out["off_torque"], op.wire_temperature_limit,
-            FLUID_LIMIT, torque_at=network_yield_at(ladder, seed=(current[rows], x_peak)),
+            limit, torque_at=network_yield_at(ladder, seed=(current[rows], x_peak)),
         )[1]  # fmt: skip
+        measured = rg.materials.magnetic == DEFAULT_CHOICE.magnetic
+        out["default_materials"] = np.full(rows.size, float(measured))
         return out
 
-    fig = regions.per_topology(p, ok, clutch)
+    fig = regions.per_topology(p, ok, clutch, mats)
     off_torque = fig["off_torque"]
     torque = fig["yield_torque"] + off_torque
     hand = {}
@@ -753,7 +797,10 @@ def evaluate_batch(
         "diameter_m": fig["diameter"],
         "length_m": fig["length"],
         "max_torque_N_m": torque,
-        "torque_error_bound": np.where(ok, error_bound(p, "network", current)[1], np.nan),
+        # the map's bound only where it was measured (1018, MRF-132DG): elsewhere unmeasured
+        "torque_error_bound": np.where(
+            ok & (fig["default_materials"] == 1.0), error_bound(p, "network", current)[1], np.nan
+        ),
         "fluid_inertia_kg_m2": fig["fluid_inertia"],
         "drag_damping_N_m_s": fig["damping"],
         "off_state_torque_N_m": off_torque,

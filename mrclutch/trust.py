@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from geometry.mass import analytic_mass, thinnest_feature
-from geometry.materials import STEEL
+from geometry.materials import DEFAULT_CHOICE, LABEL, STEEL, MaterialChoice
 from geometry.section import build_section
 from geometry.validation import ParameterError
 from magnetics.circuit import solve
@@ -98,6 +98,21 @@ def circuit_trust(
             f"use the FEM",
         )
     return ()
+
+
+def material_trust(materials: MaterialChoice) -> tuple[str, ...]:
+    """A note when the magnetic materials differ from the ones every error map and bound
+    was measured with (AISI 1018, MRF-132DG): the fast torque's bound is then unmeasured
+    for this material set (the torque itself is still given)."""
+    if materials.magnetic == DEFAULT_CHOICE.magnetic:
+        return ()
+    slots = ("fluid", "core", "drums", "shell")
+    chosen = ", ".join(f"{k} {LABEL[v]}" for k, v in zip(slots, materials.magnetic, strict=True))
+    return (
+        f"torque error bound: unmeasured for this material ({chosen}); the maps were "
+        "measured on steel 1018 and MRF-132DG (docs/magnetics.md: the network against the "
+        "FEM per fluid)",
+    )
 
 
 def mesh_trust(clutch: Any, tolerance: float) -> tuple[str, ...]:
@@ -232,7 +247,9 @@ def choose(design: ClutchDesign, accuracy: float) -> Choice:
     t_target = min(accuracy, 2 * accuracy - ei)
     circ = circuit_error(design.clutch)
     i_max = design.current_limit
-    bounds = [(n, s, torque_error_bound(design.clutch, n, s, i_max), t)
+    unmeasured = material_trust(design.materials)  # the maps' bounds do not apply
+    bounds = [(n, s, math.inf if unmeasured and n != "fem"
+               else torque_error_bound(design.clutch, n, s, i_max), t)
               for n, s, t in TORQUE_METHODS]  # fmt: skip
     name, size, et, t = next(b for b in bounds if b[2] <= t_target)  # the reference: 0
 
@@ -266,5 +283,5 @@ def choose(design: ClutchDesign, accuracy: float) -> Choice:
         name,
         size,
         {"inertia": ei, "torque": et, "bandwidth": 0.5 * (et + ei)},
-        tuple(notes) + circ.notes,
+        tuple(notes) + circ.notes + unmeasured,
     )

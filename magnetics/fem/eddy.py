@@ -44,6 +44,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from geometry.materials import STAINLESS, STEEL
+from geometry.materials import conductivity as material_conductivity
 from geometry.section import Section
 from geometry.validation import ParameterError, check_choice, check_range
 from magnetics.circuit import _kernels, _mmf, path_from_section, solve_flux
@@ -304,7 +305,7 @@ def _element_parts(grid: Grid, sigma_of: Mapping[str, float]) -> NDArray[np.str_
         inside = (cen[0] > g.r0) & (cen[0] < g.r1) & (cen[1] > g.z0) & (cen[1] < g.z1)
         if sigma_of.get(g.material, 0.0) <= 0 or not inside.any():
             continue
-        if g.material == STEEL:
+        if g.role == "steel" or (not g.role and g.material == STEEL):
             part = _PART_OF_REGION.get(g.name, "drums" if g.part in ("rotor", "input") else "other")
         else:
             part = "other"
@@ -381,7 +382,10 @@ def eddy_response(
     if np.any(~np.isfinite(freq)) or np.any(freq < 0):
         raise ParameterError("frequencies: must be finite and ≥ 0 Hz")
     lam = Laminations() if laminations is None else laminations
-    sig = dict(STEEL_ONLY if conductivity is None else conductivity)
+    if conductivity is None:  # the magnetic steels only, each its registry's σ
+        conductivity = {g.material: material_conductivity(g.material)
+                        for g in section.regions if g.role == "steel"} or STEEL_ONLY  # fmt: skip
+    sig = dict(conductivity)
     for name, s in sig.items():
         if not (math.isfinite(s) and s >= 0):
             raise ParameterError(f"conductivity[{name!r}] = {s}: must be finite and ≥ 0 S/m")

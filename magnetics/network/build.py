@@ -101,8 +101,10 @@ class Network:
     band_len: FloatArray  # (S,) the band's length, m
     outer_air: FloatArray  # (S,) reluctance of the air outside the shell, 1/H
     end_leak: FloatArray  # (S, 2) reluctance from the pole to the core past each zone's end
-    steel: str = STEEL
+    steel: str = STEEL  # the drums' steel
     fluid: str = MRF
+    core_steel: str = STEEL
+    shell_steel: str = STEEL  # the poles and the back iron
 
     @property
     def m(self) -> int:
@@ -139,7 +141,7 @@ def network_from_regions(
     def box(sp: RegionSpec):  # type: ignore[no-untyped-def]
         return at[sp.r0], at[sp.r1], at[sp.z0], at[sp.z1]
 
-    steel = {sp.name: sp for sp in rg if sp.material == STEEL}
+    steel = {sp.name: sp for sp in rg if sp.role == "steel"}
     films = rg.films("cylinder")
     m = len(films)
     zones = [(name, at[a], at[b]) for name, a, b in ZONES]
@@ -234,7 +236,7 @@ def network_from_regions(
     # Rungs' band: regions spanning the band on a wall's stations (linear, μA/l), in
     # parallel with half of each neighbouring film's fluid (its own B–H: the band's axial
     # field reaches ~10⁵ A/m at 7 A, where the fluid's secant μ is 0.7 of its initial μ).
-    spans = [sp for sp in rg if sp.material != STEEL]
+    spans = [sp for sp in rg if sp.role != "steel"]
     for k in range(1, m):
         w = wall(films[k].walls[0], "A")
         for sp in spans:
@@ -248,7 +250,7 @@ def network_from_regions(
             else:
                 continue
             part = np.where(across, share * area, 0.0)
-            if sp.material == MRF:
+            if sp.role == "fluid":
                 rung_fluid[:, k] += part
             else:
                 rung_perm[:, k] += mu[sp.material] * part / band
@@ -302,7 +304,7 @@ def network_from_regions(
             area = np.pi * (r1**2 - r0**2)
         else:
             continue
-        if sp.material == MRF:
+        if sp.role == "fluid":
             fluid_w_area += np.where(across, area, 0.0)
         else:
             perm_w += np.where(across, mu[sp.material] * area / band, 0.0)
@@ -322,6 +324,8 @@ def network_from_regions(
                                             0.5 * (pa[0] + pb[0])),
         end_leak=_end_leak(rg, at, mats, [wall(films[k].walls[0], z) for k in range(m)
                                           for z in ("A", "B")]),
+        steel=rg.materials.drums, fluid=rg.materials.fluid, core_steel=rg.materials.core,
+        shell_steel=rg.materials.shell,
     )  # fmt: skip
 
 
@@ -371,7 +375,7 @@ def _fringe_decay(
         steel = np.zeros(gap.shape, bool)
         for sp in near[0 if inner else 1]:
             there = (at[sp.z0] <= probe) & (probe < at[sp.z1])
-            if sp.material == STEEL and (sp.r1 == f.r0 if inner else sp.r0 == f.r1):
+            if sp.role == "steel" and (sp.r1 == f.r0 if inner else sp.r0 == f.r1):
                 steel |= there  # the wall itself goes on
             layer = np.minimum(at[sp.r1], w1) - np.maximum(at[sp.r0], w0)
             layer = np.where(there, np.maximum(layer, 0.0), 0.0)
@@ -395,7 +399,7 @@ def _end_leak(rg: Regions, at, mats, walls: list[RegionSpec]) -> FloatArray:  # 
     mats = MATERIALS if mats is None else mats
     size = np.size(at["outer"])
     mu = {sp.material: magnetic(sp.material, mats).mu_initial for sp in rg}
-    steel = {sp.name: sp for sp in rg if sp.material == STEEL}
+    steel = {sp.name: sp for sp in rg if sp.role == "steel"}
     r_c = at[steel["core"].r1]
     out = np.full((size, 2), 1e15)
     for z, pole in enumerate((steel["shell_A"], steel["shell_B"])):
@@ -422,7 +426,7 @@ def _end_leak(rg: Regions, at, mats, walls: list[RegionSpec]) -> FloatArray:  # 
                 a0 = np.maximum(at[sp.r0], r_c)
                 a1 = np.minimum(at[sp.r1], r_p)
                 ln = np.where(inside & (a1 > a0), np.log(np.maximum(a1, a0) / a0), 0.0)
-                weight = 0.0 if sp.material == STEEL else 1.0 / mu[sp.material]
+                weight = 0.0 if sp.role == "steel" else 1.0 / mu[sp.material]
                 series += ln * weight
                 covered += ln
             series += np.maximum(np.log(r_p / r_c) - covered, 0.0) / MU0  # air

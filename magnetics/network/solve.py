@@ -62,7 +62,9 @@ _PACKED = ("fluid_k", "fluid_w", "wall_k", "wall_w", "rung_k", "rung_w", "sheath
            "window_fluid", "band_len", "outer_air", "end_leak")  # fmt: skip
 (_FK, _FW, _WK, _WW, _RK, _RW, _SK, _SW, _RP, _RF, _CK, _CW, _CSK, _CSW, _HK, _HW, _BK, _BW,
  _WP, _WF, _BL, _AIR, _LEAK) = range(len(_PACKED))  # fmt: skip
-_STEEL, _FLUID = 0, 1  # the materials' rows in the tables (``_tables``)
+# the materials' rows in the tables (``_tables``): the drums' steel, the fluid, the core's
+# and the shell's steel (the same curve thrice when one steel is chosen for all)
+_STEEL, _FLUID, _CORE, _SHELL = 0, 1, 2, 3
 
 
 def _pack(net: Network) -> tuple[FloatArray, NDArray[np.int64]]:
@@ -73,20 +75,23 @@ def _pack(net: Network) -> tuple[FloatArray, NDArray[np.int64]]:
     return np.ascontiguousarray(np.concatenate(cols, axis=1)), off
 
 
-def _tables(steel: Magnetic, fluid: Magnetic) -> tuple[FloatArray, FloatArray, NDArray[np.int64]]:
-    """(T (2, N, 3), 1/step (2,), segments (2,)): the steel's and the fluid's H(B) as the
+def _tables(
+    steel: Magnetic, fluid: Magnetic, core: Magnetic | None = None, shell: Magnetic | None = None
+) -> tuple[FloatArray, FloatArray, NDArray[np.int64]]:
+    """(T (4, N, 3), 1/step (4,), segments (4,)): the drums' steel's, the fluid's, the core's
+    and the shell's H(B) (``core``, ``shell``: the drums' steel if None) as the
     piecewise-linear curve on a uniform grid that ``BHCurve.h_dh`` indexes (per segment i:
     slope, H = icpt + slope·B, ∫0^B H = gcpt + icpt·B + slope·B²/2); a linear material is
     one segment of slope 1/μ through the origin (1/step 0: every B is in it)."""
     rows = []
-    for mat in (steel, fluid):
+    for mat in (steel, fluid, steel if core is None else core, steel if shell is None else shell):
         if isinstance(mat, LinearMaterial):
             nu = 1.0 / (MU0 * mat.mu_r)  # H = B/μ, as LinearMaterial.h_dh
             rows.append((0.0, np.array([nu]), np.zeros(1), np.zeros(1)))
         else:
             rows.append((mat._inv_step, mat._slope, mat._icpt, mat._gcpt))
     n = max(r[1].size for r in rows)
-    table = np.zeros((2, n, 3))  # a segment's three numbers side by side (one cache line)
+    table = np.zeros((4, n, 3))  # a segment's three numbers side by side (one cache line)
     for i, (_, slope, icpt, gcpt) in enumerate(rows):
         table[i, : slope.size, 0], table[i, : slope.size, 1] = slope, icpt
         table[i, : slope.size, 2] = gcpt
@@ -153,12 +158,13 @@ def _odd(tab, inv, nseg, mat, phi, k, w, mean):  # type: ignore[no-untyped-def]
     return math.copysign(h * w, phi), dh * w * k
 
 
-def _pair(tab, inv, nseg, y, q, ks, ws, kf, wf, mean):  # type: ignore[no-untyped-def]
-    """A wall's steel section (kernel ks, ws) in parallel with its fluid sheath (kf, wf)
+def _pair(tab, inv, nseg, smat, y, q, ks, ws, kf, wf, mean):  # type: ignore[no-untyped-def]
+    """A wall's steel section (material row ``smat``, kernel ks, ws) in parallel with its
+    fluid sheath (kf, wf)
     carrying y − q and q: (the steel's MMF, the residual F_fluid(q) − F_steel(y − q), the
     steel's slope a, a + the sheath's slope b, the pair's slope a·b/(a + b)). Without a
     sheath (wf = 0) the residual is q and the slopes (0, 1, a): q stays 0, the steel alone."""
-    fs, a = _odd(tab, inv, nseg, 0, y - q, ks, ws, mean)
+    fs, a = _odd(tab, inv, nseg, smat, y - q, ks, ws, mean)
     ff, b = _odd(tab, inv, nseg, 1, q, kf, wf, mean)
     if wf > 0:
         ab = a + b
@@ -214,13 +220,14 @@ def _residual(p, off, m, npole, tab, inv, nseg, x, ni, jw, warm, res, jac, work)
     # each zone's film and drum wall at the zone's film flux; their sums over the stack
     sg0, sg1, sdg0, sdg1 = 0.0, 0.0, 0.0, 0.0
     for k in range(m):
+        wm = 2 if k == 0 else 0  # film 0's inner wall is the core
         z0 = x[k] - e0
         a, da = _odd(tab, inv, nseg, 1, z0, p[off[_FK] + 2 * k], p[off[_FW] + 2 * k], False)
-        b, db = _odd(tab, inv, nseg, 0, z0, p[off[_WK] + 2 * k], p[off[_WW] + 2 * k], False)
+        b, db = _odd(tab, inv, nseg, wm, z0, p[off[_WK] + 2 * k], p[off[_WW] + 2 * k], False)
         z1 = x[k] - e1
         a1, da1 = _odd(tab, inv, nseg, 1, z1, p[off[_FK] + 2 * k + 1], p[off[_FW] + 2 * k + 1],
                        False)  # fmt: skip
-        b1, db1 = _odd(tab, inv, nseg, 0, z1, p[off[_WK] + 2 * k + 1], p[off[_WW] + 2 * k + 1],
+        b1, db1 = _odd(tab, inv, nseg, wm, z1, p[off[_WK] + 2 * k + 1], p[off[_WW] + 2 * k + 1],
                        False)  # fmt: skip
         g0, g1, dg0, dg1 = a + b, a1 + b1, da + db, da1 + db1
         g[k], dg[k] = g0 + g1, dg0 + dg1
@@ -241,7 +248,8 @@ def _residual(p, off, m, npole, tab, inv, nseg, x, ni, jw, warm, res, jac, work)
         fj, dfj = 0.0, 0.0
         for z in range(2):
             i = 2 * j + z
-            fs, rq, pa, pk, cond = _pair(tab, inv, nseg, y[j], x[m + 4 + i], p[off[_RK] + i],
+            fs, rq, pa, pk, cond = _pair(tab, inv, nseg, 2 if j == 0 else 0, y[j],
+                                         x[m + 4 + i], p[off[_RK] + i],
                                          p[off[_RW] + i], p[off[_SK] + i], p[off[_SW] + i],
                                          True)  # fmt: skip
             fj += fs
@@ -249,7 +257,7 @@ def _residual(p, off, m, npole, tab, inv, nseg, x, ni, jw, warm, res, jac, work)
             res[m + 4 + i], jac[o_sa + i], jac[o_sk + i] = rq, pa, pk
         f[j], df[j] = fj, dfj
     # the core over the band beside half of film 0
-    fc, rc, pac, pkc, dc = _pair(tab, inv, nseg, y[0], x[3 * m + 4], p[off[_CK]], p[off[_CW]],
+    fc, rc, pac, pkc, dc = _pair(tab, inv, nseg, 2, y[0], x[3 * m + 4], p[off[_CK]], p[off[_CW]],
                                  p[off[_CSK]], p[off[_CSW]], False)  # fmt: skip
     f[0] += fc
     df[0] += dc
@@ -264,11 +272,11 @@ def _residual(p, off, m, npole, tab, inv, nseg, x, ni, jw, warm, res, jac, work)
         jac[o_state + j - 1] = bs
     sh, dsh = 0.0, 0.0  # the poles, radially (Gauss points in ln r)
     for j in range(npole):
-        h, dh = _odd(tab, inv, nseg, 0, y[m], p[off[_HK] + j], p[off[_HW] + j], False)
+        h, dh = _odd(tab, inv, nseg, 3, y[m], p[off[_HK] + j], p[off[_HW] + j], False)
         sh += h
         dsh += dh
     yb = y[m] - xo  # the back iron: the shell's flux less the outer air's
-    bk, dbk = _odd(tab, inv, nseg, 0, yb, p[off[_BK]], p[off[_BW]], False)
+    bk, dbk = _odd(tab, inv, nseg, 3, yb, p[off[_BK]], p[off[_BW]], False)
     f[m] = sh + bk
     win, dwin, bw = _band(tab, inv, nseg, xw, p[off[_WP]], p[off[_WF]], band,
                           jw[o_state + m - 1], warm)  # fmt: skip
@@ -554,7 +562,8 @@ def _notice(what: str = "the reluctance network's solver") -> None:
 
 
 def _materials(net: Network, mats: Mapping[str, Magnetic]):  # type: ignore[no-untyped-def]
-    return _tables(magnetic(net.steel, mats), magnetic(net.fluid, mats))
+    return _tables(magnetic(net.steel, mats), magnetic(net.fluid, mats),
+                   magnetic(net.core_steel, mats), magnetic(net.shell_steel, mats))  # fmt: skip
 
 
 def solve_network(
