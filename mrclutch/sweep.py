@@ -42,6 +42,7 @@ from typing import Any
 import numpy as np
 
 from geometry.atomic import OutputError, atomic_path, output_error, write_bytes, write_text
+from geometry.materials import SLOTS, MaterialChoice
 from geometry.params import INT_RANGES, INTEGER_FIELDS, LENGTH_FIELDS, DrumClutch, preset
 from geometry.validation import ParameterError, check_int
 from mrclutch.inputs import read_toml
@@ -57,24 +58,36 @@ MAX_DESIGNS = 10**8
 
 @dataclass(frozen=True)
 class ParamRange:
-    """One swept DrumClutch field (SI). Either explicit ``values`` or [lo, hi] with a count."""
+    """One swept DrumClutch field (SI). Either explicit ``values`` or [lo, hi] with a count;
+    or a categorical axis, a part's material (``categories``: registry names; its values are
+    indices into them, ``{name}_index`` in the output)."""
 
     name: str
     lo: float
     hi: float
     count: int
     values: tuple[float, ...] = ()
+    categories: tuple[str, ...] = ()
 
     @property
     def integer(self) -> bool:
-        return self.name in INTEGER_FIELDS
+        return self.name in INTEGER_FIELDS or bool(self.categories)
 
     @property
     def column(self) -> str:
-        """CSV column: lengths in mm with the unit in the name, integers as they are."""
+        """CSV column: lengths in mm with the unit in the name, integers as they are, a
+        material as its index into ``categories``."""
+        if self.categories:
+            return f"{self.name}_index"
         return self.name if self.integer else f"{self.name}_mm"
 
+    def named(self, values: np.ndarray) -> np.ndarray:
+        """A categorical axis' indices as its registry names (an object array)."""
+        return np.asarray(self.categories, dtype=object)[np.asarray(values, dtype=np.int64)]
+
     def grid(self) -> np.ndarray:
+        if self.categories:
+            return np.arange(len(self.categories), dtype=float)
         if self.values:
             return np.asarray(self.values, dtype=float)
         if self.integer:
@@ -82,6 +95,8 @@ class ParamRange:
         return np.linspace(self.lo, self.hi, self.count)
 
     def sample(self, rng: np.random.Generator, n: int) -> np.ndarray:
+        if self.categories:
+            return rng.integers(0, len(self.categories), size=n).astype(float)
         if self.values:
             return rng.choice(np.asarray(self.values, dtype=float), size=n)
         if self.integer:
@@ -133,7 +148,7 @@ class SweepSpec:
     def fingerprint(self) -> str:
         """A hash of everything that decides the rows (not the chunk size's effect on order)."""
         desc = {
-            "params": [(p.name, p.lo, p.hi, p.count, p.values) for p in self.params],
+            "params": [(p.name, p.lo, p.hi, p.count, p.values, *p.categories) for p in self.params],
             "mode": self.mode,
             "samples": self.samples,
             "seed": self.seed,
@@ -168,6 +183,17 @@ def parse_parameters(table: Mapping[str, Any], mode: str, where: str) -> tuple[P
     ``{values = [...]}``; integers (``n_drums``) take ``{min, max}`` inclusive."""
     out = []
     for key, spec in table.items():
+        if key in SLOTS:  # a part's material: a categorical axis over registry names
+            vals = spec.get("values") if isinstance(spec, dict) else None
+            if not isinstance(vals, list) or not vals or set(spec) != {"values"}:
+                raise ParameterError(f'{where}: {key}: a material axis is {{values = ["name", …]}}')
+            names = []
+            for v in vals:
+                if not isinstance(v, str):
+                    raise ParameterError(f"{where}: {key}.values: {v!r} is not a material name")
+                names.append(getattr(MaterialChoice(**{key: v}), key))  # checked, canonical
+            out.append(ParamRange(key, 0.0, len(names) - 1.0, len(names), (), tuple(names)))
+            continue
         if key in INTEGER_FIELDS:
             name, scale = key, 1.0
         elif key.endswith("_mm") and key[:-3] in LENGTH_FIELDS:
@@ -318,6 +344,8 @@ def _meta(spec: SweepSpec, outputs: Sequence[str]) -> dict[str, Any]:
         "fingerprint": spec.fingerprint(),
         "n_designs": spec.n_designs,
         "columns": describe([k for k in outputs if k in OUTPUTS]),  # units and meanings
+        # a material axis' column holds indices into these names
+        "categories": {p.column: list(p.categories) for p in spec.params if p.categories},
     }
 
 
@@ -660,6 +688,8 @@ def _parquet_part(
     ]
     for p in spec.params:
         meaning = f"swept DrumClutch.{p.name}"
+        if p.categories:
+            meaning = f"swept material of the {p.name}: index into {list(p.categories)}"
         if p.integer:
             fields.append(
                 pa.field(p.column, pa.int64(), metadata={"unit": "1", "description": meaning})
@@ -904,8 +934,10 @@ def chunk_rows(
     """Chunk k evaluated and encoded, as CSV rows or a Parquet file, with its SHA-256 (runs
     in a worker: only the encoded chunk and its checksum return)."""
     ids, fields = spec.chunk(k)
-    res = evaluate(fields)
-    cols = [_display(p.name, fields[p.name]) for p in spec.params]
+    named = {p.name: p.named(fields[p.name]) for p in spec.params if p.categories}
+    res = evaluate({**fields, **named})
+    cols = [fields[p.name] if p.integer else _display(p.name, fields[p.name])
+            for p in spec.params]  # fmt: skip
     cols += [res[name] for name in outputs]
     if fmt == "parquet":
         payload = _parquet_part(spec, outputs, ids, cols)
