@@ -30,6 +30,7 @@ from numpy.typing import ArrayLike
 
 from geometry import regions
 from geometry.cad import check_tolerance, material_solids, tessellate
+from geometry.materials import DEFAULT_CHOICE, MaterialChoice
 from geometry.params import DrumClutch, broadcast_fields, valid
 from geometry.regions import OUTPUT_PARTS, PARTS
 from geometry.section import Section, build_section
@@ -131,10 +132,13 @@ def weigh_shape(shape: Any, density: float, axis: str = "z") -> PartMass:
 
 
 def brep_mass(
-    clutch: DrumClutch, solids: Mapping[tuple[str, str], Any] | None = None
+    clutch: DrumClutch,
+    solids: Mapping[tuple[str, str], Any] | None = None,
+    materials: MaterialChoice = DEFAULT_CHOICE,
 ) -> MassReport:
-    """Mass and inertia of every part from OpenCascade's exact volume integrals."""
-    s = build_section(clutch)
+    """Mass and inertia of every part from OpenCascade's exact volume integrals (each
+    solid at its chosen material's density)."""
+    s = build_section(clutch, materials)
     solids = solids if solids is not None else material_solids(clutch, s)
     acc = {p: [0.0, 0.0] for p in PARTS}
     for (part, material), shape in solids.items():
@@ -240,6 +244,7 @@ def mesh_mass(
     guard: bool = True,
     max_refinements: int = 8,
     solids: Mapping[tuple[str, str], Any] | None = None,
+    materials: MaterialChoice = DEFAULT_CHOICE,
 ) -> MassReport:
     """Mass and inertia of every part from a triangle mesh of chord height ``tolerance`` (m).
 
@@ -255,7 +260,7 @@ def mesh_mass(
     check_positive("tolerance", tolerance, " m")
     check_tolerance("tolerance", tolerance, clutch)
     check_positive("angular_tolerance", angular_tolerance, " rad")
-    s = build_section(clutch)
+    s = build_section(clutch, materials)
     solids = solids if solids is not None else material_solids(clutch, s)
     notes = list(_hole_note(clutch))
     tol = tolerance

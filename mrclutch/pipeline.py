@@ -190,7 +190,7 @@ def clutch_figures(
     if inertia_method == "analytic":
         mass = analytic_mass(section)
     else:
-        mass = brep_mass(c)
+        mass = brep_mass(c, materials=design.materials)
     i_max = design.current_limit
     temp = op.fluid_temperature
     curve = torque_curve(

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from geometry.atomic import atomic_path
+from geometry.section import build_section
 from geometry.validation import ParameterError
 from magnetics.error_map import circuit_error
 from magnetics.torque import torque_curve
@@ -106,7 +107,8 @@ def fem_max_torque(design: ClutchDesign, fem_size: float) -> float:
 def _max_torque(design: ClutchDesign, method: str, fem_size: float | None = None) -> float:
     """Yield torque by ``method`` plus the drag, at the current limit and input speed."""
     op = design.operating
-    curve = torque_curve(design.clutch, [design.current_limit], method=method,
+    curve = torque_curve(build_section(design.clutch, design.materials),
+                         [design.current_limit], method=method,
                          fem_size=fem_size, speed_rpm=op.input_speed_rpm,
                          temperature=op.fluid_temperature, support=design.support)  # fmt: skip
     return float(curve.torque[0])

@@ -154,7 +154,7 @@ def _build_in(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[st
     tick("3D view")
     _view(design, tmp / "view.png")
     tick("section drawing")
-    section_figure(build_section(design.clutch), tmp / "section.png")
+    section_figure(build_section(design.clutch, design.materials), tmp / "section.png")
     tick("torque–current curve (network, circuit and FEM)")
     curve = _torque(design, tmp / "torque.png")
     tick("haptic plots")
@@ -183,7 +183,7 @@ def _build_in(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[st
 
 
 def _cad(design: ClutchDesign, folder: Path) -> dict[str, Any]:
-    res = export_clutch(design.clutch, folder)
+    res = export_clutch(design.clutch, folder, materials=design.materials)
     return {
         "step": res.step.name,
         "materials": res.materials.name if res.materials is not None else None,
@@ -202,9 +202,10 @@ def _view(design: ClutchDesign, path: Path) -> None:
 
 def _torque(design: ClutchDesign, path: Path) -> dict[str, Any]:
     rpm = design.operating.input_speed_rpm
-    circ = torque_curve(design.clutch, CURVE_CURRENTS, method="circuit", speed_rpm=rpm)
-    net = torque_curve(design.clutch, CURVE_CURRENTS, method="network", speed_rpm=rpm)
-    fem = torque_curve(design.clutch, FEM_CHECK_CURRENTS, method="fem", speed_rpm=rpm)
+    sec = build_section(design.clutch, design.materials)
+    circ = torque_curve(sec, CURVE_CURRENTS, method="circuit", speed_rpm=rpm)
+    net = torque_curve(sec, CURVE_CURRENTS, method="network", speed_rpm=rpm)
+    fem = torque_curve(sec, FEM_CHECK_CURRENTS, method="fem", speed_rpm=rpm)
     plot_torque([circ, net, fem], path, title=f"{design.name} at {rpm:.0f} rpm")
     err = {k: float(np.max(np.abs(np.interp(fem.currents, tc.currents, tc.torque)
                                   / fem.torque - 1))) for k, tc in (("circuit", circ),

@@ -86,3 +86,25 @@ def test_tolerance_ceiling_is_one_line_with_the_limit():
     assert check_tolerance("t", top, c) == top
     with pytest.raises(ParameterError, match=r"--tolerance-mm = 100 mm: must be <= 0\.588 mm"):
         check_tolerance("--tolerance-mm", 0.1, c, scale=1e3)
+
+
+@pytest.mark.slow
+def test_the_materials_choice_reaches_the_step_sidecar(tmp_path):
+    """Each solid's material, label and density in ``clutch.materials.json`` are the
+    design's choice (aluminium housing, MRF-140CG, Hiperco shell), and the STEP's part
+    colour is its dominant material's."""
+    from geometry.cad import part_material
+    from geometry.export import read_materials
+    from geometry.materials import COLOUR, DENSITY, MaterialChoice
+
+    ch = MaterialChoice(fluid="MRF-140CG", shell="Hiperco 50", housing="aluminium 6061")
+    res = export_clutch(preset("paper"), tmp_path, 1e-4, check=False, materials=ch)
+    side = read_materials(res.step)
+    mats = {e["material"]: e for e in side.values()}
+    assert {"mrf_140cg", "hiperco_50", "aluminium_6061"} <= set(mats)
+    assert "stainless_304" in mats  # the bands and hub stay stainless
+    for m in ("mrf_140cg", "hiperco_50", "aluminium_6061"):
+        assert mats[m]["density_kg_m3"] == DENSITY[m]
+    assert mats["hiperco_50"]["label"] == "Hiperco 50 (Co-Fe)"
+    assert part_material("housing", ch) == "hiperco_50"
+    assert COLOUR[part_material("fluid", ch)] != COLOUR["mrf_132dg"]

@@ -31,7 +31,7 @@ from geometry.mass import (
 from geometry.params import DrumClutch
 from geometry.section import OUTPUT_PARTS, build_section
 from geometry.validation import ParameterError, check_positive
-from mrclutch.cli.commands._common import add_design_args, load_clutch, print_json
+from mrclutch.cli.commands._common import add_design_args, load_clutch, load_design_args, print_json
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.view import screenshot, show
 
@@ -100,8 +100,9 @@ def _tolerance(args: argparse.Namespace, clutch: DrumClutch) -> float:
 
 
 def cmd_export(args: argparse.Namespace) -> int:
-    clutch = load_clutch(args)
-    res = export_clutch(clutch, args.out, _tolerance(args, clutch))
+    design = load_design_args(args)
+    clutch = design.clutch
+    res = export_clutch(clutch, args.out, _tolerance(args, clutch), materials=design.materials)
     print(f"{res.step}")
     print(f"{res.materials}  (material and density of every solid: mrclutch inertia reads it)")
     for name, path in res.stl.items():
@@ -128,14 +129,15 @@ def cmd_inertia(args: argparse.Namespace) -> int:
         return _weigh_file(args)
     if args.density is not None or args.part_density:
         raise CLIError("--density/--part-density apply to a STEP/STL file only")
-    clutch = load_clutch(args)
+    design = load_design_args(args)
+    clutch = design.clutch
     tol = _tolerance(args, clutch)
-    s = build_section(clutch)
+    s = build_section(clutch, design.materials)
     solids = material_solids(clutch, s)
     reps = {
         "analytic": analytic_mass(s),
-        "mesh": mesh_mass(clutch, tol, solids=solids),
-        "brep": brep_mass(clutch, solids),
+        "mesh": mesh_mass(clutch, tol, solids=solids, materials=design.materials),
+        "brep": brep_mass(clutch, solids, materials=design.materials),
     }
     out: dict[str, Any] = {k: _method(r) for k, r in reps.items()}
     out["clutch_mass_kg"] = reps["brep"].clutch_mass

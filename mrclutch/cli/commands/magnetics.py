@@ -90,7 +90,8 @@ def _torque(args: argparse.Namespace) -> int:
     check_choice("--method", args.method, ("circuit", "network", "fem", "both"))
     check_range("--speed-rpm", args.speed_rpm, 0.0, 1e5, " rpm")
     currents = _parse_currents(args.current)
-    clutch = load_clutch(args)
+    design = load_design_args(args)
+    clutch = build_section(design.clutch, design.materials)
     methods = ("network", "fem") if args.method == "both" else (args.method,)
     if "fem" in methods and currents.size > 1:  # long FEM work says how long first
         section = build_section(clutch)
@@ -145,7 +146,7 @@ def _inductance(clutch: Any, currents: Any, model: str = "circuit") -> tuple[Any
     """Flux linkage λ (Wb) and incremental inductance dλ/dI (H) at the currents, by the
     saturating circuit (magnetics.dynamics.flux_linkage) or the reluctance network
     (magnetics.network.flux_linkage: within 1 % of the FEM's λ on the paper preset)."""
-    section = build_section(clutch)
+    section = clutch if hasattr(clutch, "regions") else build_section(clutch)
     cur = np.asarray(currents, dtype=float)[None, :]
     if model == "network":
         net = network_from_regions(section.table)

@@ -7,6 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from geometry.materials import COLOUR as REGISTRY_COLOUR
+from geometry.materials import LABEL
 from mrclutch.cli.plots import save_png
 from mrclutch.sweep import pareto_front, read_results
 
@@ -87,7 +89,7 @@ def section_figure(section: object, out: str | Path) -> Path:
 
     fig, ax = plt.subplots(figsize=(6, 6), constrained_layout=True)
     for reg in section.regions:  # type: ignore[attr-defined]
-        colour = MATERIAL_COLOURS[reg.material]
+        colour = MATERIAL_COLOURS.get(reg.material, REGISTRY_COLOUR[reg.material])
         ax.add_patch(
             Rectangle((reg.r0 * 1e3, reg.z0 * 1e3), (reg.r1 - reg.r0) * 1e3,
                       (reg.z1 - reg.z0) * 1e3, facecolor=colour, edgecolor="white", lw=0.3)
@@ -107,10 +109,9 @@ def section_figure(section: object, out: str | Path) -> Path:
         f"{c.n_drums} drums × {c.drum_thickness * 1e3:.3g} mm, gap {c.gap * 1e3:.3g} mm",
         fontsize=10,
     )
-    names = {"steel_1018": "steel 1018", "stainless_304": "stainless 304",
-             "coil": "coil (Cu + epoxy)", "mrf_132dg": "MRF-132DG"}  # fmt: skip
-    ax.legend(handles=[Patch(color=MATERIAL_COLOURS[m], label=n) for m, n in names.items()],
-              loc="lower right", fontsize=9)  # fmt: skip
+    present = dict.fromkeys(reg.material for reg in section.regions)  # type: ignore[attr-defined]
+    ax.legend(handles=[Patch(color=MATERIAL_COLOURS.get(m, REGISTRY_COLOUR[m]), label=LABEL[m])
+                       for m in present], loc="lower right", fontsize=9)  # fmt: skip
     save_png(fig, out, dpi=130)
     return Path(out)
 
