@@ -259,7 +259,7 @@ def _temperature_factors(p: Mapping[str, np.ndarray], ok: np.ndarray, base: Any,
              for t in (op.fluid_temperature, *temps)]  # fmt: skip
         return {"lo": d[1] / d[0], "hi": d[2] / d[0]}
 
-    f = regions.per_topology(p, ok, fn)
+    f = regions.per_topology(p, ok, fn, base.materials)
     return np.fmin(f["lo"], f["hi"]), np.fmax(f["lo"], f["hi"])
 
 

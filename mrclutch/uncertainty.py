@@ -293,7 +293,8 @@ def default_uncertainty(design: Any = None) -> Uncertainty:
     :func:`paper_unexplained_b1`, the delay from the typed value to the geometry's (None:
     resolved per design)."""
     t = 20.0 if design is None else float(design.operating.fluid_temperature)
-    t_hi = min(t + WARMING, FLUIDS[MRF].temperature_range[1])
+    fluid = MRF if design is None else design.materials.fluid
+    t_hi = min(t + WARMING, FLUIDS[fluid].temperature_range[1])
     return Uncertainty(fluid_temperature=(t, t_hi), bench_damping=(0.0, paper_unexplained_b1()))
 
 

@@ -24,7 +24,6 @@ from magnetics.network import network_from_regions
 from magnetics.torque import torque_curve
 from mrclutch.cli.commands._common import (
     add_design_args,
-    load_clutch,
     load_design_args,
     print_json,
 )
@@ -176,7 +175,7 @@ def _field(args: argparse.Namespace) -> int:
     if args.size_mm is not None:
         size = check_range("--size-mm", args.size_mm, 0.02, 5.0, " mm") * 1e-3
     design = load_design_args(args)
-    section = build_section(design.clutch)
+    section = build_section(design.clutch, design.materials)
     try:
         sol = solve_fem(section, args.current, size=size)
     except FEMConvergenceError as exc:
