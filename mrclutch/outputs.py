@@ -95,9 +95,8 @@ _ALL = (
            "coil power at max current"),
     Output("torque_error_bound", "1", "bound on the |relative error| of the max torque (the "
            "reluctance network's) against the FEM at this design and current limit, 95 % "
-           "coverage over every section dimension (inf: outside the measured ranges; NaN: "
-           "unmeasured for a fluid or steel other than MRF-132DG / 1018, docs/materials.md; "
-           "magnetics/data/network_bound.json)",
+           "coverage over every section dimension (inf: outside the measured ranges or "
+           "materials; magnetics/data/network_bound.json)",
            "torque error bound"),
     Output("torque_delay_s", "s", "equivalent pure delay of the torque's response to a "
            "current step: Σ of the electrical, eddy-current and fluid lags "

@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike
 
 from geometry import regions
 from geometry.mass import MassReport, analytic_mass, brep_mass, region_mass
-from geometry.materials import DEFAULT_CHOICE, MRF, SLOTS, MaterialChoice
+from geometry.materials import MRF, SLOTS, MaterialChoice
 from geometry.params import broadcast_fields, preset, valid
 from geometry.section import build_section
 from geometry.validation import ParameterError, check_choice
@@ -67,7 +67,7 @@ from mrclutch.haptics.model import (
 from mrclutch.haptics.zwidth import ZWIDTH_KEYS
 from mrclutch.haptics.zwidth import zwidth as zwidth_of
 from mrclutch.outputs import SWEEP_COLUMNS, SWEEP_OPTIONAL
-from mrclutch.trust import choose, circuit_trust, material_trust
+from mrclutch.trust import choose, circuit_trust, material_set
 
 FIDELITIES: tuple[str, ...] = ("fast", "reference")
 #: Stated relative error of the fast path's rendering bandwidth against the reference
@@ -184,9 +184,7 @@ def clutch_figures(
         inertia_method = "analytic" if fidelity == "fast" else "brep"
         torque_method = "network" if fidelity == "fast" else "fem"
         if torque_method == "network":  # never a silent wrong number (issue 6)
-            extra = circuit_trust(c, "network", design.current_limit) + material_trust(
-                design.materials
-            )
+            extra = circuit_trust(c, "network", design.current_limit, design.materials)
     if inertia_method == "analytic":
         mass = analytic_mass(section)
     else:
@@ -651,6 +649,22 @@ def hand_budget(design: ClutchDesign, fig: ClutchFigures, mr: HapticParams,
 # ---- the vectorised fast path for sweeps -----------------------------------------------
 
 
+def _material_bounds(
+    p: Mapping[str, np.ndarray], current: np.ndarray, mats: MaterialChoice | np.ndarray
+) -> np.ndarray:
+    """The network's error bound of every row at its material set (``trust.material_set``;
+    magnetics.network_bound: inf for a set never measured)."""
+    if isinstance(mats, MaterialChoice):
+        return np.asarray(error_bound(p, "network", current, material_set(mats))[1], float)
+    keys = np.array([material_set(m) for m in mats], dtype=object)
+    out = np.full(keys.shape, np.inf)
+    for key in dict.fromkeys(keys.tolist()):
+        rows = keys == key
+        sub = {k: np.asarray(v)[rows] for k, v in p.items()}
+        out[rows] = error_bound(sub, "network", np.asarray(current)[rows], key)[1]
+    return out
+
+
 def material_rows(
     fields: Mapping[str, Any], base: MaterialChoice
 ) -> tuple[dict[str, Any], MaterialChoice | np.ndarray]:
@@ -769,8 +783,6 @@ def evaluate_batch(
             net, path, op.input_speed, out["off_torque"], op.wire_temperature_limit,
             limit, torque_at=network_yield_at(ladder, seed=(current[rows], x_peak)),
         )[1]  # fmt: skip
-        measured = rg.materials.magnetic == DEFAULT_CHOICE.magnetic
-        out["default_materials"] = np.full(rows.size, float(measured))
         return out
 
     fig = regions.per_topology(p, ok, clutch, mats)
@@ -797,10 +809,8 @@ def evaluate_batch(
         "diameter_m": fig["diameter"],
         "length_m": fig["length"],
         "max_torque_N_m": torque,
-        # the map's bound only where it was measured (1018, MRF-132DG): elsewhere unmeasured
-        "torque_error_bound": np.where(
-            ok & (fig["default_materials"] == 1.0), error_bound(p, "network", current)[1], np.nan
-        ),
+        # each row's material set's bound (inf where that set was never measured)
+        "torque_error_bound": np.where(ok, _material_bounds(p, current, mats), np.nan),
         "fluid_inertia_kg_m2": fig["fluid_inertia"],
         "drag_damping_N_m_s": fig["damping"],
         "off_state_torque_N_m": off_torque,

@@ -270,7 +270,7 @@ def test_sweep_rows_with_a_fluid_axis_match_single_evaluations() -> None:
         assert batch["off_state_torque_N_m"][i] == pytest.approx(one.clutch.drag.torque,
                                                                  rel=1e-6)  # fmt: skip
     # the measured bound only for the materials it was measured with
-    assert np.isnan(batch["torque_error_bound"][[0, 2]]).all()
+    assert np.isinf(batch["torque_error_bound"][[0, 2]]).all()
     assert np.isfinite(batch["torque_error_bound"][[1, 3]]).all()
 
 
@@ -290,8 +290,8 @@ def test_a_sweep_spec_with_a_fluid_axis_runs_on_the_fast_path(tmp_path: Path) ->
     assert spec.params[0].categories == ("mrf_140cg", "mrf_122eg")
     d = design_preset("paper")
     ev = BatchEvaluator(d)
-    n, text = chunk_rows(spec, ev, ("max_torque_N_m",), 0)
-    rows = [line.split(",") for line in str(text).strip().splitlines()]
+    n, payload, _ = chunk_rows(spec, ev, ("max_torque_N_m",), 0)
+    rows = [line.split(",") for line in payload.decode().strip().splitlines()]
     assert n == 4 and [r[1] for r in rows] == ["0", "0", "1", "1"]
     for r in rows:
         fluid = spec.params[0].categories[int(r[1])]
@@ -307,3 +307,20 @@ def test_a_sweep_spec_with_an_unknown_fluid_is_refused(tmp_path: Path) -> None:
     spec_file.write_text('[sweep]\n[parameters]\nfluid = {values = ["MRF-999"]}\n')
     with pytest.raises(ParameterError, match="unknown fluid; known: mrf_122eg"):
         load_spec(spec_file)
+
+
+def test_a_non_default_material_set_never_carries_the_1018_132dg_bound() -> None:
+    from mrclutch.design import design_preset
+    from mrclutch.pipeline import clutch_figures
+    from mrclutch.trust import choose, material_set, torque_error_bound
+
+    d = design_preset("paper")
+    hip = replace(d, materials=MaterialChoice(core="hiperco_50", shell="hiperco_50"))
+    assert material_set(d.materials) == "steel_1018+mrf_132dg"
+    assert material_set(hip.materials) == "hiperco_50/steel_1018/hiperco_50+mrf_132dg"
+    assert np.isfinite(torque_error_bound(d.clutch, "network", None, 7.0))
+    for method in ("network", "circuit"):
+        assert torque_error_bound(hip.clutch, method, None, 7.0, hip.materials) == np.inf
+    assert choose(hip, 0.05).torque == "fem"
+    notes = clutch_figures(replace(d, materials=MaterialChoice(fluid="mrf_140cg"))).notes
+    assert any("unmeasured" in n for n in notes)
