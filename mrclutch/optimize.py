@@ -40,11 +40,11 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from geometry import regions
+from geometry.materials import SLOTS, MaterialChoice
 from geometry.params import (
     INTEGER_FIELDS,
     LENGTH_FIELDS,
     LENGTH_RANGES,
-    broadcast_fields,
     valid,
 )
 from geometry.validation import (
@@ -58,7 +58,7 @@ from magnetics import thermal
 from mrclutch.design import ClutchDesign, current_limit
 from mrclutch.haptics.actuator import HapticParams
 from mrclutch.haptics.model import bandwidth, max_passive_stiffness
-from mrclutch.pipeline import FLUID_LIMIT, evaluate_batch
+from mrclutch.pipeline import batch_fields, evaluate_batch, fluid_limit
 from mrclutch.process import MAX_ECCENTRICITY
 from mrclutch.robust import hand_box_batch, robust_columns_batch
 from mrclutch.uncertainty import Uncertainty, default_uncertainty
@@ -197,7 +197,7 @@ def limit_columns(fields: Mapping[str, ArrayLike], base: ClutchDesign,
     from 0 to the peak (yield torque ∝ current): the yield torque is concave in the
     current (Carlson's tanh law [carlson], saturating steel), so the chord's current is at
     least the true one and its time a lower bound."""
-    p = broadcast_fields(fields, base.clutch)
+    p, mats = batch_fields(fields, base)  # a material column: per row (issue 33)
     ok = valid(p) & (np.asarray(r["valid"]) == 1)
     op = base.operating
     current = current_limit(op, p["wire_diameter"])
@@ -205,23 +205,24 @@ def limit_columns(fields: Mapping[str, ArrayLike], base: ClutchDesign,
     w = op.input_speed
 
     def fn(rg: regions.Regions, rows: np.ndarray) -> dict[str, np.ndarray]:
-        net = thermal.network(rg, op.ambient_temperature, FLUID_LIMIT)
+        limit = fluid_limit(rg.materials)
+        net = thermal.network(rg, op.ambient_temperature, limit)
         i = current[rows]
         # R(T) = R20 (1 + α (T − 20)) (magnetics.thermal)
         power = i * i * net.r20 * (1 + thermal.ALPHA_CU * (op.coil_temperature - 20.0))
         tw, tf = thermal.time_to_limits_batch(net, i, peak[rows] * w,
-                                              op.wire_temperature_limit, FLUID_LIMIT)  # fmt: skip
+                                              op.wire_temperature_limit, limit)  # fmt: skip
         out = {"coil_power_W": power, "time_at_peak_s": np.minimum(tw, tf)}
         if duty_torque > 0:
             y = peak[rows] - off[rows]
             i_d = i * np.clip((duty_torque - off[rows]) / y, 0.0, None)
             dw, df = thermal.time_to_limits_batch(
-                net, i_d, duty_torque * w, op.wire_temperature_limit, FLUID_LIMIT
+                net, i_d, duty_torque * w, op.wire_temperature_limit, limit
             )
             out["time_at_duty_s"] = np.where(duty_torque <= peak[rows], np.minimum(dw, df), 0.0)
         return out
 
-    out = regions.per_topology(p, ok, fn)
+    out = regions.per_topology(p, ok, fn, mats)
     out[CONTINUOUS] = np.asarray(r["continuous_torque_N_m"]) - off
     if duty_torque <= 0:
         out["time_at_duty_s"] = np.full(off.shape, np.inf)
@@ -544,6 +545,7 @@ def pareto(
     generations: int = 100,
     members: int = DEFAULT_MEMBERS,
     robust: Any = None,
+    materials: Mapping[str, Sequence[str]] | None = None,
 ) -> ParetoSet:
     """The trade-offs on the fast path: NSGA-II (pymoo) over the search box and the drum
     count, maximising the rendering figure and the continuous torque above the drag,
@@ -555,7 +557,11 @@ def pareto(
 
     ``robust``: None (the nominal verdict) or a callable (fields, base) → columns
     ``ROBUST_COLUMNS`` (worst-case largest stable and passive K over the uncertainty), a
-    limit on the front's members."""
+    limit on the front's members.
+
+    ``materials``: categorical axes, a part's material (``geometry.materials.SLOTS``) →
+    the names to choose among (e.g. {"fluid": ["MRF-122EG", "MRF-140CG"]}): each one more
+    search variable, rounded to an index as the drum count is (issue 33)."""
     from pymoo.algorithms.moo.nsga2 import NSGA2
     from pymoo.core.problem import Problem
     from pymoo.optimize import minimize
@@ -571,6 +577,12 @@ def pareto(
     for n in counts:
         check_int("drum_counts", n, 1, 20)
     names = list(box)
+    cats: dict[str, tuple[str, ...]] = {}
+    for slot, choices in (materials or {}).items():
+        if slot not in SLOTS or isinstance(choices, str) or not choices:
+            raise ParameterError(f"materials: {slot!r}: give a part ({', '.join(SLOTS)}) and "
+                                 "a list of material names")  # fmt: skip
+        cats[slot] = tuple(getattr(MaterialChoice(**{slot: c}), slot) for c in choices)
     objectives = (("rendering", RENDERING[rendering], 1.0),
                   *((k, col, s) for k, (col, s) in PARETO_OBJECTIVES.items()))  # fmt: skip
     zw = rendering == "zwidth"
@@ -578,8 +590,11 @@ def pareto(
 
     def fields_of(x: np.ndarray) -> dict[str, np.ndarray]:
         f = {k: x[:, i] for i, k in enumerate(names)}
-        idx = np.clip(np.rint(x[:, -1]), 0, len(counts) - 1).astype(np.int64)
+        idx = np.clip(np.rint(x[:, len(names)]), 0, len(counts) - 1).astype(np.int64)
         f["n_drums"] = np.asarray(counts, dtype=np.int64)[idx]
+        for c, (slot, choices) in enumerate(cats.items(), len(names) + 1):
+            k = np.clip(np.rint(x[:, c]), 0, len(choices) - 1).astype(np.int64)
+            f[slot] = np.asarray(choices, dtype=object)[k]
         return f
 
     def objective_matrix(r: Mapping[str, np.ndarray]) -> np.ndarray:
@@ -591,11 +606,15 @@ def pareto(
         def __init__(self) -> None:
             terms = len(cons.terms(_probe))
             super().__init__(
-                n_var=len(names) + 1,
+                n_var=len(names) + 1 + len(cats),
                 n_obj=len(objectives),
                 n_ieq_constr=terms,
-                xl=np.array([box[k][0] for k in names] + [-0.5]),
-                xu=np.array([box[k][1] for k in names] + [len(counts) - 0.5]),
+                xl=np.array([box[k][0] for k in names] + [-0.5] * (1 + len(cats))),
+                xu=np.array(
+                    [box[k][1] for k in names]
+                    + [len(counts) - 0.5]
+                    + [len(c) - 0.5 for c in cats.values()]
+                ),
             )
 
         def _evaluate(self, x: np.ndarray, out: dict, *args: Any, **kwargs: Any) -> None:
@@ -616,6 +635,8 @@ def pareto(
 
     one = {k: np.array([box[k][0]]) for k in names}
     one["n_drums"] = np.array([counts[0]])
+    for slot, choices in cats.items():
+        one[slot] = np.array(choices[:1], dtype=object)
     _probe = rows(one)
     minimize(Clutches(), NSGA2(pop_size=pop_size), ("n_gen", generations), seed=seed,
              verbose=False)  # fmt: skip
@@ -697,7 +718,8 @@ def pareto(
     for j in range(len(pick)):
         values = {k: float(fl[k][j]) for k in names}
         clutch = replace(base.clutch, n_drums=int(fl["n_drums"][j]), **values)
-        d = replace(base, clutch=clutch, name=f"{base.name}-pareto")
+        mats = replace(base.materials, **{slot: str(fl[slot][j]) for slot in cats})
+        d = replace(base, clutch=clutch, name=f"{base.name}-pareto", materials=mats)
         row = {k: float(v[j]) for k, v in r_pick.items()}
         out_members.append(Member(d, row, active_limits(cons, r_pick, j),
                                   range_edges(d, box, source, counts)))  # fmt: skip

@@ -665,6 +665,22 @@ def _material_bounds(
     return out
 
 
+def batch_fields(
+    fields: Mapping[str, Any], base: ClutchDesign
+) -> tuple[dict[str, np.ndarray], MaterialChoice | np.ndarray]:
+    """A batch's dimensions as 1-D arrays of S (``broadcast_fields``) and its materials: one
+    MaterialChoice for all rows or S of them (``material_rows``: the material columns)."""
+    fields, mats = material_rows(fields, base.materials)
+    if not isinstance(mats, MaterialChoice):  # the material columns set the batch's shape too
+        drums = np.asarray(fields.get("n_drums", base.clutch.n_drums))
+        fields = {**fields, "n_drums": np.broadcast_to(drums, np.broadcast_shapes(
+            drums.shape, mats.shape))}  # fmt: skip
+    p = broadcast_fields(fields, base.clutch)
+    if not isinstance(mats, MaterialChoice):
+        mats = np.broadcast_to(mats, np.shape(p["n_drums"])).ravel()
+    return p, mats
+
+
 def material_rows(
     fields: Mapping[str, Any], base: MaterialChoice
 ) -> tuple[dict[str, Any], MaterialChoice | np.ndarray]:
@@ -746,14 +762,7 @@ def evaluate_batch(
     Designs that fail DrumClutch's validation get ``valid = 0`` and NaN outputs; no invalid
     number reaches a solver."""
     base = base if base is not None else ClutchDesign()
-    fields, mats = material_rows(fields, base.materials)
-    if not isinstance(mats, MaterialChoice):  # the material columns set the batch's shape too
-        drums = np.asarray(fields.get("n_drums", base.clutch.n_drums))
-        fields = {**fields, "n_drums": np.broadcast_to(drums, np.broadcast_shapes(
-            drums.shape, mats.shape))}  # fmt: skip
-    p = broadcast_fields(fields, base.clutch)
-    if not isinstance(mats, MaterialChoice):
-        mats = np.broadcast_to(mats, np.shape(p["n_drums"])).ravel()
+    p, mats = batch_fields(fields, base)
     ok = valid(p)
     op = base.operating
     current = np.array(np.broadcast_to(current_limit(op, p["wire_diameter"]), ok.shape), float)

@@ -434,3 +434,19 @@ def test_robust_members_hold_their_K_over_declared_ranges():
     wn = robust_columns_batch(_fields([m.design for m in nominal.members]), base, unc)
     kn = np.array([m.row["K_N_per_m"] for m in nominal.members])
     assert np.any(wn["max_passive_K_worst_N_per_m"] < kn)
+
+
+def test_a_fluid_axis_in_the_pareto_search_reaches_every_member():
+    """issue 33: a categorical material axis is one more search variable; every member is
+    made of one of the fluids offered and its fast row is its own design's evaluation."""
+    from mrclutch.pipeline import evaluate
+
+    offered = ("mrf_122eg", "mrf_140cg")
+    ps = pareto(PAPER, members=4, materials={"fluid": ["MRF-122EG", "MRF-140CG"]}, **QUICK)
+    assert ps.members
+    for m in ps.members:
+        assert m.design.materials.fluid in offered
+        one = evaluate(m.design).clutch
+        assert m.row["max_torque_N_m"] == pytest.approx(one.max_torque, rel=1e-6)
+    with pytest.raises(ParameterError, match="unknown fluid; known"):
+        pareto(PAPER, members=2, materials={"fluid": ["MRF-999"]}, **QUICK)

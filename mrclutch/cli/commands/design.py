@@ -301,6 +301,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--drums", default="1,2,3,4", help="drum counts to try (default 1,2,3,4)")
     p.add_argument(
+        "--material",
+        action="append",
+        default=[],
+        metavar="PART=NAME,NAME",
+        help="a part's material as a search axis, e.g. fluid=MRF-122EG,MRF-132DG,MRF-140CG "
+        "(repeatable; the Pareto set only; parts and names: docs/materials.md)",
+    )
+    p.add_argument(
         "--vary",
         action="append",
         default=[],
@@ -857,7 +865,8 @@ def _optimize(args: argparse.Namespace) -> int:
             if given:
                 raise CLIError(f"{opt}: only with --objective (the Pareto set: --designs DIR)")
         return _pareto(args, base, drums, cons)
-    for opt, given in (("--plot", args.plot), ("--designs", args.designs)):
+    for opt, given in (("--plot", args.plot), ("--designs", args.designs),
+                       ("--material", args.material)):  # fmt: skip
         if given:
             raise CLIError(f"{opt}: only for the Pareto set (without --objective)")
     check_int("--tries", args.tries, 1, MAX_CANDIDATES)
@@ -986,6 +995,18 @@ def _member_json(i: int, m: Member, ev: dict | None, violations: list[str]) -> d
             "reference": ev, "violations": violations}  # fmt: skip
 
 
+def _material_axes(specs: list[str]) -> dict[str, list[str]]:
+    """``--material PART=NAME,NAME`` options as the Pareto search's categorical axes."""
+    out: dict[str, list[str]] = {}
+    for spec in specs:
+        part, eq, names = spec.partition("=")
+        if not eq or not names.strip():
+            raise CLIError(f"--material {spec!r}: give PART=NAME,NAME (e.g. fluid=MRF-122EG,"
+                           "MRF-140CG)")  # fmt: skip
+        out[part.strip()] = [n.strip() for n in names.split(",") if n.strip()]
+    return out
+
+
 def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...],
             cons: Constraints) -> int:  # fmt: skip
     check_choice("--rendering", args.rendering, tuple(RENDERING))
@@ -997,7 +1018,8 @@ def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...]
     ps = pareto(base, rendering=args.rendering, constraints=cons,
                 bounds=parse_bounds(args.vary) if args.vary else None, drum_counts=drums,
                 seed=args.seed, members=args.members,
-                robust=None if args.nominal else robust_verdict(base))  # fmt: skip
+                robust=None if args.nominal else robust_verdict(base),
+                materials=_material_axes(args.material))  # fmt: skip
     t_fast = time.perf_counter() - t0
     if not ps.members and ps.dropped_robust:
         raise CLIError(f"no design of the front is stable and passive at its K over the "
