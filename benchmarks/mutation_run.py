@@ -13,8 +13,9 @@ Each mutant runs in a private copy of the tree (no bytecode cache, its own numba
 ``-x`` so a killed mutant stops at its first failure, in two stages: first the tests that
 execute the mutated line (a per-test coverage map, ``--coverage``, built once by running
 the suite under pytest-cov with ``--cov-context=test``); if it survives those (or no test
-covers the line: numba kernels and code reached only through a CLI subprocess are not
-seen by coverage), every test file of its package that imports the module by name.
+covers the line, or at most two tests do: numba kernels, CLI subprocesses and module-level
+lines run at import are not seen per test by coverage), every test file of its package
+that imports the module by name. ``--out`` is resumed: mutants already there are kept.
 Killed: a test failed or the run exceeded ``--timeout``. Survived: every selected test
 passed. The JSON lists each mutant with its location, the original and the mutated
 source, its status and the test that killed it; ``--report`` prints the
@@ -222,6 +223,10 @@ def covering_tests(coverage_file: Path) -> dict[tuple[str, int], list[str]]:
 
 
 _FAILING: list[str] = []  # tests that fail on the unmutated tree (build_coverage)
+#: A line covered by this many tests or fewer also runs its package's importers: coverage
+#: records a module-level line (a constant, a default) under the one test that first
+#: imported it, and sees neither numba kernels nor CLI subprocesses.
+_FEW = 2
 
 
 def _pytest(tree: Path, targets: list[str], timeout: float) -> tuple[str, str]:
@@ -267,7 +272,7 @@ def run_one(m: Mutant, timeout: float, tests: list[str], failing: list[str]) -> 
     try:
         target.write_text(mutated_source(m))
         status, by = _pytest(_TREE, tests, timeout) if tests else ("survived", "")
-        if status == "survived":
+        if status == "survived" and len(tests) <= _FEW:
             files = _importers(_TREE, m.module) or [_package_tests(m.module)]
             status, by = _pytest(_TREE, files, timeout * 4)
     finally:
@@ -333,13 +338,18 @@ def main(argv: list[str] | None = None) -> int:
     if failing:
         print(f"{len(failing)} tests fail unmutated, left out: {failing}", flush=True)
     done: list[Mutant] = []
+    if args.out.exists():  # resume: the same tree and seed give the same sample
+        done = [Mutant(**d) for d in json.loads(args.out.read_text())["mutants"]]
+        seen = {(m.module, m.index) for m in done}
+        sample = [m for m in sample if (m.module, m.index) not in seen]
     with cf.ProcessPoolExecutor(args.jobs) as pool:
         futures = [pool.submit(run_one, m, args.timeout, cover.get((m.module, m.line), []),
                                failing) for m in sample]  # fmt: skip
-        for k, fut in enumerate(cf.as_completed(futures), 1):
+        total = len(done) + len(sample)
+        for fut in cf.as_completed(futures):
             m = fut.result()
             done.append(m)
-            print(f"[{k}/{len(sample)}] {m.status:8s} {m.module}:{m.line} {m.before!r} -> "
+            print(f"[{len(done)}/{total}] {m.status:8s} {m.module}:{m.line} {m.before!r} -> "
                   f"{m.after!r} ({m.seconds:.0f} s) {m.killed_by}", flush=True)  # fmt: skip
             args.out.parent.mkdir(parents=True, exist_ok=True)
             args.out.write_text(
