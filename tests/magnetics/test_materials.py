@@ -118,3 +118,20 @@ def test_yield_stress_along_a_decay_grows_with_the_field_and_the_depth(h0, h1, w
     assert f(ha, wa) <= f(hb, wa) * (1 + 1e-9) + 1e-11 * top
     assert f(ha, wa) <= f(ha, wb) * (1 + 1e-9) + 1e-11 * top
     assert -1e-11 * top <= f(hb, wb) <= np.expm1(wb) * top * (1 + 1e-9) + 1e-11 * top
+
+
+def test_carrier_viscosity_is_the_walther_line_through_its_points() -> None:
+    """ASTM D341 [astm-d341]: W = log10 log10(ν + 0.7) (ν in mm²/s) is linear in log10 T
+    (K). Through MRF-132DG's carrier points (40 °C, 19 mm²/s) and (100 °C, 4.1 mm²/s):
+    W(19) = log10 log10 19.7 = 0.11210, W(4.1) = log10 log10 4.8 = −0.16670; slope
+    −0.27880/log10(373.15/313.15) = −3.6617; at 70 °C W = 0.11210 − 3.6617·log10(343.15/
+    313.15) = −0.033377, so ν = 10^(10^W) − 0.7 = 7.735 mm²/s. The plastic viscosity scales
+    with it: η(100 °C)/η(40 °C) = 4.1/19."""
+    from magnetics.materials import FLUIDS, MRF
+
+    f = FLUIDS[MRF]
+    assert f.carrier_viscosity(40.0) == pytest.approx(19.0e-6, rel=1e-9)
+    assert f.carrier_viscosity(100.0) == pytest.approx(4.1e-6, rel=1e-9)
+    assert f.carrier_viscosity(70.0) == pytest.approx(7.735e-6, rel=1e-3)
+    ratio = f.viscosity_at(100.0) / f.viscosity_at(40.0)
+    assert ratio == pytest.approx(4.1 / 19.0, rel=1e-9)

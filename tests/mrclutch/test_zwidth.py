@@ -259,3 +259,30 @@ def test_zwidth_boundary_points_stability() -> None:
     ]
     assert all(flags)
     assert not is_stable_spring_damper(TABLE2_MR, 10 * max_stable_stiffness(TABLE2_MR), 0.0)
+
+
+@pytest.mark.parametrize(
+    ("b", "T", "K", "B", "d"),
+    [(2.0, 1e-3, 100.0, 1.0, 1), (1.0, 2e-3, 250.0, 0.7, 3)],
+)
+def test_sampled_margin_is_the_true_maximum_not_the_grids(b, T, K, B, d):
+    """With B large against K·T the right side's maximum lies inside (0, π), between two
+    of the 2049 grid points: the grid alone is ~4e-7 N·s/m off. The zoomed maximum must
+    equal a bounded scalar maximisation of the same right side to 1e-10 (a mutant that
+    dropped the zoom survived the suite)."""
+    from scipy.optimize import minimize_scalar
+
+    from mrclutch.haptics.zwidth import _cs_terms, sampled_passivity_margin
+
+    def rhs(th: float) -> float:
+        dk, cb = _cs_terms(np.array([th]), d)
+        return float(K * T * dk[0] + B * cb[0])
+
+    grid = np.linspace(0.0, np.pi, 2049)
+    j = int(np.argmax([rhs(t) for t in grid]))
+    assert 0 < j < 2048  # an interior maximum
+    best = minimize_scalar(lambda t: -rhs(t), bounds=(grid[j - 1], grid[j + 1]),
+                           method="bounded", options={"xatol": 1e-14})  # fmt: skip
+    exact = b + best.fun
+    assert abs((b - rhs(grid[j])) - exact) > 1e-8  # the grid alone is measurably off
+    assert sampled_passivity_margin(b, T, K, B, d) == pytest.approx(exact, abs=1e-10)
