@@ -93,7 +93,7 @@ def _torque(args: argparse.Namespace) -> int:
     clutch = build_section(design.clutch, design.materials)
     methods = ("network", "fem") if args.method == "both" else (args.method,)
     if "fem" in methods and currents.size > 1:  # long FEM work says how long first
-        section = build_section(clutch)
+        section = clutch  # already the section, with the design's materials
         check_memory(section, DEFAULT_SIZE)
         seconds = time_estimate(section, DEFAULT_SIZE, int(currents.size))
         if seconds > 60:
