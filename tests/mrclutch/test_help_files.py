@@ -22,7 +22,8 @@ from mrclutch.cli.main import COMMANDS
 
 ROOT = Path(__file__).resolve().parents[2]
 README = (ROOT / "README.md").read_text()
-TINY_SWEEP = """[sweep]
+TINY_SWEEP = """\
+[sweep]
 mode = "grid"
 base = "paper"
 [parameters]
