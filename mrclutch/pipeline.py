@@ -395,6 +395,9 @@ NAN_MEANS: dict[str, str] = {
     "bandwidth_gain_lumped": "one side has no bandwidth (the motor unavailable)",
 }
 NAN_MEANS["K_min_N_per_m"] = NAN_MEANS["K_max_N_per_m"]
+NAN_MEANS["K_max_at_B0_N_per_m"] = (
+    "no passive K >= 0 even with no virtual damping (the Z-width is empty at B = 0)"
+)
 NAN_MEANS["delay"] = (
     "the delay's range is not given: it spans the typed delay and the torque "
     "response's equivalent delay at the corners (mrclutch.robust)"

@@ -489,11 +489,14 @@ def threshold(p: HapticParams, K: float, verdict: str, field: str) -> dict[str, 
 def _rescaled(box: HandBox, p: HapticParams, K: float, bench: tuple[float, float]) -> HandBox:
     """The box of the fast path moved onto the evaluated pair ``p`` (another fidelity, or
     measured values): each range keeps its ratio to the nominal; the bench damping is
-    additive. Measured quantities (a range of one value) stay as they are."""
+    additive; a nominal of 0 (a typed delay of 0) moves its range by the new value.
+    Measured quantities (a range of one value) stay as they are."""
 
     def scale(t: tuple[np.ndarray, ...], v: float, add: tuple[float, float] = (0.0, 0.0)
               ) -> tuple[np.ndarray, ...]:  # fmt: skip
         nom, lo, hi = (float(x[0]) for x in t)
+        if nom == 0.0:  # no ratio to keep (a typed delay of 0): the range moves by v
+            return tuple(np.array([x]) for x in (v, lo + v, hi + v))
         r_lo, r_hi = (lo - add[0]) / nom, (hi - add[1]) / nom
         return tuple(np.array([x]) for x in (v, v * r_lo + add[0], v * r_hi + add[1]))
 

@@ -4,6 +4,7 @@ caps the current (the many-drum delay), and design files round-trip."""
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import tomllib
 
@@ -16,6 +17,7 @@ from geometry import regions
 from geometry.params import LENGTH_RANGES
 from geometry.validation import ParameterError
 from magnetics.thermal import coil_resistance
+from mrclutch.cli.main import main
 from mrclutch.design import design_from_mapping, design_preset, design_to_toml
 from mrclutch.pipeline import evaluate, evaluate_batch
 
@@ -373,3 +375,26 @@ def test_no_valid_sweep_row_has_an_infinite_delay():
     ok = out["valid"] == 1
     assert ok.sum() > n // 4
     assert np.all(np.isfinite(out["torque_delay_s"][ok]))
+
+
+def test_the_fuzz_findings_of_the_last_run_are_answered(tmp_path, capsys):
+    """Two classes the 10⁴-input fuzz run found: a typed delay of 0 with a 1 V supply and a
+    0.01 gearing divided by the delay's nominal of 0 when the robust box was moved onto the
+    evaluated pair (ZeroDivisionError); a 1 mm lever with no transmission damping left the
+    Z-width empty at B = 0 with no reason for its null."""
+    zero = tmp_path / "zero.toml"
+    zero.write_text(
+        'name = "z"\n[clutch]\nbase = "paper"\n[operating]\ndelay_ms = 0\n'
+        "[amplifier]\nsupply_voltage_V = 1\n[transmission]\ngearing = 0.01\n"
+    )
+    assert main(["evaluate", str(zero)]) == 0
+    capsys.readouterr()
+    lever = tmp_path / "lever.toml"
+    lever.write_text(
+        'name = "l"\n[clutch]\nbase = "paper"\n[operating]\nmax_current_A = 1\n'
+        "[transmission]\nlever_mm = 1\ngearing = 0.01\nb_N_s_per_m = 0\n"
+    )
+    assert main(["evaluate", str(lever), "--json"]) == 0
+    nulls = json.loads(capsys.readouterr().out)["nulls"]
+    assert "empty at B = 0" in nulls["zwidth/mr/K_max_at_B0_N_per_m"]
+    assert not any("no reason" in why for why in nulls.values())
