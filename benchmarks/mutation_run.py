@@ -281,6 +281,38 @@ def run_one(m: Mutant, timeout: float, tests: list[str], failing: list[str]) -> 
     return m
 
 
+VERDICTS = ROOT / "benchmarks/data/mutation_verdicts.toml"
+
+
+def verdicts() -> dict[str, dict[str, str]]:
+    """Each survivor's verdict, by "module:index": ``equivalent`` (no input a user can give
+    tells it from the original; ``why`` says so) or ``test`` (the test added for it)."""
+    import tomllib
+
+    return tomllib.loads(VERDICTS.read_text()) if VERDICTS.exists() else {}
+
+
+def summary(mutants: list[Mutant]) -> dict[str, float]:
+    """Counts of a run, with the survivors' verdicts: survival of the non-equivalent
+    mutants in the run (before their tests were written) and after."""
+    done = [m for m in mutants if m.status != "pending"]
+    ver = verdicts()
+    surv = [m for m in done if m.status == "survived"]
+    eq = [m for m in surv if ver.get(f"{m.module}:{m.index}", {}).get("verdict") == "equivalent"]
+    tested = [m for m in surv if ver.get(f"{m.module}:{m.index}", {}).get("verdict") == "test"]
+    non_eq = len(done) - len(eq)
+    return {
+        "mutants": len(done),
+        "killed": len(done) - len(surv),
+        "survived": len(surv),
+        "equivalent": len(eq),
+        "given_a_test": len(tested),
+        "unexplained": len(surv) - len(eq) - len(tested),
+        "survival_non_equivalent_pct": 100.0 * (len(surv) - len(eq)) / max(non_eq, 1),
+        "survival_after_tests_pct": 100.0 * (len(surv) - len(eq) - len(tested)) / max(non_eq, 1),
+    }
+
+
 def report(mutants: list[Mutant]) -> str:
     done = [m for m in mutants if m.status != "pending"]
     lines = ["| package | mutants | killed | survived |", "|---|---:|---:|---:|"]
@@ -290,10 +322,16 @@ def report(mutants: list[Mutant]) -> str:
         lines.append(f"| {pkg}/ | {len(mine)} | {killed} | {len(mine) - killed} |")
     killed = sum(m.status == "killed" for m in done)
     lines.append(f"| all | {len(done)} | {killed} | {len(done) - killed} |")
-    lines += ["", "| survivor | line | before → after |", "|---|---:|---|"]
-    for m in done:
+    lines += ["", "| survivor | line | before → after | verdict |", "|---|---:|---|---|"]
+    ver = verdicts()
+    for m in sorted(done, key=lambda m: (m.module, m.line)):
         if m.status == "survived":
-            lines.append(f"| {m.module} | {m.line} | `{m.before}` → `{m.after}` |")
+            v = ver.get(f"{m.module}:{m.index}", {})
+            say = (f"equivalent: {v.get('why', '')}" if v.get("verdict") == "equivalent"
+                   else f"test: `{v.get('test', '')}`" if v.get("verdict") == "test"
+                   else "**unexplained**")  # fmt: skip
+            before, after = (x.replace("|", "\\|") for x in (m.before, m.after))
+            lines.append(f"| {m.module} | {m.line} | `{before}` → `{after}` | {say} |")
     return "\n".join(lines)
 
 
@@ -306,6 +344,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, default=ROOT / "benchmarks/data/mutation.json")
     ap.add_argument("--list", action="store_true", help="print the sample, run nothing")
     ap.add_argument("--report", action="store_true", help="print the table of --out")
+    ap.add_argument("--summary", action="store_true", help="print --out's counts as JSON")
     ap.add_argument("--only", nargs="*", help="re-run these 'module:index' mutants only")
     ap.add_argument(
         "--coverage",
@@ -314,8 +353,9 @@ def main(argv: list[str] | None = None) -> int:
         help="per-test coverage map (built first if missing)",
     )
     args = ap.parse_args(argv)
-    if args.report:
-        print(report([Mutant(**d) for d in json.loads(args.out.read_text())["mutants"]]))
+    if args.report or args.summary:
+        got = [Mutant(**d) for d in json.loads(args.out.read_text())["mutants"]]
+        print(json.dumps(summary(got)) if args.summary else report(got))
         return 0
     everything = enumerate_mutants()
     sample = random.Random(args.seed).sample(everything, min(args.sample, len(everything)))

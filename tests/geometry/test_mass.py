@@ -117,3 +117,15 @@ def test_bad_tolerance_is_named(paper):
     c, solids = paper
     with pytest.raises(ParameterError, match="tolerance"):
         mesh_mass(c, -1.0, solids=solids)
+
+
+def test_thinnest_feature_is_the_thinnest_wall_or_the_hole_radius():
+    """The paper preset's thinnest feature is the 0.2 mm fluid film of the shaft's bore
+    clearance; 24 hub holes of 0.3 mm diameter have a 0.15 mm radius, thinner still (a
+    mutant that doubled the diameter instead of halving it survived the suite)."""
+    from geometry.mass import thinnest_feature
+
+    c = preset("paper")
+    assert thinnest_feature(c) == pytest.approx(0.2e-3, rel=1e-9)
+    holes = replace(c, hub_holes=24, hub_hole_diameter=0.3e-3, hub_hole_pitch_radius=4e-3)
+    assert thinnest_feature(holes) == pytest.approx(0.15e-3, rel=1e-9)

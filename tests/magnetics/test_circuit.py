@@ -116,3 +116,17 @@ def test_torque_falls_with_gap_at_fixed_ampere_turns_below_saturation(g1, dg):
     """Below saturation (1 A) a wider gap means less field and less torque (same NI)."""
     t = max_torque_batch({"gap": np.array([g1, g1 + dg]) * 1e-3}, 1.0)
     assert t[1] < t[0]
+
+
+def test_steel_flux_density_of_the_drums_by_hand():
+    """The drums carry the gap flux radially through their walls over the 6 mm zone; the
+    largest |B| is at the smallest wall radius, the first output drum's 5.75 mm:
+    B = Φ/(2π·5.75 mm·6 mm), one value per current (a mutant that took the maximum over
+    the currents instead of the drums survived the suite). The core carries Φ over
+    π·5.05²."""
+    res = solve(preset("paper"), [2.0, 7.0])
+    phi = np.abs(res.flux[0])
+    drums = np.asarray(res.steel_b["drums"])
+    assert drums.shape == (1, 2)
+    np.testing.assert_allclose(drums[0], phi / (2 * np.pi * 5.75e-3 * 6e-3), rtol=1e-12)
+    np.testing.assert_allclose(res.steel_b["core"][0], phi / (np.pi * 5.05e-3**2), rtol=1e-12)

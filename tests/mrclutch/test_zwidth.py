@@ -286,3 +286,13 @@ def test_sampled_margin_is_the_true_maximum_not_the_grids(b, T, K, B, d):
     exact = b + best.fun
     assert abs((b - rhs(grid[j])) - exact) > 1e-8  # the grid alone is measurably off
     assert sampled_passivity_margin(b, T, K, B, d) == pytest.approx(exact, abs=1e-10)
+
+
+@pytest.mark.parametrize(("K", "B"), [(-1.0, 0.0), (0.0, -1.0), (math.nan, 1.0), (1.0, math.inf)])
+def test_spring_damper_stability_refuses_a_negative_or_non_finite_gain(K, B):
+    """K and B must each be finite and ≥ 0 (a mutant that accepted any one of the four
+    conditions in place of all survived the suite)."""
+    from mrclutch.haptics.zwidth import is_stable_spring_damper
+
+    with pytest.raises(ParameterError, match="need finite K, B >= 0"):
+        is_stable_spring_damper(TABLE2_MR, K, B)
