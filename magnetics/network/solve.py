@@ -120,24 +120,26 @@ def _jac_layout(m):  # type: ignore[no-untyped-def]
     return o_off, o_tail, o_border, o_corner, o_state, o_sa, o_sk, o_sk + 2 * m + 1
 
 
-def _h_dh(tab, inv, nseg, mat, b):  # type: ignore[no-untyped-def]
-    """(H, dH/dB) of material ``mat`` at B ≥ 0 (``BHCurve.h_dh``: the segment's line)."""
+def _segment(inv, nseg, mat, b):  # type: ignore[no-untyped-def]
+    """The segment of material ``mat``'s B–H table that holds B ≥ 0 (the last one past
+    the table's end)."""
     t = b * inv[mat]
     top = nseg[mat] - 1
     if t > top:
         t = top
-    i = int(t)
+    return int(t)
+
+
+def _h_dh(tab, inv, nseg, mat, b):  # type: ignore[no-untyped-def]
+    """(H, dH/dB) of material ``mat`` at B ≥ 0 (``BHCurve.h_dh``: the segment's line)."""
+    i = _segment(inv, nseg, mat, b)
     s = tab[mat, i, 0]
     return tab[mat, i, 1] + s * b, s
 
 
 def _h_mean_dh(tab, inv, nseg, mat, b):  # type: ignore[no-untyped-def]
     """(H̄, dH̄/dB), H̄(B) = (1/B)·∫0^B H, at B ≥ 0 (``BHCurve.h_mean_dh``)."""
-    t = b * inv[mat]
-    top = nseg[mat] - 1
-    if t > top:
-        t = top
-    i = int(t)
+    i = _segment(inv, nseg, mat, b)
     s = tab[mat, i, 0]
     bb = max(b, 1e-300)
     g = tab[mat, i, 2] / bb
@@ -506,8 +508,8 @@ def _tangent_rows(pk, off, m, npole, tab, inv, nseg, x, ni, source, v):  # type:
             _solve(m, jac, source, v[s, c], work)
 
 
-_KERNELS = ("_jac_layout", "_h_dh", "_h_mean_dh", "_odd", "_pair", "_band", "_residual",
-            "_solve", "_solve_ladder", "_newton", "_workspace", "_solve_rows",
+_KERNELS = ("_jac_layout", "_segment", "_h_dh", "_h_mean_dh", "_odd", "_pair", "_band",
+            "_residual", "_solve", "_solve_ladder", "_newton", "_workspace", "_solve_rows",
             "_tangent_rows")  # fmt: skip
 
 
