@@ -286,7 +286,9 @@ VERDICTS = ROOT / "benchmarks/data/mutation_verdicts.toml"
 
 def verdicts() -> dict[str, dict[str, str]]:
     """Each survivor's verdict, by "module:index": ``equivalent`` (no input a user can give
-    tells it from the original; ``why`` says so) or ``test`` (the test added for it)."""
+    tells it from the original; ``why`` says so), ``speed`` (the same answers, only more or
+    fewer solver iterations: benchmarks judge those, not tests) or ``test`` (the test added
+    for it)."""
     import tomllib
 
     return tomllib.loads(VERDICTS.read_text()) if VERDICTS.exists() else {}
@@ -298,18 +300,24 @@ def summary(mutants: list[Mutant]) -> dict[str, float]:
     done = [m for m in mutants if m.status != "pending"]
     ver = verdicts()
     surv = [m for m in done if m.status == "survived"]
-    eq = [m for m in surv if ver.get(f"{m.module}:{m.index}", {}).get("verdict") == "equivalent"]
-    tested = [m for m in surv if ver.get(f"{m.module}:{m.index}", {}).get("verdict") == "test"]
-    non_eq = len(done) - len(eq)
+
+    def of(kind: str) -> list[Mutant]:
+        return [m for m in surv if ver.get(f"{m.module}:{m.index}", {}).get("verdict") == kind]
+
+    eq, speed, tested = of("equivalent"), of("speed"), of("test")
+    non_eq = len(done) - len(eq) - len(speed)  # mutants that change an answer
     return {
         "mutants": len(done),
         "killed": len(done) - len(surv),
         "survived": len(surv),
         "equivalent": len(eq),
+        "speed_only": len(speed),
         "given_a_test": len(tested),
-        "unexplained": len(surv) - len(eq) - len(tested),
-        "survival_non_equivalent_pct": 100.0 * (len(surv) - len(eq)) / max(non_eq, 1),
-        "survival_after_tests_pct": 100.0 * (len(surv) - len(eq) - len(tested)) / max(non_eq, 1),
+        "unexplained": len(surv) - len(eq) - len(speed) - len(tested),
+        "survival_non_equivalent_pct": 100.0 * (len(surv) - len(eq) - len(speed)) / max(non_eq, 1),
+        "survival_after_tests_pct": 100.0
+        * (len(surv) - len(eq) - len(speed) - len(tested))
+        / max(non_eq, 1),
     }
 
 
@@ -327,8 +335,9 @@ def report(mutants: list[Mutant]) -> str:
     for m in sorted(done, key=lambda m: (m.module, m.line)):
         if m.status == "survived":
             v = ver.get(f"{m.module}:{m.index}", {})
-            say = (f"equivalent: {v.get('why', '')}" if v.get("verdict") == "equivalent"
-                   else f"test: `{v.get('test', '')}`" if v.get("verdict") == "test"
+            kind = v.get("verdict")
+            say = (f"{kind}: {v.get('why', '')}" if kind in ("equivalent", "speed")
+                   else f"test: `{v.get('test', '')}`" if kind == "test"
                    else "**unexplained**")  # fmt: skip
             before, after = (x.replace("|", "\\|") for x in (m.before, m.after))
             lines.append(f"| {m.module} | {m.line} | `{before}` → `{after}` | {say} |")

@@ -123,3 +123,13 @@ def test_validation(paper):
         eddy_response(s, ib, size=1e-3, conductivity={"steel_1018": -1.0})
     with pytest.raises(ParameterError, match="bias"):
         bias_current(s, 7.0, bias=1.5)
+
+
+def test_laminated_response_at_zero_frequency_is_the_static_flux(paper):
+    """At ω = 0 the laminations carry no eddy current: Φ(0)/Φ(0) = 1 exactly, so their
+    matrix must not enter (its x/tanh x − 1 is 0.31·ν at the x → 1 guard, not its limit 0;
+    a mutant that added it whenever the shell was laminated survived the suite)."""
+    s, ib = paper
+    lam = eddy_response(s, ib, [0.0, 100.0], size=1e-3, laminations=Laminations(shell=0.5e-3))
+    assert lam.ratio[0] == pytest.approx(1.0, abs=1e-12)
+    assert abs(lam.ratio[1]) < 1.0

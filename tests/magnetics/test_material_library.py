@@ -324,3 +324,13 @@ def test_a_non_default_material_set_never_carries_the_1018_132dg_bound() -> None
     assert choose(hip, 0.05).torque == "fem"
     notes = clutch_figures(replace(d, materials=MaterialChoice(fluid="mrf_140cg"))).notes
     assert any("unmeasured" in n for n in notes)
+
+
+def test_steel_1018_conductivity_by_hand():
+    """AISI 1018: ρ = 1.59e-7 Ω·m at 0 °C and 2.19e-7 at 100 °C [matweb-1018]; linear, at
+    20 °C ρ = 1.59e-7 + 0.2·0.60e-7 = 1.71e-7 Ω·m, σ = 1/ρ = 5.85 MS/m, quoted 5.8 MS/m
+    (FEMM's '1018 Steel' [femm-matlib]). The eddy lags scale with it (a mutant of the
+    constant survived the suite)."""
+    from geometry.materials import conductivity
+
+    assert conductivity("steel_1018") == pytest.approx(1 / 1.71e-7, rel=0.01)

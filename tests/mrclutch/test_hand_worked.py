@@ -93,3 +93,21 @@ def test_rendering_area_with_a_hold_against_a_direct_integral(params, T):
     assert got == pytest.approx(direct, rel=1e-6)
     assert abs(rendering_area(replace(params, sample_period=0.0), K, points_per_decade=20000)
                - direct) > 1e-4 * direct  # fmt: skip
+
+
+def test_simulated_growth_rate_is_the_step_maps_spectral_radius():
+    """The free loop's step map x ↦ T x grows as ρ(T)^i, so the fitted growth rate is
+    ln ρ(T)/h with h the step (an independent eigenvalue computation; a mutant that fitted
+    a parabola to the log of the peaks survived the suite). Above the stable K the rate is
+    > 0, below it < 0."""
+    from mrclutch.haptics.delay import simulate_growth, step_map
+    from mrclutch.haptics.model import max_stable_stiffness
+
+    p = TABLE2_MR
+    k = float(max_stable_stiffness(p))
+    h = (p.delay + 0.5 * p.sample_period) / 5
+    for K in (1.2 * k, 0.8 * k):
+        rate = math.log(max(abs(np.linalg.eigvals(step_map(p, K, 5))))) / h
+        got = simulate_growth(p, K, 1.0, 5)
+        assert got == pytest.approx(rate, rel=0.05)
+        assert (got > 0) == (K > k)
