@@ -15,9 +15,8 @@ from __future__ import annotations
 
 import argparse
 import json
-import statistics
-import time
-from collections.abc import Callable
+import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -25,14 +24,8 @@ from mrclutch.design import design_preset
 from mrclutch.pipeline import BatchEvaluator, evaluate
 from mrclutch.robust import ROBUST_COLUMNS, RobustBatchEvaluator, robust_verdicts
 
-
-def median_time(f: Callable[[], object], repeats: int) -> float:
-    out = []
-    for _ in range(repeats):
-        t = time.perf_counter()
-        f()
-        out.append(time.perf_counter() - t)
-    return statistics.median(out)
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # a sibling script's timer
+from bench_zwidth import median_time
 
 
 def fields(n: int) -> dict[str, np.ndarray]:

@@ -33,10 +33,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from measure_circuit_map import pool_map
+from measure_fem_reference import REFERENCE_SIZE, fem_yield_torques
 
 OUT = Path(__file__).resolve().parent / "data" / "fem_doe.json"
-REFERENCE_SIZE = 0.25e-3
-CONVENTIONS = ("mid-line", "weakest-layer")
 TURNS = 140  # the paper preset's coil
 #: The design space of the bound (SI; n_drums inclusive integers). The error-map axes keep
 #: their ranges; every other length spans about half to twice the paper preset's value.
@@ -111,13 +110,12 @@ def sample(n: int, seed: int, sobol: bool) -> list[dict[str, float]]:
 
 
 def fem(design: dict) -> dict[str, list[float]] | None:  # type: ignore[type-arg]
-    """{convention: FEM yield torque (N·m) at the design's ampere-turns, "s": seconds}."""
+    """{convention: FEM yield torque (N·m) at the design's ampere-turns, "s": seconds}
+    (``measure_fem_reference.fem_yield_torques`` at I = N·I/TURNS)."""
     from dataclasses import replace
 
-    from geometry.section import build_section
     from geometry.validation import ParameterError
-    from magnetics.fem import FEMConvergenceError, build_grid, solve_fem
-    from magnetics.torque import _fluid
+    from magnetics.fem import FEMConvergenceError
     from mrclutch.design import design_preset
 
     t0 = time.perf_counter()
@@ -127,19 +125,10 @@ def fem(design: dict) -> dict[str, list[float]] | None:  # type: ignore[type-arg
         c = replace(base, coil_turns=TURNS, **kw)
     except ParameterError:
         return None
-    section = build_section(c)
-    fluid = _fluid(section, None)
-    grid = build_grid(section, REFERENCE_SIZE)
-    out: dict[str, list[float]] = {k: [] for k in CONVENTIONS}
-    psi = None
-    for ni in design["ampere_turns"]:
-        try:
-            sol = solve_fem(section, ni / TURNS, grid=grid, psi0=psi)
-        except FEMConvergenceError:  # recorded as a failed design, never guessed
-            return None
-        psi = sol.psi
-        for k in CONVENTIONS:
-            out[k].append(round(float(sol.gap_yield_torque(fluid, None, k).sum()), 10))
+    try:
+        out = fem_yield_torques(c, [ni / TURNS for ni in design["ampere_turns"]], 10)
+    except FEMConvergenceError:  # recorded as a failed design, never guessed
+        return None
     out["s"] = [round(time.perf_counter() - t0, 3)]
     return out
 

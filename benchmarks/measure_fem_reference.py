@@ -28,14 +28,32 @@ REFERENCE_SIZE = 0.25e-3
 OUT = Path(__file__).resolve().parent / "data" / "fem_reference.json"
 
 
+def fem_yield_torques(clutch, currents, digits: int) -> dict[str, list[float]]:  # type: ignore[no-untyped-def]
+    """{convention: FEM yield torque (N·m) at ``currents`` (A), rounded to ``digits``} of one
+    clutch: one grid at REFERENCE_SIZE, Newton warm-started across the currents. Raises
+    ``FEMConvergenceError`` where a solve does not converge."""
+    from geometry.section import build_section
+    from magnetics.fem import build_grid, solve_fem
+    from magnetics.torque import _fluid
+
+    section = build_section(clutch)
+    fluid = _fluid(section, None)
+    grid = build_grid(section, REFERENCE_SIZE)
+    out: dict[str, list[float]] = {k: [] for k in CONVENTIONS}
+    psi = None
+    for i in currents:
+        sol = solve_fem(section, i, grid=grid, psi0=psi)
+        psi = sol.psi
+        for k in CONVENTIONS:
+            out[k].append(round(float(sol.gap_yield_torque(fluid, None, k).sum()), digits))
+    return out
+
+
 def _design(values: dict[str, float]) -> dict[str, list[float]] | None:
     """{convention: torque at CURRENTS (N·m)} of one design; None if it fails validation."""
     from dataclasses import replace
 
-    from geometry.section import build_section
     from geometry.validation import ParameterError
-    from magnetics.fem import build_grid, solve_fem
-    from magnetics.torque import _fluid
     from mrclutch.design import design_preset
 
     base = design_preset("paper").clutch
@@ -43,17 +61,7 @@ def _design(values: dict[str, float]) -> dict[str, list[float]] | None:
         c = replace(base, **{k: (int(v) if k == "n_drums" else v) for k, v in values.items()})
     except ParameterError:
         return None
-    section = build_section(c)
-    fluid = _fluid(section, None)
-    grid = build_grid(section, REFERENCE_SIZE)
-    out: dict[str, list[float]] = {k: [] for k in CONVENTIONS}
-    psi = None
-    for i in CURRENTS:
-        sol = solve_fem(section, i, grid=grid, psi0=psi)
-        psi = sol.psi
-        for k in CONVENTIONS:
-            out[k].append(round(float(sol.gap_yield_torque(fluid, None, k).sum()), 9))
-    return out
+    return fem_yield_torques(c, CURRENTS, 9)
 
 
 def random_designs(n: int, seed: int) -> list[dict[str, float]]:

@@ -141,5 +141,5 @@ def test_a_small_sample_of_the_stored_fem_is_re_measured() -> None:
     rows = sorted(data["check"], key=lambda r: r["design"]["n_drums"])[:2]
     for r in rows:
         again = doe.fem(r["design"])
-        for conv in doe.CONVENTIONS:
+        for conv in ("mid-line", "weakest-layer"):  # both conventions of the stored solve
             np.testing.assert_allclose(again[conv], r["torque"][conv], rtol=1e-6)
