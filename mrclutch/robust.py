@@ -10,10 +10,11 @@ box:
 * largest passive K — *corners*: non-increasing in m1, increasing in b1, decreasing in τ
   (tested by hypothesis in tests/mrclutch/test_robust.py), so the worst is at (m1⁺, b1⁻, τ⁺)
   and the best at (m1⁻, b1⁺, τ⁻);
-* largest stable K — increasing in b1 (tested): b1 at its corner; m1 and τ are not
-  monotone (a heavier m1 can stabilise), so a *bounded global search* over (m1, τ)
-  (:func:`box_search`: a 3 × 3 grid of the box, then grids half as wide on the best point,
-  five times for the worst case), each point by :func:`stable_stiffness_batch` (the
+* largest stable K — monotone in none of m1, b1, τ (a heavier m1 can stabilise; where
+  the transmission's own damping b is light, more b1 can destabilise: tested
+  counter-examples), so a *bounded global search* over (m1, b1, τ) (:func:`box_search`:
+  a 3 × 3 × 3 grid of the box, then grids half as wide on the best point, five times for
+  the worst case), each point by :func:`stable_stiffness_batch` (the
   D-subdivision of ``haptics.model`` on arrays of designs, equal to
   ``max_stable_stiffness`` to 1e-9: tested);
 * bandwidth at the rendered K_max — monotone in none of m1, b1, τ, K (tests show
@@ -340,10 +341,6 @@ ROBUST_COLUMNS: tuple[str, ...] = (
 )
 
 
-def _rows(x: np.ndarray) -> np.ndarray:
-    return x[:, None]
-
-
 def robust_limits(
     box: HandBox,
     *,
@@ -377,13 +374,14 @@ def robust_limits(
         res["max_passive_K_worst"] = max_passive_stiffness(sub.params(mhi, blo, thi))
     if "best" in cases:
         res["max_passive_K_best"] = max_passive_stiffness(sub.params(mlo, bhi, tlo))
-    # stable K: b1 at its corner (increasing in b1), a search over (m1, τ)
-    stable = (("worst", blo, -1, zooms + 2), ("best", bhi, 1, zooms))
-    for case, b1, sense, z in (x for x in stable if x[0] in cases):
+    # stable K: monotone in none of m1, b1, τ (a transmission resonance makes more b1
+    # destabilise: tests), a search over all three
+    for case, sense, z in (x for x in (("worst", -1, zooms + 2), ("best", 1, zooms))
+                           if x[0] in cases):  # fmt: skip
         res[f"max_stable_K_{case}"], _ = box_search(
-            lambda x, b1=b1: stable_stiffness_batch(sub.params(x[..., 0], _rows(b1), x[..., 1])),
-            np.stack([mlo, tlo], 1), np.stack([mhi, thi], 1), sense=sense, points=points,
-            zooms=z)  # fmt: skip
+            lambda x: stable_stiffness_batch(sub.params(x[..., 0], x[..., 1], x[..., 2])),
+            np.stack([mlo, blo, tlo], 1), np.stack([mhi, bhi, thi], 1), sense=sense,
+            points=points, zooms=z)  # fmt: skip
     # bandwidth at the rendered K: not monotone in any input (tests): a search over all four
     for case, sense in (x for x in (("worst", -1), ("best", 1)) if x[0] in cases):
         res[f"bandwidth_{case}"], _ = box_search(
