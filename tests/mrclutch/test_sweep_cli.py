@@ -27,12 +27,21 @@ def _sweep(spec, out, *extra):
             "--no-progress", *extra]  # fmt: skip
 
 
-@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
-def test_killed_sweep_resumes_to_the_same_rows(tmp_path, sig):
-    spec = tmp_path / "spec.toml"
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory):
+    """(the spec, the rows of its sweep run without interruption): one run for both
+    signals."""
+    tmp = tmp_path_factory.mktemp("whole")
+    spec = tmp / "spec.toml"
     spec.write_text(SPEC)
-    whole, part = tmp_path / "whole.csv", tmp_path / "part.csv"
-    subprocess.run(_sweep(spec, whole), check=True, capture_output=True)
+    subprocess.run(_sweep(spec, tmp / "whole.csv"), check=True, capture_output=True)
+    return spec, (tmp / "whole.csv").read_text()
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
+def test_killed_sweep_resumes_to_the_same_rows(tmp_path, sig, uninterrupted):
+    spec, whole = uninterrupted
+    part = tmp_path / "part.csv"
     proc = subprocess.Popen(_sweep(spec, part), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline:  # wait until a few chunks are on disk
@@ -48,7 +57,7 @@ def test_killed_sweep_resumes_to_the_same_rows(tmp_path, sig):
     assert b"--resume" in err and b"Traceback" not in err
     assert 0 < rows < 60000 and rows % 2000 == 0  # whole chunks only
     subprocess.run(_sweep(spec, part, "--resume"), check=True, capture_output=True)
-    assert part.read_text() == whole.read_text()
+    assert part.read_text() == whole
 
 
 HEAVY = ("build123d", "OCP", "skfem", "pyvista", "vtk", "trimesh")
