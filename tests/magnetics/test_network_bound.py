@@ -51,6 +51,8 @@ def test_the_stored_bound_is_this_measurement(measured: dict) -> None:  # type: 
     assert mine["ranges"] == measured["ranges"]
     np.testing.assert_allclose(mine["estimate"]["b"], measured["estimate"]["b"], atol=1e-7)
     np.testing.assert_allclose(mine["estimate"]["a"], measured["estimate"]["a"], atol=1e-7)
+    np.testing.assert_allclose(mine["scale"]["g"], measured["scale"]["g"], atol=1e-7)
+    assert mine["scale"]["d"] == pytest.approx(measured["scale"]["d"], abs=1e-7)
     assert mine["log_scaled"] == measured["log_scaled"]
     assert mine["q"] == pytest.approx(measured["q"], rel=1e-5)
     assert mine["check"] == measured["check"]
@@ -59,21 +61,24 @@ def test_the_stored_bound_is_this_measurement(measured: dict) -> None:  # type: 
 def test_fresh_designs_lie_inside_the_bound_and_it_is_tight(measured: dict) -> None:  # type: ignore[type-arg]
     """On the 200 fresh random designs (a seed never used to build it), every section
     dimension varied, all inside the ranges: |error| inside the bound on ≥ 95 % of designs
-    × currents (measured 96.5 %). Its median is 2.13 × the median |error| (3.96 % against
-    1.86 %): issue 31 asks ≤ 2, not met — the best estimate found leaves a residual whose
-    95th percentile (q = 2.4 %) exceeds the median error itself (docs/magnetics.md)."""
+    × currents (measured 96.2 %). Its median is 2.02 × the median |error| (3.77 % against
+    1.86 %; the constant-q bound of the previous round: 2.13 ×): issue 31 asks ≤ 2, not
+    met, asserted here at 2.05 so that a regression shows. The scale σ̂ varies over the
+    check designs (it is adaptive, not a constant in disguise)."""
     c = measured["check"]
     assert c["designs"] == 200 and c["points"] == 600
     assert c["coverage"] >= 0.95
-    assert c["median_bound"] <= 2.2 * c["median_abs_error"]
+    assert c["median_bound"] <= 2.05 * c["median_abs_error"]
+    lo, hi = c["min_scale"], c["max_scale"]
+    assert 0.0 < lo < c["median_scale"] < hi and hi > 2.0 * lo
     assert c["median_bound"] < 0.05 and c["max_abs_error"] < 0.10
     assert c["seed"] != measured["build"]["seed"]
 
 
 def test_the_runtime_bound_is_the_stated_formula() -> None:
-    """ê = c + b·x + xᵀAx and bound = |ê| + q, x the inputs scaled to [0, 1] (lengths and
-    N·I on log axes, the drum count linear), written out term by term here (each term: a
-    planted change fails)."""
+    """ê = c + b·x + xᵀAx, σ̂ = exp(d + g·x) and bound = |ê| + q·σ̂, x the inputs scaled to
+    [0, 1] (lengths and N·I on log axes, the drum count linear), written out term by term
+    here (each term: a planted change fails)."""
     m = load()
     assert "n_drums" not in m.log_scaled and "gap" in m.log_scaled
     assert AMPERE_TURNS in m.log_scaled
@@ -91,11 +96,40 @@ def test_the_runtime_bound_is_the_stated_formula() -> None:
         current = lo * (hi / lo) ** x[-1] / p["coil_turns"]
         est = m.c + sum(bi * xi for bi, xi in zip(m.b, x, strict=True))
         est += sum(m.a[i][j] * x[i] * x[j] for i in range(len(x)) for j in range(len(x)))
+        sig = math.exp(m.d + sum(gi * xi for gi, xi in zip(m.g, x, strict=True)))
         e, b, why = network_bound(p, current)
         assert why == ()
         assert e == pytest.approx(est, rel=1e-9, abs=1e-12)
-        assert b == pytest.approx(abs(est) + m.q, rel=1e-9)
-    assert 0.0 < m.q < 0.1 and m.coverage == 0.95
+        assert b == pytest.approx(abs(est) + m.q * sig, rel=1e-9)
+    assert 0.0 < m.q < 10.0 and m.coverage == 0.95
+    assert 0.0 < math.exp(m.d) < 0.1 and len(m.g) == len(m.ranges)
+
+
+def test_the_normalised_cross_conformal_bound_covers_and_adapts() -> None:
+    """The script's procedure on synthetic data whose noise grows 20-fold along x₀ (a known
+    law, fresh draws to judge it): the normalised bound covers ≈ 95 % of fresh points, as
+    the constant one does, with a smaller median (it is tight where the noise is small),
+    and its scale found the law's direction."""
+    mnb = _bench("measure_network_bound")
+    rng = np.random.default_rng(3)
+
+    def draw(n: int) -> tuple[np.ndarray, np.ndarray]:
+        x = rng.uniform(size=(n, 2))
+        return x, 0.05 * x[:, 1] + 0.004 * np.exp(3.0 * x[:, 0]) * rng.standard_normal(n)
+
+    x, e = draw(1500)
+    design = np.arange(e.size)
+    xf, ef = draw(20000)
+    median = {}
+    for scaled_ in (False, True):
+        q, _, _ = mnb.cross_conformal(x, e, design, scaled_)
+        c, b, a, d, g = mnb.fit(x, e, design, scaled_)
+        bound = np.abs(mnb.estimate(c, b, a, xf)) + q * np.exp(d + xf @ g)
+        assert 0.93 <= np.mean(np.abs(ef) <= bound) <= 0.97
+        median[scaled_] = np.median(bound)
+        if scaled_:  # slope 3 along x₀ (δ and the ridge pull it lower), 0 along x₁
+            assert 1.5 < g[0] < 3.5 and abs(g[1]) < 0.5
+    assert median[True] < 0.85 * median[False]
 
 
 def test_outside_the_ranges_or_the_materials_the_error_is_unknown() -> None:
