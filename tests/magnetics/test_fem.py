@@ -157,3 +157,23 @@ def test_a_torque_curve_solves_its_currents_in_increasing_order_whatever_their_o
     b = torque_curve(PAPER, [0.0, 2.0, 4.0, 7.0], **kw).yield_torque
     np.testing.assert_allclose(a, b[[3, 0, 1, 2]], rtol=1e-6)
     assert a[1] == 0 and np.all(np.diff(b) > 0)
+
+
+@pytest.mark.parametrize("gap", [0.2, 0.5, 1.0, 1.7, 3.0, 9.0])
+def test_air_cells_are_the_fewest_geometric_cells_of_first_size_h(gap):
+    """Outside the clutch the grid grows ×1.5 a cell: an air interval of length L gets the
+    fewest n cells (capped at 12, not reached here) whose first, next to the clutch, is
+    ≤ h — by hand the first of n such cells is L/(1 + 1.5 + … + 1.5^(n−1)) =
+    L/(2(1.5^n − 1)), so one cell while L ≤ h (a mutant that forced at least two
+    survived the suite)."""
+    from magnetics.fem.grid import _axis
+
+    h = 0.5
+    lines = _axis([0.0, 1.0, 1.0 + gap * h], 0.0, 1.0 + gap * h, h, (0.0, 1.0))
+    air = np.diff(lines[lines >= 1.0 - 1e-12])
+    n = next(k for k in range(1, 13) if gap * h / (2 * (1.5**k - 1)) <= h * (1 + 1e-12))
+    assert air.size == n
+    assert air[0] <= h * (1 + 1e-12)
+    np.testing.assert_allclose(air[1:] / air[:-1], 1.5, rtol=1e-9)
+    if gap <= 1.0:
+        assert n == 1

@@ -115,3 +115,21 @@ def test_fem_weakest_layer_below_mid_line_and_near_circuit():
         sol.gap_yield_torque(FLUID, convention="middle")
     with pytest.raises(ParameterError):
         torque_curve(PAPER, [1.0], convention="middle")
+
+
+
+def test_no_field_no_yield_torque_on_a_sharp_knee():
+    """With no flux and no radial MMF the field is 0 everywhere, τy(H(0)) = 0, so every
+    gap (zone and half band) transmits exactly 0 — here on the sharp-knee fluid above,
+    whose band takes the Gauss–Legendre branch over u of min_r r²·τy (a mutant that
+    started that sum at 0.001 in place of 0 survived the suite)."""
+    knee = BHCurve(MRF, (0.5, 0.6), (500.0, 500.0 + 0.1 / MU0), "synthetic knee")
+    mats = dict(MATERIALS)
+    mats[MRF] = knee
+    assert _yield_table(knee, FLUID).turns.size >= 1  # the interior-minimum branch
+    assert FLUID.tau_y(knee.h_of_b(np.zeros(1)))[0] == 0.0
+    path = path_from_section(build_section(replace(PAPER, gap=1.5e-3)), mats)
+    assert np.all(path.band_len > 0)
+    zero = np.zeros((path.turns.size, 1))
+    for cv in ("mid-line", "weakest-layer"):
+        assert np.all(_gap_torque(path, zero, zero, mats, None, cv) == 0.0)

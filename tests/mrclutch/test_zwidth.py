@@ -296,3 +296,67 @@ def test_spring_damper_stability_refuses_a_negative_or_non_finite_gain(K, B):
 
     with pytest.raises(ParameterError, match="need finite K, B >= 0"):
         is_stable_spring_damper(TABLE2_MR, K, B)
+
+
+def test_passive_set_ends_at_b_top_past_b_max() -> None:
+    """Where the set reaches past B_max (with K_min > 0), B_top is where it closes: just
+    below it some K is passive, just past it none, by ``passive_stiffness_interval`` (its
+    own five 41-point zooms, not zwidth's bracket). A mutant whose bracket 'doubling'
+    divided (2/B) left B_top at the grid's B_max and survived the suite."""
+    p = _random(300, seed=8)
+    r = zwidth(p, n_b=9)
+    bt = r["B_top_N_s_per_m"]
+    ext = np.nonzero(bt > r["B_max_at_K0_N_s_per_m"] * (1 + 1e-6))[0]
+    assert ext.size >= 10
+    q = HapticParams(**{n: getattr(p, n)[ext] for n in ("m1", "b1", "k", "b", "m2", "delay")})
+    lo, hi = passive_stiffness_interval(q, bt[ext] * (1 - 1e-3))
+    assert np.all(np.isfinite(hi) & (lo <= hi))  # inside: a passive K exists
+    lo, hi = passive_stiffness_interval(q, bt[ext] * (1 + 1e-4))
+    assert np.all(np.isnan(hi) & np.isnan(lo))  # past the end: none
+
+
+def test_closing_node_keeps_the_refined_bound() -> None:
+    """Where the set closes at B_max (K = 0 reaches it), the last node's K_max is the
+    refined bound there as the module docstring defines it (the 361-point grid and three
+    21-point zooms at B_top), unaltered: ``_bound`` at the same B gives it bit for bit.
+    A mutant of the closure test (K_lo + K_hi in place of K_lo − K_hi) rounded those small
+    K_max (1e-14 … 1e-6 of K_max(0)) to 0 and survived the suite."""
+    from mrclutch.haptics.zwidth import _bound, _columns
+
+    p = _random(300, seed=8)
+    r = zwidth(p, n_b=9)
+    bt = r["B_top_N_s_per_m"]
+    closes = np.nonzero(bt <= r["B_max_at_K0_N_s_per_m"] * (1 + 1e-6))[0]
+    assert closes.size >= 200
+    k_last = r["K_max_N_per_m"][closes, -1]
+    assert np.all(k_last >= 0)
+    assert np.sum(k_last < 1e-6 * r["K_max_N_per_m"][closes, 0]) >= 100  # ≈ 0: closed
+    want = _bound(_columns(p), closes, bt[closes], -1.0, 3, 21)[0]
+    np.testing.assert_array_equal(k_last, want)
+
+
+@pytest.mark.parametrize("phi", [0.0, 0.5, 1.0, 1.5])
+def test_ray_crossing_directions_match_the_quartics_roots(phi: float) -> None:
+    """Without delay χ(s) = s Num(s) + ρ (c + σ s)(b s + k) is a quartic: at each crossing
+    gain ρ_c the number of its roots with Re s > 0 (numpy.roots, independent of the
+    module) must change by 2 × the crossing's direction between ρ_c (1 ∓ 1e-6). A mutant
+    whose central difference added (χ(s+h) + χ(s−h)) flipped every direction; the
+    stability verdicts, a sum of all directions, did not see it."""
+    from mrclutch.haptics.zwidth import _ray_crossings
+
+    p = _random(10, seed=10)
+    c, sg = math.cos(phi), math.sin(phi)
+    seen = 0
+    for i in range(10):
+        q = HapticParams(m1=p.m1[i], b1=p.b1[i], k=p.k[i], b=p.b[i], m2=p.m2[i])
+        num = np.array(_num_coeffs(q), dtype=float)
+
+        def unstable(rho: float, q: HapticParams = q, num: np.ndarray = num) -> int:
+            chi = np.polyadd(np.append(num, 0.0), rho * np.polymul([sg, c], [q.b, q.k]))
+            return int(np.sum(np.roots(chi).real > 0))
+
+        rc, dirs = _ray_crossings(q, c, sg, 1e7)
+        for r, d in zip(rc, dirs, strict=True):
+            assert unstable(r * (1 + 1e-6)) - unstable(r * (1 - 1e-6)) == 2 * d
+            seen += 1
+    assert seen >= 3
