@@ -117,7 +117,6 @@ def test_fem_weakest_layer_below_mid_line_and_near_circuit():
         torque_curve(PAPER, [1.0], convention="middle")
 
 
-
 def test_no_field_no_yield_torque_on_a_sharp_knee():
     """With no flux and no radial MMF the field is 0 everywhere, τy(H(0)) = 0, so every
     gap (zone and half band) transmits exactly 0 — here on the sharp-knee fluid above,
