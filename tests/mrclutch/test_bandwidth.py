@@ -91,3 +91,30 @@ def test_k_eff_is_positive_below_the_bandwidth() -> None:
     for i in range(K.size):
         w = np.linspace(1e-3, f[i] * (1 - 1e-6), 200_001)
         assert np.all(_k_eff(p.m1[i], p.b1[i], p.k[i], p.b[i], p.m2[i], p.delay[i], K[i], w) > 0)
+
+
+def test_a_near_touch_below_1_rad_s_is_not_taken_for_the_crossing() -> None:
+    """A slow lever (m1 = 1 g, k = K = 1e-5 N/m, b1 = b = 2e-6 N·s/m, m2 = 0.4994 g; no
+    delay): k_eff falls towards 0 at the transmission resonance, √(k/m1) = 0.1 rad/s, but
+    stays above it there (by 1.5e-4 K on a dense scan of k_eff = Re[(k + jbω)(K − m1ω² +
+    jb1ω)/(k − m1ω² + j(b1 + b)ω)] − m2ω², written out here), rises, and crosses 0 first
+    at 0.1413 rad/s (brentq). Only an unresolved interval narrower than rtol·ω may count
+    as a touch (``bandwidth`` docstring): the dip is resolved root-free and the bandwidth
+    is the crossing (a mutant that stopped at rtol/ω, 100 × wider at 0.1 rad/s, reported
+    the dip and survived the suite)."""
+    m1, b1, k, b, m2, K = 1e-3, 2e-6, 1e-5, 2e-6, 4.994e-4, 1e-5
+
+    def keff(w):  # type: ignore[no-untyped-def]
+        s = 1j * w
+        z = (k + b * s) * (K + m1 * s * s + b1 * s) / (k + m1 * s * s + (b1 + b) * s)
+        return z.real - m2 * w * w
+
+    w = np.linspace(0.09, 0.2, 1_100_001)
+    kw = keff(w)
+    dip = (w > 0.099) & (w < 0.101)
+    assert 1e-4 * K < kw[dip].min() < 2e-4 * K  # a near touch at the resonance
+    first = int(np.argmax(kw <= 0))
+    assert 0.14 < w[first] < 0.15 and np.all(kw[:first] > 0)
+    want = brentq(keff, w[first - 1], w[first], xtol=1e-15, rtol=1e-14)
+    got = float(bandwidth(HapticParams(m1=m1, b1=b1, k=k, b=b, m2=m2), K)) * 2 * math.pi
+    assert got == pytest.approx(want, rel=1e-8)
