@@ -97,7 +97,8 @@ class NetworkBound:
                 outside.append(name)
             inside &= ok
             if name in self.log_scaled:
-                with np.errstate(divide="ignore", invalid="ignore"):
+                # (overflow: a value near the float limit, off the map whatever x is)
+                with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
                     x[:, j] = np.log(v / lo) / np.log(hi / lo)
             else:
                 x[:, j] = (v - lo) / (hi - lo)

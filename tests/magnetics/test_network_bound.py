@@ -153,6 +153,16 @@ def test_outside_the_ranges_or_the_materials_the_error_is_unknown() -> None:
     assert un.bound == math.inf and "unmeasured" in un.notes[0]
 
 
+def test_a_value_near_the_float_limit_is_off_the_map_without_an_overflow() -> None:
+    """Found by hypothesis (test_batch_fuzz): a drum 1.8e304 m thick made v/lo overflow
+    (a RuntimeWarning, an error here) before the range check could say off the map."""
+    m = load()
+    p = {k: np.array([lo]) for k, (lo, _) in m.ranges.items() if k != AMPERE_TURNS}
+    p["drum_thickness"] = np.array([1.797693134862316e304])
+    _x, inside, why = m.scaled(p, np.array([m.ranges[AMPERE_TURNS][0]]))
+    assert not inside[0] and why == ("drum_thickness",)
+
+
 def test_the_batch_bound_is_the_single_one_and_needs_a_current() -> None:
     gaps = np.array([0.3e-3, 0.7e-3, 1.2e-3])  # the last outside the gap's range
     p = {k: np.full(3, float(v)) for k, v in vars(PAPER).items()}
