@@ -5,10 +5,15 @@ two ways: solved at each current (``max_torque_batch``, its fastest path, the is
 "~6·10⁴/s") and through its torque table (``torque_grid_batch``, what sweeps used).
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/bench_network.py [--designs 100000] [--rounds 3]
-        [--skip-table]
+        [--skip-table] [--breakdown]
 
 ``--skip-table`` leaves the torque table out (it takes 30× the others' time). The network's
 compiled kernels are loaded (or compiled, once per machine) before the clock starts.
+``--breakdown``: instead, per drum count (5000 designs each, 3 currents), µs per design of
+the network's three stages — building the ladder from the region table (NumPy), the
+Newton solve (the compiled kernel) and the torque reading (compiled) — against the loop's
+whole time, and the loop's share that building and reading alone take (where the network
+stands if its solve cost nothing).
 """
 
 from __future__ import annotations
@@ -33,12 +38,61 @@ def designs(n: int, seed: int = 1) -> dict[str, np.ndarray]:
     return f
 
 
+def breakdown(n: int = 5000, rounds: int = 3) -> None:
+    """Print the network's stage times per drum count against the loop's (module doc)."""
+    from geometry.params import broadcast_fields, valid
+    from geometry.regions import per_topology
+    from magnetics.network.build import network_from_regions
+    from magnetics.network.solve import solve_network
+    from magnetics.network.torque import network_film_torque, network_torque_batch
+    from magnetics.torque import max_torque_batch
+
+    cur = np.array([[2.0, 4.0, 7.0]])
+    network_torque_batch(designs(10, 2), cur[0])  # the kernels loaded
+    print("drums  build_us  solve_us  read_us  network_us  loop_us  (build+read)/loop")
+    for nd in range(1, 7):
+        f = designs(n)
+        f["n_drums"][:] = nd
+        p = broadcast_fields(f)
+        best = {k: np.inf for k in ("build", "solve", "read", "loop")}
+        for _ in range(rounds):
+
+            def one(rg, rows, best=best):  # type: ignore[no-untyped-def]
+                t0 = time.perf_counter()
+                net = network_from_regions(rg)
+                t1 = time.perf_counter()
+                x = solve_network(net, net.turns[:, None] * cur)
+                t2 = time.perf_counter()
+                t = network_film_torque(net, x)
+                t3 = time.perf_counter()
+                for k, v in (("build", t1 - t0), ("solve", t2 - t1), ("read", t3 - t2)):
+                    best[k] = min(best[k], v)
+                return {"t": t.sum(-1)}
+
+            per_topology(p, valid(p), one)
+            t0 = time.perf_counter()
+            for c in cur[0]:
+                max_torque_batch(f, c)
+            best["loop"] = min(best["loop"], time.perf_counter() - t0)
+        us = {k: 1e6 * v / n for k, v in best.items()}
+        net = us["build"] + us["solve"] + us["read"]
+        print(
+            f"{nd:5d}  {us['build']:8.2f}  {us['solve']:8.2f}  {us['read']:7.2f}  "
+            f"{net:10.2f}  {us['loop']:7.2f}  {(us['build'] + us['read']) / us['loop']:.2f}"
+        )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--designs", type=int, default=100_000)
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--skip-table", action="store_true", help="leave the torque table out")
+    ap.add_argument("--breakdown", action="store_true",
+                    help="per drum count: the network's stages against the loop")  # fmt: skip
     a = ap.parse_args()
+    if a.breakdown:
+        breakdown()
+        return
     from magnetics.torque import max_torque_batch, network_torque_batch, torque_grid_batch
 
     f = designs(a.designs)
