@@ -41,7 +41,8 @@ def compare_figure(
     w = 2 * np.pi * f
     fig, axes = plt.subplots(3, 1, figsize=(6, 8.4), sharex=True, constrained_layout=True)
     ax_z, ax_k, ax_b = axes
-    for (label, p), color in zip(sides.items(), ("tab:blue", "tab:red", "tab:green"), strict=False):
+    colors = ("tab:blue", "tab:red", "tab:green")
+    for j, ((label, p), color) in enumerate(zip(sides.items(), colors, strict=False)):
         zc = np.abs(closed_loop_impedance(p, K, w))
         zp = np.abs(passive_impedance(p, w))
         area = rendering_area(p, K, band)
@@ -52,21 +53,26 @@ def compare_figure(
         if np.isfinite(bw):
             for ax in axes:
                 ax.axvline(bw, color=color, lw=0.8, ls=":")
-            ax_z.annotate(f"{bw:.1f} Hz", (bw, zc.min()), color=color, fontsize=9)
+            # each design's label on its own height (bandwidths close together stay legible)
+            ax_z.annotate(f" {bw:.1f} Hz", (bw, 0.03 + 0.08 * j), color=color, fontsize=9,
+                          xycoords=ax_z.get_xaxis_transform())  # fmt: skip
         eff = effective_impedance(p, K, w)
         ax_k.semilogx(f, eff.stiffness, color=color, label=label)
         ax_b.semilogx(f, eff.damping, color=color, label=label)
     ax_k.axhline(K, color="0.5", lw=0.8, label=f"K = {K:.0f} N/m")
     ax_k.axhline(0.0, color="k", lw=0.5)
     ax_z.set_ylabel("|Z| = |F/ẋ| [N·s/m]")
-    ax_z.set_title(f"Rendering K = {K:.0f} N/m (dotted: bandwidth)", fontsize=11)
+    fig.suptitle(f"Rendering K = {K:.0f} N/m (dotted: bandwidth)", fontsize=11)
     ax_k.set_ylabel("effective stiffness [N/m]")
     ax_k.set_ylim(-2 * K, 2 * K)
     ax_b.set_ylabel("effective damping [N·s/m]")
     ax_b.set_xlabel("frequency [Hz]")
     for ax in axes:
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=9)
+    # the |Z| legend above its panel: inside, it covered the low-frequency curves
+    ax_z.legend(fontsize=8, loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=1, frameon=False)
+    ax_k.legend(fontsize=9)
+    ax_b.legend(fontsize=9)
     save_png(fig, path, dpi=110)
 
 
