@@ -173,18 +173,19 @@ def _base_off_axes() -> dict[str, Any]:
 
 def error_bound(
     p: Mapping[str, Any], model: str = "circuit", current: Any = None,
-    material_set: str = DEFAULT_MATERIALS,
+    material_set: str = DEFAULT_MATERIALS, features: Mapping[str, Any] | None = None,
 ) -> tuple[Any, Any, tuple[str, ...]]:  # fmt: skip
     """Vectorised core of :func:`circuit_error` over DrumClutch fields ``p`` (scalars or
     arrays, e.g. geometry.params.broadcast_fields): (estimate, bound, names of the fields
     off the map's axes that differ from the base preset somewhere), by ``model``'s map.
     The network's ("network") comes from magnetics.network_bound at ``current`` [A]
     (required there) and ``material_set``: (estimate, bound, the inputs outside its ranges
-    or ("unmeasured",))."""
+    or ("unmeasured",)); ``features``: the network's solution features at that current
+    if the caller solved it (``solution_features``), else it is solved there."""
     if model == "network":
         if current is None:
             raise ValueError("error_bound(model='network') needs the current (A)")
-        return network_bound(p, current, material_set)
+        return network_bound(p, current, material_set, features)
     return map_bound(p, model)
 
 
@@ -269,7 +270,8 @@ def _network_error(clutch: Any, current: float | None, material_set: str) -> Cir
         return CircuitError(math.nan, math.inf, (note,))
     if why:
         from_doe = network_bound_ranges()
-        where = ", ".join(_in_range(k, p, current, from_doe[k]) for k in why)
+        where = ", ".join(_in_range(k, p, current, from_doe[k]) if k in from_doe else k
+                          for k in why)  # fmt: skip
         note = (f"{label}: off the measured error map — {where}; its error is unknown "
                 f"(check it with --fidelity reference)")  # fmt: skip
         return CircuitError(math.nan, math.inf, (note,))

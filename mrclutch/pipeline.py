@@ -38,6 +38,7 @@ from magnetics.dynamics import supply_current, torque_response
 from magnetics.error_map import error_bound
 from magnetics.materials import FLUIDS
 from magnetics.network import network_from_regions
+from magnetics.network_bound import FEATURES, solution_features
 from magnetics.torque import (
     coil_properties,
     continuous_torque,
@@ -653,18 +654,23 @@ def hand_budget(design: ClutchDesign, fig: ClutchFigures, mr: HapticParams,
 
 
 def _material_bounds(
-    p: Mapping[str, np.ndarray], current: np.ndarray, mats: MaterialChoice | np.ndarray
-) -> np.ndarray:
+    p: Mapping[str, np.ndarray], current: np.ndarray, mats: MaterialChoice | np.ndarray,
+    features: Mapping[str, np.ndarray],
+) -> np.ndarray:  # fmt: skip
     """The network's error bound of every row at its material set (``trust.material_set``;
-    magnetics.network_bound: inf for a set never measured)."""
+    magnetics.network_bound: inf for a set never measured), from its network's solution
+    ``features`` at that current (``solution_features``, each (S,))."""
     if isinstance(mats, MaterialChoice):
-        return np.asarray(error_bound(p, "network", current, material_set(mats))[1], float)
+        return np.asarray(
+            error_bound(p, "network", current, material_set(mats), features)[1], float
+        )
     keys = np.array([material_set(m) for m in mats], dtype=object)
     out = np.full(keys.shape, np.inf)
     for key in dict.fromkeys(keys.tolist()):
         rows = keys == key
         sub = {k: np.asarray(v)[rows] for k, v in p.items()}
-        out[rows] = error_bound(sub, "network", np.asarray(current)[rows], key)[1]
+        feats = {k: np.asarray(v)[rows] for k, v in features.items()}
+        out[rows] = error_bound(sub, "network", np.asarray(current)[rows], key, feats)[1]
     return out
 
 
@@ -785,6 +791,9 @@ def evaluate_batch(
         ladder = network_from_regions(rg)
         t_peak, x_peak = network_torque_and_flux(ladder, current[rows][:, None])
         out["yield_torque"] = t_peak.sum(-1)[:, 0]
+        # the network's error bound reads its solution at the peak (no second solve)
+        for k, v in solution_features(ladder, x_peak).items():
+            out[f"bound_{k}"] = v[:, 0]
         resp = torque_response(rg, current[rows], base.amplifier, base.laminations, path=path,
                                coil_temperature=op.coil_temperature,
                                flux_peak=flux[:, 0])  # fmt: skip
@@ -822,7 +831,11 @@ def evaluate_batch(
         "length_m": fig["length"],
         "max_torque_N_m": torque,
         # each row's material set's bound (inf where that set was never measured)
-        "torque_error_bound": np.where(ok, _material_bounds(p, current, mats), np.nan),
+        "torque_error_bound": np.where(
+            ok,
+            _material_bounds(p, current, mats, {k: fig[f"bound_{k}"] for k in FEATURES}),
+            np.nan,
+        ),
         "fluid_inertia_kg_m2": fig["fluid_inertia"],
         "drag_damping_N_m_s": fig["damping"],
         "off_state_torque_N_m": off_torque,
