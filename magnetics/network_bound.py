@@ -44,18 +44,19 @@ from __future__ import annotations
 
 import functools
 import json
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from geometry.materials import MRF, STEEL
-
-if TYPE_CHECKING:
-    from magnetics.network import Network
+from geometry.params import broadcast_fields, valid
+from geometry.regions import per_topology
+from magnetics.network import Network, network_from_regions, solve_network
 
 DATA_FILE = Path(__file__).parent / "data" / "network_bound.json"
 #: The key of a material set: the steel of the yoke and drums, then the fluid (the
@@ -111,10 +112,6 @@ def network_features(p: Mapping[str, Any], ampere_turns: Any) -> dict[str, np.nd
     """``solution_features`` (each (P,)) of designs ``p`` (DrumClutch fields, 1-D arrays of
     P or scalars) at N·I ``ampere_turns`` (P,): the network built and solved once per drum
     count (NaN where a design fails DrumClutch's validation)."""
-    from geometry.params import broadcast_fields, valid
-    from geometry.regions import per_topology
-    from magnetics.network import network_from_regions, solve_network
-
     q = broadcast_fields({k: p[k] for k in p})
     ni = np.broadcast_to(np.asarray(ampere_turns, dtype=float), q["n_drums"].shape)
 
@@ -244,6 +241,13 @@ def measured_sets() -> tuple[str, ...]:
     return tuple(_data()["material_sets"])
 
 
+def _shaped(v: Any, shape: tuple[int, ...]) -> np.ndarray:
+    """``v`` broadcast to ``shape``; one value per design in another layout (a (1,) array
+    for a scalar design) reshaped."""
+    v = np.asarray(v, dtype=float)
+    return v.reshape(shape) if v.size == math.prod(shape) else np.broadcast_to(v, shape)
+
+
 def network_bound(
     p: Mapping[str, Any], current: Any, material_set: str = DEFAULT_MATERIALS,
     features: Mapping[str, Any] | None = None,
@@ -278,8 +282,7 @@ def network_bound(
                     col = np.full(inside.size, np.nan)
                     col[rows] = got[k]
                     features[k] = col.reshape(shape)
-            feats = {k: np.broadcast_to(np.asarray(features[k], float), shape)
-                     for k in m.features}  # fmt: skip
+            feats = {k: _shaped(features[k], shape) for k in m.features}
             xf = m.feature_columns(feats)
             solved = np.isfinite(xf).all(axis=1)
             if not solved[inside].all():

@@ -45,7 +45,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from geometry.validation import ParameterError, check_choice
-from magnetics.error_map import interpolate
+from magnetics.interpolation import interpolate
 from magnetics.materials import MU0
 
 FloatArray = NDArray[np.float64]

@@ -254,3 +254,24 @@ def test_a_small_sample_of_the_stored_fem_is_re_measured() -> None:
         again = doe.fem(r["design"])
         for conv in ("mid-line", "weakest-layer"):  # both conventions of the stored solve
             np.testing.assert_allclose(again[conv], r["torque"][conv], rtol=1e-6)
+
+
+def test_solution_features_handed_over_are_clipped_to_their_span() -> None:
+    """The features a caller hands over are the ones the bound solves for itself (the sweep's
+    path), and a feature past its build span reads as the span's end (clipped, not
+    extrapolated); a NaN feature (no solution) gives NaN and inf."""
+    p = {k: float(v) for k, v in vars(PAPER).items()}
+    ni = np.array([5.0 * p["coil_turns"]])
+    got = network_features({k: np.array([v]) for k, v in p.items()}, ni)
+    own = network_bound(p, 5.0)
+    assert network_bound(p, 5.0, features=got)[:2] == pytest.approx(own[:2], rel=1e-12)
+    m = load()
+    for k, (lo, hi) in m.features.items():
+        for end, past in ((hi, 1e3), (lo, -1e3)):
+            at = dict(got, **{k: np.array([math.exp(end) - FEATURE_FLOOR])})
+            beyond = dict(got, **{k: np.array([math.exp(end + past / 1e3) - FEATURE_FLOOR])})
+            assert network_bound(p, 5.0, features=beyond)[1] == pytest.approx(
+                network_bound(p, 5.0, features=at)[1], rel=1e-9
+            ), k
+    e, b, why = network_bound(p, 5.0, features=dict(got, b_core=np.array([math.nan])))
+    assert math.isnan(e) and b == math.inf and why == ("not a valid design",)
