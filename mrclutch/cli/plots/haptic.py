@@ -70,7 +70,7 @@ def compare_figure(
     for ax in axes:
         ax.grid(True, which="both", alpha=0.3)
     # the |Z| legend above its panel: inside, it covered the low-frequency curves
-    ax_z.legend(fontsize=8, loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=1, frameon=False)
+    ax_z.legend(fontsize=9, loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=1, frameon=False)
     ax_k.legend(fontsize=9)
     ax_b.legend(fontsize=9)
     save_png(fig, path, dpi=110)
