@@ -50,6 +50,7 @@ def breakdown(n: int = 5000, rounds: int = 3) -> None:
     cur = np.array([[2.0, 4.0, 7.0]])
     network_torque_batch(designs(10, 2), cur[0])  # the kernels loaded
     print("drums  build_us  solve_us  read_us  network_us  loop_us  (build+read)/loop")
+    shares = []
     for nd in range(1, 7):
         f = designs(n)
         f["n_drums"][:] = nd
@@ -76,10 +77,10 @@ def breakdown(n: int = 5000, rounds: int = 3) -> None:
             best["loop"] = min(best["loop"], time.perf_counter() - t0)
         us = {k: 1e6 * v / n for k, v in best.items()}
         net = us["build"] + us["solve"] + us["read"]
-        print(
-            f"{nd:5d}  {us['build']:8.2f}  {us['solve']:8.2f}  {us['read']:7.2f}  "
-            f"{net:10.2f}  {us['loop']:7.2f}  {(us['build'] + us['read']) / us['loop']:.2f}"
-        )
+        shares.append((us["build"] + us["read"]) / us["loop"])
+        print(f"{nd:5d}  {us['build']:8.2f}  {us['solve']:8.2f}  {us['read']:7.2f}  "
+              f"{net:10.2f}  {us['loop']:7.2f}  {shares[-1]:.2f}")  # fmt: skip
+    print(f"build + read over the loop: min {min(shares):.2f} max {max(shares):.2f}")
 
 
 def main() -> None:

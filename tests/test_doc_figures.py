@@ -145,6 +145,21 @@ def test_update_rewrites_spans_and_check_catches_a_hand_edit(tmp_path):
     assert df.check(registry, df.find_spans([doc]), runner) != []
 
 
+def test_a_timing_within_its_factor_keeps_its_quote_unless_retimed(tmp_path):
+    """A timing quoted 20 ms that now measures 12.5 ms is within ×/÷2: kept (no churn
+    per run); ``retime`` rewrites it to what the command prints."""
+    cmd = _fake(tmp_path, {"msg": "total 12.5 ms"})
+    registry = {"ms": df.Figure("ms", command=cmd, regex=r"total ([0-9.]+) ms",
+                                format="{:.1f}", factor=2)}  # fmt: skip
+    doc = tmp_path / "doc.md"
+    doc.write_text("<!-- fig: ms -->20<!-- /fig --> ms\n")
+    runner = df.Runner(tmp_path)
+    assert df.update(registry, runner, [doc]) == 0
+    assert "<!-- fig: ms -->20<!-- /fig -->" in doc.read_text()
+    assert df.update(registry, runner, [doc], retime=True) == 1
+    assert "<!-- fig: ms -->12.5<!-- /fig -->" in doc.read_text()
+
+
 def test_unregistered_and_unquoted_keys_reported(tmp_path):
     doc = tmp_path / "doc.md"
     doc.write_text("<!-- fig: nobody -->1<!-- /fig --> `<!-- fig: KEY -->0.1<!-- /fig -->`\n")
