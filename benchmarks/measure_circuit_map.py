@@ -123,7 +123,7 @@ def map_data(
     import numpy as np
 
     sys.path.insert(0, str(OUT.parents[2]))
-    from magnetics.error_map import _interp
+    from magnetics.interpolation import _interp
 
     axes = AXES if axes is None else axes
     grid = np.array(errs).reshape([len(v) for v in axes.values()])

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from geometry.params import preset
-from magnetics.interpolation import _interp, interpolate  # noqa: F401  (re-exported)
+from magnetics.interpolation import _interp
 from magnetics.network_bound import DEFAULT_MATERIALS, network_bound
 from magnetics.network_bound import load as load_bound
 

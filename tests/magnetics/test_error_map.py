@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from geometry.params import preset
-from magnetics.error_map import _interp, circuit_error, error_bound, interpolate, load
+from magnetics.error_map import circuit_error, error_bound, load
+from magnetics.interpolation import _interp, interpolate
 
 AXES = {"n": (1, 2, 3), "x": (0.0, 1.0, 3.0), "y": (-1.0, 2.0)}
 
