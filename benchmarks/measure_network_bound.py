@@ -40,6 +40,7 @@ import datetime
 import json
 import math
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -217,10 +218,14 @@ def measure(convention: str | None = None) -> dict:
     ok = np.isfinite(eb)
     q, _, _ = cross_conformal(xb[ok], eb[ok], design[ok])
     c, b, a, d, g = fit(xb[ok], eb[ok], design[ok])
+    r = lambda v: [round(float(t), 9) for t in v]  # noqa: E731
+    # the check reads the bound the runtime reads: NetworkBound with the stored coefficients
+    stored = replace(frame, c=round(c, 9), b=tuple(r(b)), a=tuple(tuple(r(w)) for w in a),
+                     d=round(d, 9), g=tuple(r(g)), q=round(q, 6))  # fmt: skip
     xc, ec = scaled(frame, fc, nic, sc), ec.ravel()
     okc = np.isfinite(ec)
-    sig_c = np.exp(d + xc[okc] @ g)
-    bound_c = np.abs(estimate(c, b, a, xc[okc])) + q * sig_c
+    sig_c = stored.scale(xc[okc])
+    bound_c = stored.bound(xc[okc])
     inside = np.abs(ec[okc]) <= bound_c
     check = {
         "designs": len(doe["check"]),
@@ -236,16 +241,17 @@ def measure(convention: str | None = None) -> dict:
         "within_10pct": round(float(np.mean(np.abs(ec[okc]) <= 0.10)), 4),
         "seed": doe["seeds"]["check"],
     }
-    r = lambda v: [round(float(t), 9) for t in v]  # noqa: E731
     return {
         "ranges": {k: list(v) for k, v in ranges.items()},
         "log_scaled": list(log),
         "features": {k: [round(lo, 9), round(hi, 9)] for k, (lo, hi) in spans.items()},
         "feature_floor": FEATURE_FLOOR,
         "convention": convention,
-        "estimate": {"c": round(c, 9), "b": r(b), "a": [r(row) for row in a], "ridge": RIDGE},
-        "scale": {"d": round(d, 9), "g": r(g), "ridge": SCALE_RIDGE, "delta": SCALE_DELTA},
-        "q": round(q, 6),
+        "estimate": {"c": stored.c, "b": list(stored.b), "a": [list(w) for w in stored.a],
+                     "ridge": RIDGE},
+        "scale": {"d": stored.d, "g": list(stored.g), "ridge": SCALE_RIDGE,
+                  "delta": SCALE_DELTA},
+        "q": stored.q,
         "coverage": COVERAGE,
         "build": {"designs": len(doe["build"]), "points": int(ok.sum()),
                   "seed": doe["seeds"]["build"],
