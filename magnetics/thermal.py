@@ -36,7 +36,6 @@ network's time constants, and the time from ambient to each limit at a peak curr
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
@@ -269,53 +268,18 @@ def time_to_limits(
 ) -> tuple[float, float]:
     """Seconds from ambient until the coil reaches ``wire_limit`` and the core (fluid)
     ``fluid_limit`` at a held ``current`` and ``slip_power`` (one design; inf if never):
-    the linear ODE C dT/dt = −(G − x a e0e0ᵀ) T + g T_amb + x c e0 + P e1 solved by modes."""
-    C = np.asarray(net.capacity, dtype=float)
-    G = np.asarray(net.conductance, dtype=float).copy()
-    x = float(current) ** 2
-    a, c = float(net.r20) * ALPHA_CU, float(net.r20) * (1 - 20 * ALPHA_CU)
-    G[0, 0] -= x * a
-    q = np.array([x * c, float(slip_power), float(net.to_air) * net.ambient])
-    A = -G / C[:, None]
-    b = q / C
-    lam, V = np.linalg.eig(A)  # real: A is similar to the symmetric −C^-½ G C^-½
-    lam, V = lam.real, V.real
-    Vi = np.linalg.inv(V)
-    t0 = np.full(3, net.ambient)
-    # T(t) = V diag(e^{λt}) V⁻¹ (T0 + A⁻¹b) − A⁻¹b
-    p = np.linalg.solve(A, b)
-    w0 = Vi @ (t0 + p)
-
-    def temps(t: np.ndarray) -> np.ndarray:
-        e = np.exp(
-            np.minimum(np.outer(lam.real, t), 300.0)
-        )  # past e^300 every limit is crossed (e^700 × V w0 overflowed, issue 32)
-        return ((V @ (e * w0[:, None])).real - p[:, None]).T
-
-    grid = np.concatenate([[0.0], np.logspace(-3, 6, 400)])
-    tt = temps(grid)
-    out = []
-    for node, limit in ((0, wire_limit), (1, fluid_limit)):
-        above = np.nonzero(tt[:, node] >= limit)[0]
-        if above.size == 0:
-            out.append(math.inf)
-            continue
-        lo, hi = grid[above[0] - 1], grid[above[0]]
-        for _ in range(60):  # bisection to a relative 1e-12 of the bracket
-            mid = 0.5 * (lo + hi)
-            if temps(np.array([mid]))[0, node] >= limit:
-                hi = mid
-            else:
-                lo = mid
-        out.append(float(hi))
-    return out[0], out[1]
+    the linear ODE C dT/dt = −(G − x a e0e0ᵀ) T + g T_amb + x c e0 + P e1 solved by modes
+    (``time_to_limits_batch`` on a batch of one)."""
+    tw, tf = time_to_limits_batch(net, current, slip_power, wire_limit, fluid_limit)
+    return float(tw[0]), float(tf[0])
 
 
 def time_to_limits_batch(
     net: Network, current: Any, slip_power: Any, wire_limit: float, fluid_limit: float
 ) -> tuple[Any, Any]:
     """``time_to_limits`` for a batch of S designs at once (arrays (S,) of seconds, inf if
-    never): the same modal solution and the same grid-then-bisection search, on stacks."""
+    never): the linear ODE solved by modes, T(t) = V diag(e^{λt}) V⁻¹ (T0 + A⁻¹b) − A⁻¹b,
+    each limit bracketed on a log grid of times, then bisected."""
     S = np.broadcast_shapes(np.shape(net.capacity)[:-1], np.shape(current),
                             np.shape(slip_power), np.shape(net.r20))  # fmt: skip
     S = int(np.prod(S))
@@ -338,7 +302,8 @@ def time_to_limits_batch(
 
     def temps(t: np.ndarray, node: int) -> np.ndarray:
         """Temperature of ``node`` at times t (S, N)."""
-        e = np.exp(np.minimum(lam[:, :, None] * t[:, None, :], 700.0))
+        # past e^300 every limit is crossed (e^700 × V w0 overflowed, issue 32)
+        e = np.exp(np.minimum(lam[:, :, None] * t[:, None, :], 300.0))
         return np.einsum("sj,sjn->sn", V[:, node, :] * w0, e) - p[:, node, None]
 
     grid = np.concatenate([[0.0], np.logspace(-3, 6, 400)])
