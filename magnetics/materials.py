@@ -427,10 +427,6 @@ def _fluid_of(rec: Mapping[str, Any], where: str) -> MRFluid:
 
 _MATERIALS: dict[str, Magnetic] = {}
 _FLUIDS: dict[str, MRFluid] = {}
-#: S/m at 20 °C of every registered material (the eddy-current delay's σ).
-CONDUCTIVITY: Mapping[str, float] = MappingProxyType(
-    {n: float(r["conductivity"]) for n, r in RECORDS.items()}
-)
 
 
 def _add(rec: Mapping[str, Any], where: str) -> None:
