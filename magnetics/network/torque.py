@@ -150,8 +150,7 @@ def network_film_torque(
     zones = np.abs(np.concatenate([xl - xe[..., :1], xl - xe[..., 1:]], axis=-1))  # A, B
     phi = zones / np.where(ok, eff, 1.0)[:, None, :]  # Φ per metre of L_eff
     w_end = np.log1p(c * np.pi * depth / np.where(ok, r1 - r0, 1.0)[..., None])  # (S, K, 2)
-    w_end = w_end[:, None]  # (S, 1, K, 2 ends)
-    scale = (r1 - r0)[:, None, :, None] / (np.pi * c[:, None])  # ds = (g/cπ)·e^w dw
+    scale = (r1 - r0)[..., None] / (np.pi * c)  # ds = (g/cπ)·e^w dw, (S, K, 2 ends)
     # The film's fluid also carries the axial flux beside the walls (the sheaths): at the
     # band's end of the zone B_z = q/A of the sheath that holds it (the inner half of film
     # k beside wall k, the outer half beside wall k + 1; none beside the pole), falling
@@ -168,7 +167,6 @@ def network_film_torque(
     if type(fl).tau_y is not MRFluid.tau_y or type(fl).tau_y_decay is not MRFluid.tau_y_decay:
         raise ParameterError(f"fluid {fl.name!r}: the network's torque reads Carlson's law only")
     read = _reader()
-    w_end, scale = np.ascontiguousarray(w_end[:, 0]), np.ascontiguousarray(scale[:, 0])
     phi, length = np.ascontiguousarray(phi), np.ascontiguousarray(length, dtype=float)
 
     def per_length(r: FloatArray, b_z: FloatArray) -> FloatArray:
