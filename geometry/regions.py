@@ -38,7 +38,14 @@ from typing import Any
 
 import numpy as np
 
-from geometry.materials import COIL, DEFAULT_CHOICE, DENSITY, MaterialChoice, coil_density
+from geometry.materials import (
+    COIL,
+    DEFAULT_CHOICE,
+    DENSITY,
+    SLOTS,
+    MaterialChoice,
+    coil_density,
+)
 
 Fields = Mapping[str, Any]  # DrumClutch field name -> float or array (SI)
 
@@ -127,16 +134,7 @@ class RegionSpec:
     slot: str = ""
 
 
-_ROLE = {
-    "fluid": "fluid",
-    "core": "steel",
-    "drums": "steel",
-    "shell": "steel",
-    "bands": "nonmagnetic",
-    "housing": "nonmagnetic",
-    "hub": "nonmagnetic",
-    "coil": "coil",
-}
+_ROLE = {**SLOTS, "coil": "coil"}  # a part's role is the kind its material must be
 
 
 @functools.lru_cache(maxsize=256)
