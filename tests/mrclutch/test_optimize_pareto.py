@@ -86,7 +86,11 @@ def test_search_box_raises_lower_edges_to_the_process_and_refuses_impossible_one
 # ---- the thermal columns ---------------------------------------------------------------
 
 
-def test_batched_time_to_limits_matches_the_scalar_transient():
+def test_batched_time_to_limits_against_a_direct_integration():
+    """time_to_limits_batch (the optimiser's limit columns) on four designs and duties
+    against implicit-Euler steps of C dT/dt = −G T + q(T) of each design's own network (the
+    winding's Joule heat at R20·(1 + α(T − 20)), the slip heat in the fluid, the air's
+    conductance to ambient); a limit never reached (inf) against the steady state below it."""
     rng = np.random.default_rng(3)
     designs = [replace(PAPER, clutch=replace(PAPER.clutch, gap=g, n_drums=2))
                for g in rng.uniform(0.3e-3, 0.9e-3, 4)]  # fmt: skip
@@ -95,25 +99,49 @@ def test_batched_time_to_limits_matches_the_scalar_transient():
     from geometry.params import broadcast_fields, valid
 
     p = broadcast_fields(f, PAPER.clutch)
+    cur, slip = np.array([7.0, 3.0, 1.0, 5.0]), np.array([20.0, 5.0, 40.0, 0.0])
     got = {}
 
     def fn(rg, rows):
         net = thermal.network(rg, 20.0, FLUID_LIMIT)
-        cur, slip = np.array([7.0, 3.0, 1.0, 5.0]), np.array([20.0, 5.0, 40.0, 0.0])
-        tw, tf = thermal.time_to_limits_batch(net, cur, slip, 155.0, FLUID_LIMIT)
-        got["batch"] = (tw, tf)
-        got["scalar"] = [thermal.time_to_limits(
-            thermal.Network(*(np.asarray(x)[j] if np.ndim(x) else x for x in (
-                net.capacity, net.conductance, net.to_air, net.r20)), net.ambient,
-                np.asarray(net.inverse)[j]), cur[j], slip[j], 155.0, FLUID_LIMIT)
-            for j in range(4)]  # fmt: skip
+        got["net"] = net
+        got["t"] = thermal.time_to_limits_batch(net, cur, slip, 155.0, FLUID_LIMIT)
         return {}
 
     regions.per_topology(p, valid(p), fn)
-    tw, tf = got["batch"]
-    for j, (sw, sf) in enumerate(got["scalar"]):
-        assert tw[j] == pytest.approx(sw, rel=1e-9) or (math.isinf(sw) and math.isinf(tw[j]))
-        assert tf[j] == pytest.approx(sf, rel=1e-9) or (math.isinf(sf) and math.isinf(tf[j]))
+    net, (tw, tf) = got["net"], got["t"]
+    finite = 0
+    for j in range(4):
+        C = np.asarray(net.capacity)[j]
+        G = np.asarray(net.conductance)[j]
+        r20, air = float(np.ravel(net.r20)[j]), float(np.ravel(net.to_air)[j])
+
+        def heat(T, j=j, r20=r20, air=air):  # W into the winding, the fluid, the housing
+            return np.array([cur[j] ** 2 * r20 * (1 + thermal.ALPHA_CU * (T[0] - 20.0)),
+                             slip[j], air * net.ambient])  # fmt: skip
+
+        lims = (155.0, FLUID_LIMIT)
+        want = (tw[j], tf[j])
+        end = 1.2 * max([t for t in want if math.isfinite(t)], default=0.0)
+        if end > 0:
+            n = 20000
+            dt, T, hit = end / n, np.full(3, net.ambient), [None, None]
+            A = np.diag(C / dt) + G
+            for step in range(1, n + 1):
+                T = np.linalg.solve(A, C / dt * T + heat(T))
+                for k in (0, 1):
+                    if hit[k] is None and T[k] >= lims[k]:
+                        hit[k] = step * dt
+            for k in (0, 1):
+                if math.isfinite(want[k]):
+                    finite += 1
+                    assert hit[k] == pytest.approx(want[k], rel=2e-3, abs=2 * dt)
+        T = np.full(3, net.ambient)  # the steady state (fixed point in the resistance)
+        for _ in range(200):
+            T = np.linalg.solve(G, heat(T))
+        for k in (0, 1):
+            assert math.isinf(want[k]) == (T[k] < lims[k]), (j, k, T[k], want[k])
+    assert finite >= 3  # the duties reach some limits, not only the steady-state branch
 
 
 def test_limit_columns_match_the_single_design_evaluation():
