@@ -330,10 +330,14 @@ def optimize(
     sign = -1.0 if objective in MINIMISED else 1.0
     evaluations = 0
 
-    def results(x: np.ndarray, n: int, stability: bool = False) -> dict[str, np.ndarray]:
-        nonlocal evaluations
+    def _pop_fields(x: np.ndarray, n: int) -> dict[str, np.ndarray]:
         fields = {k: x[i] for i, k in enumerate(names)}
         fields["n_drums"] = np.full(x.shape[1], n, dtype=np.int64)
+        return fields
+
+    def results(x: np.ndarray, n: int, stability: bool = False) -> dict[str, np.ndarray]:
+        nonlocal evaluations
+        fields = _pop_fields(x, n)
         evaluations += x.shape[1]
         r = evaluate_rows(fields, base, cons, stability=stability, zwidth=objective == "zwidth")
         if robust is not None:
@@ -371,11 +375,6 @@ def optimize(
         )
         return res.population[np.argsort(res.population_energies)].T
 
-    def _pop_fields(x: np.ndarray, n: int) -> dict[str, np.ndarray]:
-        fields = {k: x[i] for i, k in enumerate(names)}
-        fields["n_drums"] = np.full(x.shape[1], n, dtype=np.int64)
-        return fields
-
     def feasible_of(pop: np.ndarray, n: int) -> tuple[list[tuple[float, np.ndarray]], bool]:
         """The members of a population meeting every limit, stability included, best first,
         and whether some member met every limit but stability."""
@@ -384,8 +383,7 @@ def optimize(
         if robust is not None and np.any(v == 0):
             ok = np.flatnonzero(v == 0)
             sub = {k: a[ok] for k, a in r.items()}
-            sub.update(robust.full({k: x[ok] for k, x in _pop_fields(pop, n).items()}, base,
-                                   sub))  # fmt: skip
+            sub.update(robust.full(_pop_fields(pop[:, ok], n), base, sub))
             v[ok] = cons.violation(sub)
             for k in (key, "K_N_per_m"):
                 r[k][ok] = sub[k]
