@@ -445,9 +445,7 @@ def parse_bounds(specs: Sequence[str]) -> dict[str, tuple[float, float]]:
             raise ParameterError(f"--vary {s!r}: LO and HI must be numbers (mm)") from None
         if not (math.isfinite(a) and math.isfinite(b) and 0 < a < b):
             raise ParameterError(f"--vary {s!r}: need finite 0 < LO < HI (mm)")
-        lo_ok, hi_ok = (r[1] for r in LENGTH_RANGES if r[0] == name[:-3]), (
-            r[2] for r in LENGTH_RANGES if r[0] == name[:-3])  # fmt: skip
-        least, most = next(lo_ok), next(hi_ok)
+        least, most = next((lo, hi) for f, lo, hi, _ in LENGTH_RANGES if f == name[:-3])
         if a * 1e-3 < least or b * 1e-3 > most:  # the optimiser would only see invalid rows
             raise ParameterError(f"--vary {s!r}: {name} must stay within [{least * 1e3:g}, "
                                  f"{most * 1e3:g}] mm")  # fmt: skip
