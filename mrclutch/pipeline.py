@@ -285,8 +285,7 @@ def _density_notes(design: ClutchDesign) -> tuple[str, ...]:
 def _supply_notes(design: ClutchDesign) -> tuple[str, ...]:
     """Say when the amplifier's supply, not max_current, sets the current limit."""
     op, supply = design.operating, design.supply_current
-    if supply >= min(op.max_current, op.current_density_limit * math.pi
-                     * design.clutch.wire_diameter**2 / 4):  # fmt: skip
+    if supply >= current_limit(op, design.clutch.wire_diameter):  # capped without the supply
         return ()
     volts = design.amplifier.supply_voltage
     return (f"the amplifier's {volts:g} V supply holds at most {supply:.3g} A through the "
