@@ -7,10 +7,11 @@ import pytest
 
 from geometry import preset
 from mrclutch.design import ClutchDesign, design_preset
-from mrclutch.haptics.actuator import HapticParams
+from mrclutch.haptics.actuator import TABLE2_MR, HapticParams
+from mrclutch.haptics.hand import hand_figures
 from mrclutch.haptics.model import metrics
 from mrclutch.outputs import SWEEP_COLUMNS
-from mrclutch.pipeline import evaluate, evaluate_batch
+from mrclutch.pipeline import HAND_KEYS, evaluate, evaluate_batch
 
 DESIGNS = [
     {},
@@ -178,3 +179,16 @@ def test_a_current_density_cap_is_a_note_not_a_silent_change():
     assert not [n for n in evaluate(paper).clutch.notes if "current-density" in n]
     loose = replace(paper, operating=Operating(max_current_density=1e9))
     assert not [n for n in evaluate(loose).clutch.notes if "current-density" in n]
+
+
+def test_hand_keys_are_the_keys_hand_figures_returns():
+    """HAND_KEYS (the keys of a side whose hand figures are unavailable) is a hand-written
+    copy of ``hand_figures``' keys: it must follow them, nested ones included, or an
+    unavailable side's JSON would differ in shape from an available one's."""
+
+    def shape(d):
+        return {k: shape(v) if isinstance(v, dict) else None for k, v in d.items()}
+
+    full = shape(hand_figures(TABLE2_MR, float(TABLE2_MR.k_max)))
+    full.pop("notes")  # the unavailable side writes its own (empty) notes and a note
+    assert shape(HAND_KEYS) == full
