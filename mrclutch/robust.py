@@ -44,6 +44,7 @@ from magnetics.torque import torque_curve
 from mrclutch.design import ClutchDesign
 from mrclutch.haptics.actuator import HapticParams
 from mrclutch.haptics.model import (
+    _num_coeffs,
     bandwidth,
     max_passive_stiffness,
     max_stable_stiffness,
@@ -60,11 +61,6 @@ _LOG_POINTS = 300
 _PHASE_STEP = 0.25
 #: Most linear points a batch may take before designs go to the exact kernel one by one.
 _MAX_LINEAR = 4000
-
-
-def _num_coeffs(m1: Any, b1: Any, k: Any, b: Any, m2: Any) -> tuple[Any, Any, Any, Any]:
-    """Eq. 2 numerator coefficients (s³, s², s¹, s⁰) [lebel]."""
-    return (m1 * m2, m2 * b1 + m1 * b + m2 * b, b1 * b + m1 * k + m2 * k, b1 * k)
 
 
 def stable_stiffness_batch(p: HapticParams) -> np.ndarray:
@@ -87,7 +83,7 @@ def stable_stiffness_batch(p: HapticParams) -> np.ndarray:
     out = np.full(n, np.nan)
     if n == 0:
         return out.reshape(shape)
-    a3, a2, a1, a0 = _num_coeffs(f["m1"], f["b1"], f["k"], f["b"], f["m2"])
+    a3, a2, a1, a0 = (np.ravel(np.broadcast_to(c, shape)) for c in _num_coeffs(p))
     # largest |zero| of Num: companion matrices of the monic cubic, batched
     comp = np.zeros((n, 3, 3))
     comp[:, 0, :] = -np.stack([a2 / a3, a1 / a3, a0 / a3], axis=1)
