@@ -512,10 +512,12 @@ def robust_verdicts(ev: Any, uncertainty: Uncertainty | None = None) -> dict[str
     mr = ev.mr
     box = _rescaled(box, mr, float(mr.k_max), unc.bench_damping)
     meas = design.measured
-    if meas is not None and meas.use_in_model:  # measured: no range
+    fixed: tuple[str, ...] = ()  # the HandBox fields a bench measured: no range, no threshold
+    if meas is not None and meas.use_in_model:
         fix = {"m1": meas.m1, "b1": meas.b1, "delay": meas.step_delay}
+        fixed = tuple(f for f, v in fix.items() if v is not None)
         box = replace(box, **{f: tuple(np.array([float(getattr(mr, f))]) for _ in range(3))
-                              for f, v in fix.items() if v is not None})  # fmt: skip
+                              for f in fixed})  # fmt: skip
     lim = robust_limits(box)
     out: dict[str, Any] = {"K_N_per_m": K}
     pairs = (("max_stable_K", "max_stable_K_N_per_m"), ("max_passive_K", "max_passive_K_N_per_m"),
@@ -548,13 +550,11 @@ def robust_verdicts(ev: Any, uncertainty: Uncertainty | None = None) -> dict[str
         th = {}
         if holds == "depends":
             for field, *_ in THRESHOLD_INPUTS:
-                if meas is not None and meas.use_in_model and field in ("m1", "b1", "delay"):
-                    if getattr(meas, "step_delay" if field == "delay" else field) is not None:
-                        continue
+                if field in fixed:
+                    continue
                 t = threshold(mr, K, verdict, field)
                 if t is not None:
-                    i = 0 if field == "b1" else 1
-                    rng = (box.b1, box.delay)[i]
+                    rng = getattr(box, field)  # THRESHOLD_INPUTS' fields are HandBox's
                     t["range"] = [float(rng[1][0]), float(rng[2][0])]
                     t["at_nominal_of_others"] = True
                     th[field] = t
