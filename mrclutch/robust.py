@@ -678,6 +678,5 @@ class RobustBatchEvaluator(BatchEvaluator):
         plain = tuple(k for k in self.optional if k not in ROBUST_COLUMNS)
         rows = dict(BatchEvaluator(self.base, plain)(fields))
         if on & set(ROBUST_COLUMNS):
-            unc = self.uncertainty if self.uncertainty is not None else self.base.ranges
-            rows.update(robust_columns_batch(fields, self.base, unc, nominal=rows))
+            rows.update(robust_columns_batch(fields, self.base, self.uncertainty, nominal=rows))
         return {k: rows[k] for k in self.columns}
