@@ -86,6 +86,7 @@ from magnetics.materials import FLUIDS, load_fluid
 from magnetics.thermal import adiabatic_current_density
 from mrclutch.haptics.actuator import MR_170, MR_DELAY, Transmission
 from mrclutch.inputs import read_toml
+from mrclutch.inputs import toml_value as _toml
 from mrclutch.process import PROCESS_KEYS, Process
 from mrclutch.uncertainty import (
     PAPER_BENCH,
@@ -478,32 +479,3 @@ def _exact(si: float, guess: float, to_si: Any) -> float:
                 return m
         lo, hi = math.nextafter(lo, -math.inf), math.nextafter(hi, math.inf)
     return guess
-
-
-#: TOML basic-string escapes; other control characters as \uXXXX (TOML 1.0 §String).
-_ESCAPES = {"\\": "\\\\", '"': '\\"', "\b": "\\b", "\t": "\\t", "\n": "\\n",
-            "\f": "\\f", "\r": "\\r"}  # fmt: skip
-
-
-def _toml(v: Any) -> str:
-    if isinstance(v, str):
-        out = []
-        for ch in v:
-            code = ord(ch)
-            if ch in _ESCAPES:
-                out.append(_ESCAPES[ch])
-            elif code < 0x20 or code == 0x7F:
-                out.append(f"\\u{code:04X}")
-            elif 0xD800 <= code <= 0xDFFF:  # a lone surrogate (an undecodable file name)
-                out.append("\\uFFFD")
-            else:
-                out.append(ch)
-        return '"' + "".join(out) + '"'
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, int):
-        return str(v)
-    f = float(v)
-    if math.isinf(f):
-        return "inf" if f > 0 else "-inf"
-    return repr(f)

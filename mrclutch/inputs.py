@@ -11,6 +11,7 @@ key. Every refusal is a ParameterError naming the file.
 from __future__ import annotations
 
 import errno
+import math
 import os
 import stat
 import tomllib
@@ -90,3 +91,35 @@ def check_depth(value: Any, where: str, key: str = "", depth: int = 0) -> None:
     elif isinstance(value, list):
         for i, v in enumerate(value):
             check_depth(v, where, f"{key}[{i}]", depth + 1)
+
+
+#: TOML basic-string escapes; other control characters as \uXXXX (TOML 1.0 §String).
+_ESCAPES = {"\\": "\\\\", '"': '\\"', "\b": "\\b", "\t": "\\t", "\n": "\\n",
+            "\f": "\\f", "\r": "\\r"}  # fmt: skip
+
+
+def toml_value(v: Any) -> str:
+    """``v`` (a string, bool, int or float) as a TOML value: a basic string with its
+    control characters escaped, ``inf`` as TOML's inf; what ``design_to_toml`` and
+    ``uncertainty.measured_to_toml`` write."""
+    if isinstance(v, str):
+        out = []
+        for ch in v:
+            code = ord(ch)
+            if ch in _ESCAPES:
+                out.append(_ESCAPES[ch])
+            elif code < 0x20 or code == 0x7F:
+                out.append(f"\\u{code:04X}")
+            elif 0xD800 <= code <= 0xDFFF:  # a lone surrogate (an undecodable file name)
+                out.append("\\uFFFD")
+            else:
+                out.append(ch)
+        return '"' + "".join(out) + '"'
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    f = float(v)
+    if math.isinf(f):
+        return "inf" if f > 0 else "-inf"
+    return repr(f)

@@ -43,6 +43,7 @@ from geometry.validation import ParameterError
 from magnetics.drag import Support, drag_terms, totals
 from magnetics.materials import FLUIDS
 from mrclutch.haptics.actuator import MR_170, TABLE2_MR
+from mrclutch.inputs import toml_value
 
 #: Where each default comes from (docs/verdicts.md).
 SOURCES: dict[str, str] = {
@@ -347,7 +348,7 @@ def measured_to_toml(m: Measured) -> list[str]:
         v = getattr(m, name)
         if v is not None:
             lines.append(f"{key} = {_fmt(v / factor)}")
-    lines.append(f"use_in_model = {'true' if m.use_in_model else 'false'}")
+    lines.append(f"use_in_model = {toml_value(m.use_in_model)}")
     if m.source:
-        lines.append('source = "' + m.source.replace("\\", "\\\\").replace('"', '\\"') + '"')
+        lines.append(f"source = {toml_value(m.source)}")
     return lines
