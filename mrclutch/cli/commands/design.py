@@ -1064,8 +1064,7 @@ def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...]
             written.append(str(path))
     paper = _paper_beside(base, "fast" if args.no_verify else "reference")
     if not args.nominal:
-        pd = replace(design_preset("paper"), operating=base.operating,
-                     transmission=base.transmission, process=base.process)  # fmt: skip
+        pd = _paper_on(base)
         pf = {k: np.array([getattr(pd.clutch, k)]) for k in (*ps.box, "n_drums")}
         prow = evaluate_rows(pf, pd, cons)
         paper = at_K(paper, float(robust_verdict(pd).full(pf, pd, prow)["K_N_per_m"][0]))
@@ -1147,11 +1146,15 @@ def _explain_json(ev: dict) -> dict:
     }  # fmt: skip
 
 
+def _paper_on(base: ClutchDesign) -> ClutchDesign:
+    """The paper preset's clutch on ``base``'s operating point, transmission and process."""
+    return replace(design_preset("paper"), operating=base.operating,
+                   transmission=base.transmission, process=base.process)  # fmt: skip
+
+
 def _paper_beside(base: ClutchDesign, fidelity: str) -> dict:
-    """The paper preset's clutch on ``base``'s operating point and transmission."""
-    paper = replace(design_preset("paper"), operating=base.operating,
-                    transmission=base.transmission)  # fmt: skip
-    return evaluate(paper, fidelity).as_json()
+    """The paper preset's clutch (``_paper_on``) evaluated at ``fidelity``."""
+    return evaluate(_paper_on(base), fidelity).as_json()
 
 
 def at_K(ev: dict, K: float) -> dict:
