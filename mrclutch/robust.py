@@ -285,14 +285,19 @@ def hand_box_batch(
     p = broadcast_fields(fields, base.clutch)
     rows0 = nominal if nominal is not None else evaluate_batch(p, base)
     m1_0, b1_0, f_0, teq_0, ok = _hand_of(rows0, base)
-    m1s, b1s, fs, teqs = [m1_0], [b1_0], [f_0], [teq_0]
+    stack = [x[None] for x in (m1_0, b1_0, f_0, teq_0)]
     if unc.gap_tolerance > 0 or unc.drum_thickness_tolerance > 0:
-        for dg in (-unc.gap_tolerance, unc.gap_tolerance):
-            for dt in (-unc.drum_thickness_tolerance, unc.drum_thickness_tolerance):
-                q = {**p, "gap": p["gap"] + dg, "drum_thickness": p["drum_thickness"] + dt}
-                m1c, b1c, fc, teqc, _ = _hand_of(evaluate_batch(q, base), base)
-                m1s.append(m1c), b1s.append(b1c), fs.append(fc), teqs.append(teqc)
-    stack = [np.stack(x) for x in (m1s, b1s, fs, teqs)]
+        # the four corners as one batch of 4 S designs (one fast-path call, not four)
+        corners = [
+            (dg, dt)
+            for dg in (-unc.gap_tolerance, unc.gap_tolerance)
+            for dt in (-unc.drum_thickness_tolerance, unc.drum_thickness_tolerance)
+        ]
+        q = {k: np.tile(v, 4) for k, v in p.items()}
+        q["gap"] = np.concatenate([p["gap"] + dg for dg, _ in corners])
+        q["drum_thickness"] = np.concatenate([p["drum_thickness"] + dt for _, dt in corners])
+        hand = _hand_of(evaluate_batch(q, base), base)[:4]
+        stack = [np.concatenate([s, c.reshape(4, -1)]) for s, c in zip(stack, hand, strict=True)]
     # hull over the corners; a corner the validation refuses (NaN) is left out
     (m1_lo, b1_lo, f_lo, teq_lo), (m1_hi, b1_hi, f_hi, teq_hi) = (
         [np.where(ok, fn.reduce(s, axis=0), np.nan) for s in stack] for fn in (np.fmin, np.fmax)
