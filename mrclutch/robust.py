@@ -408,8 +408,9 @@ def robust_columns_batch(
     -> dict[str, np.ndarray]
 
     The worst case, over ``uncertainty`` (an :class:`mrclutch.uncertainty.Uncertainty`;
-    None: ``default_uncertainty(base)``), of the largest stable K and the largest passive
-    K [N/m] and of the bandwidth at the rendered K_max [Hz], for S designs at once.
+    None: ``base.ranges``, its declared uncertainty or the defaults), of the largest stable K
+    and the largest passive K [N/m] and of the bandwidth at the rendered K_max [Hz], for S
+    designs at once.
     ``fields``: the DrumClutch field arrays ``pipeline.evaluate_batch`` takes (missing
     fields from ``base.clutch``); ``base``: the ClutchDesign giving the operating point and
     transmission (None: ``ClutchDesign()``). Returns 1-D arrays of S under
