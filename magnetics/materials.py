@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from geometry.materials import COIL, KIND, MRF, RECORDS, STAINLESS, STEEL, check_record, register
-from geometry.validation import ParameterError, check_positive
+from geometry.validation import ParameterError, check_positive, check_range
 
 MU0 = 4e-7 * math.pi  # vacuum permeability, H/m (pre-2019 SI value; differs by 5e-10)
 FloatArray = NDArray[np.float64]
@@ -287,9 +287,19 @@ class MRFluid:
     temperature_range: tuple[float, float] = (-40.0, 130.0)  # °C, maker's operating range
     thermal_conductivity: float = 0.65  # W/(m·K)
     specific_heat: float = 800.0  # J/(kg·K)
+    #: 1/K, the carrier's volumetric expansion: sets τy(T) (magnetics.hot); None: no data
+    carrier_expansion: float | None = None
+    #: J/m³, lifetime dissipated energy per volume (magnetics.life); None: no data
+    lifetime_energy: float | None = None
 
     def __post_init__(self) -> None:
         check_positive(f"{self.name}.phi", self.phi)
+        if self.carrier_expansion is not None:
+            check_range(f"{self.name}.carrier_expansion", self.carrier_expansion, 0.0, 1e-2,
+                        " 1/K")  # fmt: skip
+        if self.lifetime_energy is not None:
+            check_positive(f"{self.name}.lifetime_dissipated_energy", self.lifetime_energy,
+                           " J/m³")  # fmt: skip
         check_positive(f"{self.name}.viscosity", self.viscosity, " Pa·s")
         (t0, n0), (t1, n1) = self.carrier_points
         if not (t1 > t0 and n0 > n1 > 0):
@@ -417,10 +427,16 @@ def _fluid_of(rec: Mapping[str, Any], where: str) -> MRFluid:
         ) from None
     if len(cp) != 2 or not lo < hi:
         raise ParameterError(f"{where}: carrier_points: two points; temperature_range: lo < hi")
+
+    def optional(key: str) -> float | None:  # issue 41: absent in a user's file = no data
+        return num(key) if key in rec else None
+
     try:
         return MRFluid(name, phi, num("carrier_c"), visc, str(rec.get("rheology_source", "")),
                        num("viscosity_temperature"), (cp[0], cp[1]), str(rec.get("carrier", "")),
-                       (lo, hi), num("thermal_conductivity"), num("specific_heat"))  # fmt: skip
+                       (lo, hi), num("thermal_conductivity"), num("specific_heat"),
+                       optional("carrier_expansion"),
+                       optional("lifetime_dissipated_energy"))  # fmt: skip
     except ParameterError as e:
         raise ParameterError(f"{where}: {e}") from None
 
