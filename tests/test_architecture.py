@@ -33,6 +33,7 @@ LAZY_OK = {
     "pyarrow": "≈ 0.3 s; only when a sweep writes or reads Parquet",
     "numba": "≈ 0.3 s and its compiled kernels; only when the network is solved",
     "pymoo": "≈ 0.5 s; only where optimize searches for a Pareto set",
+    "ezdxf": "≈ 0.5 s; only when a DXF of the section is written",
 }
 
 

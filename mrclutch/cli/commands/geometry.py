@@ -30,8 +30,9 @@ from geometry.mass import (
 )
 from geometry.params import DrumClutch
 from geometry.section import OUTPUT_PARTS, build_section
-from geometry.validation import ParameterError, check_positive
+from geometry.validation import ParameterError, check_choice, check_positive
 from mrclutch.cli.commands._common import add_design_args, load_clutch, load_design_args, print_json
+from mrclutch.cli.commands.handoff import export_handoff
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.view import screenshot, show
 
@@ -50,6 +51,21 @@ def register(sub: Any) -> None:
     add_design_args(p)
     p.add_argument("--out", required=True, metavar="DIR", help="output directory")
     _tol(p)
+    p.add_argument(
+        "--format",
+        default="step",
+        help="step (default: the CAD above), femm (DIR/NAME.fem + NAME.lua: FEMM 4.2), onelab "
+        "(DIR/NAME.geo + NAME.pro: Gmsh + GetDP), dxf (DIR/NAME.dxf: the r-z section, a layer "
+        "per part and material) or drawing (DIR/NAME.svg: dimensioned, with the [process] "
+        "tolerances); NAME is the design's name (docs/handoff.md)",
+    )
+    p.add_argument(
+        "--current",
+        type=float,
+        default=None,
+        metavar="A",
+        help="femm, onelab: the coil current (default: the design's current limit)",
+    )
     p.set_defaults(func=cmd_export)
 
     p = sub.add_parser(
@@ -99,7 +115,13 @@ def _tolerance(args: argparse.Namespace, clutch: DrumClutch) -> float:
     return check_tolerance("--tolerance-mm", tol, clutch, scale=1e3)
 
 
+EXPORT_FORMATS = ("step", "femm", "onelab", "dxf", "drawing")
+
+
 def cmd_export(args: argparse.Namespace) -> int:
+    check_choice("--format", args.format, EXPORT_FORMATS)
+    if args.format != "step":
+        return export_handoff(args)
     design = load_design_args(args)
     clutch = design.clutch
     res = export_clutch(clutch, args.out, _tolerance(args, clutch), materials=design.materials)
