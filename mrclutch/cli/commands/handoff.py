@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +24,7 @@ from magnetics.export.onelab import write_geo, write_pro
 from mrclutch.cli.commands._common import add_design_args, load_design_args
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.jsonio import to_jsonable
-from mrclutch.handoff import device_description, material_tables
+from mrclutch.handoff import MAP_COLUMNS, device_description, material_tables, torque_map
 
 
 def register(sub: Any) -> None:
@@ -100,4 +101,66 @@ def cmd_device(args: argparse.Namespace) -> int:
     desc = device_description(design)
     text = json.dumps(to_jsonable(desc), indent=2) + "\n"
     print(write_text(args.out, text))
+    return 0
+
+
+def add_map_args(p: argparse.ArgumentParser) -> None:
+    """``mrclutch torque``'s torque-map options (``write_torque_map``)."""
+    p.add_argument(
+        "--map",
+        metavar="FILE.csv|.parquet",
+        help="write a torque map over current (--current) x slip speed (--map-speeds-rpm) x "
+        "fluid temperature (--map-temperatures-C), with the off-state torque: a controller's "
+        "lookup table (docs/handoff.md)",
+    )
+    p.add_argument(
+        "--map-speeds-rpm",
+        default="0,100,265,530",
+        metavar="S,S,...",
+        help="--map: slip speeds, rpm (default 0,100,265,530)",
+    )
+    p.add_argument(
+        "--map-temperatures-C",
+        default="20,40,60",
+        metavar="T,T,...",
+        help="--map: fluid temperatures, °C (default 20,40,60)",
+    )
+
+
+def _floats(option: str, text: str) -> list[float]:
+    try:
+        vals = [float(x) for x in text.split(",")]
+    except ValueError:
+        raise CLIError(f"{option} {text!r}: give numbers separated by commas") from None
+    if not vals or not all(math.isfinite(v) for v in vals):
+        raise CLIError(f"{option} {text!r}: give finite numbers separated by commas")
+    return vals
+
+
+def write_torque_map(args: argparse.Namespace, currents: Any) -> int:
+    """``mrclutch torque --map FILE``: the map (mrclutch.handoff.torque_map) as CSV or
+    Parquet, by the file's suffix, through the output layer."""
+    path = Path(args.map)
+    suffix = path.suffix.lower()
+    if suffix not in (".csv", ".parquet"):
+        raise CLIError(f"--map {args.map}: the file must end in .csv or .parquet")
+    if args.method not in ("network", "circuit", "fem"):
+        raise CLIError(f"--map: --method {args.method!r}: give network, circuit or fem")
+    speeds = _floats("--map-speeds-rpm", args.map_speeds_rpm)
+    temps = _floats("--map-temperatures-C", args.map_temperatures_C)
+    design = load_design_args(args)
+    cols = torque_map(design, currents, speeds, temps, method=args.method)
+    if suffix == ".csv":
+        rows = zip(*(cols[c] for c in MAP_COLUMNS), strict=True)
+        body = ",".join(MAP_COLUMNS) + "\n"
+        body += "".join(",".join(f"{x:.10g}" for x in r) + "\n" for r in rows)
+        write_text(path, body)
+    else:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        table = pa.table({c: cols[c] for c in MAP_COLUMNS})
+        with atomic_path(path) as tmp:
+            pq.write_table(table, tmp)
+    print(f"{path}  ({len(cols['current_A'])} rows: {', '.join(MAP_COLUMNS)})")
     return 0

@@ -27,6 +27,7 @@ from mrclutch.cli.commands._common import (
     load_design_args,
     print_json,
 )
+from mrclutch.cli.commands.handoff import add_map_args, write_torque_map
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.plots.magnetics import plot_field, plot_torque
 
@@ -75,6 +76,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     )
     p.add_argument("--json", action="store_true", help="JSON on stdout")
     p.add_argument("--plot", metavar="FILE.png", help="write a torque-current chart")
+    add_map_args(p)
     p.set_defaults(func=_torque)
 
     f = sub.add_parser("field", help="FEM flux-density map over the section at one current")
@@ -86,6 +88,8 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
 
 
 def _torque(args: argparse.Namespace) -> int:
+    if args.map is not None:
+        return write_torque_map(args, _parse_currents(args.current))
     check_choice("--method", args.method, ("circuit", "network", "fem", "both"))
     check_range("--speed-rpm", args.speed_rpm, 0.0, 1e5, " rpm")
     currents = _parse_currents(args.current)
