@@ -47,6 +47,7 @@ from magnetics.torque import (
     torque_curve,
 )
 from mrclutch.design import ClutchDesign, current_limit
+from mrclutch.feel import feel_figures
 from mrclutch.haptics.actuator import (
     EM_170,
     TABLE2_MR,
@@ -347,6 +348,8 @@ class Evaluation:
     unavailable: Mapping[str, str] = field(default_factory=dict)
     source: str = "fast model"  # where the pair's figures at the hand come from
     model_mr: HapticParams | None = None  # the model's pair where measured values replace it
+    #: ``mrclutch.feel.feel_figures``: the residual torque and its loop, the runout ripple
+    feel: Mapping[str, Any] = field(default_factory=dict)
 
     def as_json(self) -> dict[str, Any]:
         mr_m, em_m = dict(self.haptic), dict(self.motor_metrics)
@@ -374,6 +377,7 @@ class Evaluation:
             "response": dict(self.response),
             "unavailable": dict(self.unavailable),
             "source": self.source,
+            "feel": {k: dict(v) for k, v in self.feel.items()},
         }
         out["nulls"] = null_notes(out)
         return out
@@ -503,7 +507,9 @@ def evaluate(
     gearing = em_tr.gearing if em_tr is not None else None
     return Evaluation(design, fidelity, fig, mr, em, gearing, mr_m, em_m, budget, zws, hand,
                       response_figures(design, resp, mr, unavailable), resp,
-                      MappingProxyType(unavailable), source, model_mr)  # fmt: skip
+                      MappingProxyType(unavailable), source, model_mr,
+                    feel_figures(design, fig.max_torque, fig.yield_torque, fig.off_state_torque,
+                                 float(backdrive_force(mr))))  # fmt: skip
 
 
 #: The label beside a figure at the hand: where its torque, mass and damping come from.
