@@ -309,8 +309,10 @@ def read_fem(text: str) -> FemFile:
         rows: list[list[str]] = []
         if name in ("numpoints", "numsegments", "numarcsegments", "numholes", "numblocklabels"):
             n = int(val)
+            if i + n > len(lines):
+                raise ValueError(f"[{name}] = {n}: fewer lines follow")
             rows = [lines[i + j].split() for j in range(n)]
-            if any(not r for r in rows) or (i + n > len(lines)):
+            if any(not r or r[0].startswith("[") for r in rows):
                 raise ValueError(f"[{name}] = {n}: fewer lines follow")
             i += n
         if name == "numpoints":
