@@ -141,6 +141,18 @@ _ALL = (
            "bandwidth, worst case"),
     Output("zwidth_area_N2_s_per_m2", "N²·s/m²", "area of the Z-width: virtual (K, B) "
            "rendered passively (mrclutch.haptics.zwidth)", "Z-width area"),
+    # ---- issue 41: what the hand feels of the steel's memory and of the runout --------
+    Output("residual_torque_N_m", "N·m", "yield torque left at 0 A after the current limit: "
+           "the steel's coercive current through the network (mrclutch.feel, "
+           "docs/hysteresis.md)", "residual torque", "mN·m", 1e3),
+    Output("hysteresis_width_pct", "%", "widest gap between the falling and the rising "
+           "torque–current branches, % of the yield torque at the current limit "
+           "(mrclutch.feel)", "hysteresis loop width"),
+    Output("ripple_torque_N_m", "N·m", "half peak-to-peak torque ripple at the slip "
+           "frequency from the [process] runout (mrclutch.feel, magnetics.ripple)",
+           "runout ripple", "mN·m", 1e3),
+    Output("ripple_force_N", "N", "the runout ripple at the hand, T·nG/l (mrclutch.feel)",
+           "runout ripple at the hand", "mN", 1e3),
 )  # fmt: skip
 
 #: Every output, by key.
@@ -218,6 +230,12 @@ SWEEP_OPTIONAL: tuple[str, ...] = (
     "max_stable_K_worst_N_per_m",
     "max_passive_K_worst_N_per_m",
     "bandwidth_worst_hz",
+    # issue 41 (mrclutch.feel.feel_batch): the residual torque and loop about ×1.3, the
+    # ripple's gap curvature two more network solves
+    "residual_torque_N_m",
+    "hysteresis_width_pct",
+    "ripple_torque_N_m",
+    "ripple_force_N",
 )
 
 

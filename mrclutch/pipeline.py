@@ -16,6 +16,7 @@ stiffness K = K_max of the MR system.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
@@ -47,6 +48,7 @@ from magnetics.torque import (
     torque_curve,
 )
 from mrclutch.design import ClutchDesign, current_limit
+from mrclutch.duty import DUTY_INFS, DUTY_NULLS, evaluation_duty
 from mrclutch.feel import feel_figures
 from mrclutch.haptics.actuator import (
     EM_170,
@@ -348,6 +350,13 @@ class Evaluation:
     unavailable: Mapping[str, str] = field(default_factory=dict)
     source: str = "fast model"  # where the pair's figures at the hand come from
     model_mr: HapticParams | None = None  # the model's pair where measured values replace it
+
+    @functools.cached_property
+    def duty(self) -> dict[str, Any]:
+        """Issue 41: the hot peak and duty holds, the fluid's volume and life and the b1
+        budget's new terms (``mrclutch.duty.evaluation_duty``), computed when first read."""
+        return evaluation_duty(self)
+
     #: ``mrclutch.feel.feel_figures``: the residual torque and its loop, the runout ripple
     feel: Mapping[str, Any] = field(default_factory=dict)
 
@@ -377,6 +386,7 @@ class Evaluation:
             "response": dict(self.response),
             "unavailable": dict(self.unavailable),
             "source": self.source,
+            "duty": self.duty,
             "feel": {k: dict(v) for k, v in self.feel.items()},
         }
         out["nulls"] = null_notes(out)
@@ -415,6 +425,8 @@ INF_MEANS: dict[str, str] = {
     "time_to_fluid_limit_s": "never: the fluid stays below its temperature limit at the "
     "peak current",
 }
+NAN_MEANS.update(DUTY_NULLS)  # issue 41's figures (mrclutch.duty)
+INF_MEANS.update(DUTY_INFS)
 _UNBOUNDED = "unbounded (inf): no finite limit exists; JSON has no infinity"
 
 
