@@ -56,6 +56,7 @@ from geometry.validation import (
 )
 from magnetics import thermal
 from mrclutch.design import ClutchDesign, current_limit
+from mrclutch.feel import feel_batch
 from mrclutch.haptics.actuator import HapticParams
 from mrclutch.haptics.model import bandwidth, max_passive_stiffness
 from mrclutch.pipeline import batch_fields, evaluate_batch, fluid_limit
@@ -107,6 +108,10 @@ class Constraints:
     peak_time: float | None = None  # s at the peak current before the wire or fluid limit
     duty_torque: float = 0.0  # N·m (yield + drag) held for duty_time s (0: no duty cycle)
     duty_time: float = 0.0  # s
+    #: N·m left at 0 A after the current limit (mrclutch.feel; None: no limit)
+    max_residual_torque: float | None = None
+    #: N of runout ripple at the hand (mrclutch.feel; None: no limit)
+    max_ripple_force: float | None = None
 
     def __post_init__(self) -> None:
         check_positive("min_torque", self.min_torque, " N·m")
@@ -120,6 +125,10 @@ class Constraints:
             check_range("peak_time", self.peak_time, 0.0, 1e6, " s")
         check_range("duty_torque", self.duty_torque, 0.0, 1e3, " N·m")
         check_range("duty_time", self.duty_time, 0.0, 1e7, " s")
+        if self.max_residual_torque is not None:
+            check_positive("max_residual_torque", self.max_residual_torque, " N·m")
+        if self.max_ripple_force is not None:
+            check_positive("max_ripple_force", self.max_ripple_force, " N")
         if (self.duty_torque > 0) != (self.duty_time > 0):
             raise ParameterError(
                 f"duty cycle: duty_torque = {self.duty_torque:g} N·m and "
@@ -157,6 +166,10 @@ class Constraints:
             g["time at peak"] = 1 - r["time_at_peak_s"] / self.peak_time
         if self.duty_time > 0:
             g["duty cycle"] = 1 - r["time_at_duty_s"] / self.duty_time
+        if self.max_residual_torque is not None:
+            g["residual torque"] = r["residual_torque_N_m"] / self.max_residual_torque - 1
+        if self.max_ripple_force is not None:
+            g["ripple"] = r["ripple_force_N"] / self.max_ripple_force - 1
         if self.passive:
             g["passive"] = r["K_N_per_m"] / r["max_passive_K_N_per_m"] - 1
         if self.stable and "max_stable_K_N_per_m" in r:
@@ -241,7 +254,12 @@ def evaluate_rows(
     ``Constraints.terms`` reads."""
     r = evaluate_batch(fields, base, passivity=cons.passive, stability=stability,
                        zwidth=zwidth)  # fmt: skip
-    return {**r, **limit_columns(fields, base, r, cons.duty_torque)}
+    out = {**r, **limit_columns(fields, base, r, cons.duty_torque)}
+    feel = tuple(k for k, on in (("residual_torque_N_m", cons.max_residual_torque),
+                                 ("ripple_force_N", cons.max_ripple_force)) if on is not None)
+    if feel:  # the steel's memory and the runout ripple (mrclutch.feel)
+        out.update(feel_batch(fields, base, feel))
+    return out
 
 
 #: How many ranked candidates ``optimize`` keeps for a check at higher fidelity.

@@ -67,3 +67,22 @@ def test_a_harder_steel_leaves_more_torque() -> None:
     r = [feel_batch({"gap": np.array([d.clutch.gap])}, x, ("residual_torque_N_m",))
          ["residual_torque_N_m"][0] for x in (soft, hard)]  # fmt: skip
     assert r[1] > 2 * r[0] > 0
+
+
+def test_the_optimiser_limits_residual_torque_and_ripple() -> None:
+    """A limit between two designs' figures passes one and fails the other: the residual
+    torque falls as the gap widens (0.5 → 0.9 mm), the ripple too (T'' ∝ 1/g³-like)."""
+    from mrclutch.optimize import Constraints, evaluate_rows
+
+    d = design_preset("paper")
+    fields = {"gap": np.array([0.5e-3, 0.9e-3])}
+    probe = feel_batch(fields, d)
+    res, rip = probe["residual_torque_N_m"], probe["ripple_force_N"]
+    assert res[0] > res[1] and rip[0] > rip[1]
+    cons = Constraints(max_residual_torque=float(res.mean()), max_ripple_force=float(rip.mean()),
+                       passive=False, stable=False).resolved(d)  # fmt: skip
+    g = cons.terms(evaluate_rows(fields, d, cons))
+    assert g["residual torque"][0] > 0 > g["residual torque"][1]
+    assert g["ripple"][0] > 0 > g["ripple"][1]
+    plain = Constraints(passive=False, stable=False).resolved(d)
+    assert "ripple" not in plain.terms(evaluate_rows(fields, d, plain))
