@@ -166,7 +166,7 @@ FunctionSpace {{
 Jacobian {{ {{ Name Vol; Case {{ {{ Region All; Jacobian Vol; }} }} }} }}
 Integration {{ {{ Name Gauss6; Case {{ {{ Type Gauss; Case {{
   {{ GeoElement Triangle; NumberOfPoints 6; }}
-  {{ GeoElement Line; NumberOfPoints 4; }} }} }} }} }} }} }}
+  {{ GeoElement Line; NumberOfPoints 4; }} }} }} }} }} }}
 // psi = r*A_phi on the r-z plane: the tool's weak form (magnetics.fem)
 Formulation {{
   {{ Name MagSta_psi; Type FemEquation;
