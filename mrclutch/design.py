@@ -56,6 +56,12 @@ the key name too::
     [measured]               # optional: what a bench measured (mrclutch/uncertainty.py)
     m1_g = 1.5
 
+    [duty]                   # optional, defaults in `mrclutch.duty.Duty` (issue 41)
+    torque_N_m = 0.2         # held slipping for time_s (0: none); --duty NM:S
+    time_s = 60
+    peak_time_s = 30         # the current limit held (hot peak figures)
+    on_fraction = 0.25       # share of the fluid's life at the duty torque
+
     [process]                # optional, defaults in `mrclutch.process.Process`
     runout_mm = 0.03         # TIR of the drums: sets the smallest gap (optimize)
     tolerance_mm = 0.02
@@ -84,6 +90,7 @@ from magnetics.drag import ROOM_TEMPERATURE, Support
 from magnetics.dynamics import Amplifier, Laminations, supply_current
 from magnetics.materials import FLUIDS, load_fluid
 from magnetics.thermal import adiabatic_current_density
+from mrclutch.duty import DUTY_KEYS, Duty
 from mrclutch.haptics.actuator import MR_170, MR_DELAY, Transmission
 from mrclutch.inputs import read_toml
 from mrclutch.inputs import toml_value as _toml
@@ -176,6 +183,8 @@ class ClutchDesign:
     process: Process = field(default_factory=Process)  # what the workshop holds (optimize)
     #: the material of each part (the fluid's range bounds ``operating.fluid_temperature``)
     materials: MaterialChoice = field(default_factory=MaterialChoice)
+    #: how it is used: a torque held, the peak hold, the life's duty (``[duty]``, issue 41)
+    duty: Duty = field(default_factory=Duty)
 
     def __post_init__(self) -> None:
         lo, hi = FLUIDS[self.materials.fluid].temperature_range
@@ -311,7 +320,7 @@ def _short(v: Any) -> str:
 def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> ClutchDesign:
     """Build a design from a parsed design file (see the module docstring)."""
     known = {"clutch", "operating", "transmission", "support", "amplifier", "laminations",
-             "uncertainty", "measured", "process", "materials", "name"}  # fmt: skip
+             "uncertainty", "measured", "process", "materials", "duty", "name"}  # fmt: skip
     for key in data:
         if key not in known and not isinstance(data[key], dict):
             raise ParameterError(f"{where}: {key}: not in a table; dimensions go under [clutch]")
@@ -383,6 +392,11 @@ def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> Clutc
         unc = uncertainty_from_mapping(data["uncertainty"], f"{where}: uncertainty",
                                        base=default_uncertainty(design))  # fmt: skip
         design = replace(design, uncertainty=unc)
+    if "duty" in data:
+        duty_table = data["duty"]
+        with _file_key(duty_table, DUTY_KEYS, f"{where}: duty"):
+            duty = Duty(**_read_table(duty_table, DUTY_KEYS, f"{where}: duty"))
+        design = replace(design, duty=duty)
     if "measured" in data:
         meas = measured_from_mapping(data["measured"], f"{where}: measured", source=str(where))
         design = replace(design, measured=meas)
@@ -450,6 +464,8 @@ def design_to_toml(design: ClutchDesign) -> str:
     lines += [
         f"{k} = {_toml(_si(getattr(design.process, n), f))}" for k, (n, f) in PROCESS_KEYS.items()
     ]
+    lines += ["", "[duty]"]
+    lines += [f"{k} = {_toml(_si(getattr(design.duty, n), f))}" for k, (n, f) in DUTY_KEYS.items()]
     return "\n".join(lines) + "\n"
 
 

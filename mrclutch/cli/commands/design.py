@@ -23,11 +23,13 @@ from mrclutch.cli.commands._common import (
     load_design_args,
     print_json,
 )
+from mrclutch.cli.duty_format import duty_lines
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.executors import sweep_executor
 from mrclutch.cli.plots.design import pareto_plot, pareto_set_plot
 from mrclutch.cli.report import write_report
 from mrclutch.design import ClutchDesign, design_from_mapping, design_preset, design_to_toml
+from mrclutch.duty import parse_duty
 from mrclutch.haptics.actuator import HapticParams
 from mrclutch.haptics.model import bandwidth
 from mrclutch.optimize import (
@@ -102,6 +104,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="the nominal verdict only: no ranges over the uncertain inputs ([uncertainty], "
         "docs/verdicts.md)",
+    )
+    p.add_argument(
+        "--duty",
+        metavar="NM:S",
+        default=None,
+        help="hold NM N·m (yield + drag, slipping) for S seconds: torque, b1 and the verdict "
+        "at the end, with the fluid's life at that torque (overrides the design's [duty]; "
+        "docs/hot.md)",
     )
     p.add_argument("--json", action="store_true", help="print JSON (SI units in the key names)")
     p.set_defaults(func=_evaluate)
@@ -370,6 +380,8 @@ def _evaluate(args: argparse.Namespace) -> int:
     design = load_design_args(args)
     if args.accuracy is not None and not 0 < args.accuracy < 1:
         raise CLIError(f"--accuracy = {args.accuracy}: need 0 < accuracy < 1 (relative)")
+    if args.duty is not None:  # issue 41
+        design = replace(design, duty=parse_duty(args.duty, design.duty))
     ev = evaluate(design, args.fidelity, accuracy=args.accuracy)
     data = verdicts_json(ev, robust=not args.no_uncertainty)
     data["nulls"] = null_notes(data)  # the verdicts' sections too
@@ -377,6 +389,7 @@ def _evaluate(args: argparse.Namespace) -> int:
         print_json(data)
         return 0
     print(format_evaluation(data))
+    print("\n".join(duty_lines(data["duty"])))
     for note in data["clutch"]["notes"]:
         print(f"note: {note}")
     seen = set()

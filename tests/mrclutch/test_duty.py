@@ -1,0 +1,144 @@
+"""Issue 41, items 3–5 wired: the hot holds (η(T), τy(T), the coil's R(T) fed back), the
+fluid's life, the b1 budget's new terms, ``[duty]`` and ``--duty``."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import tomllib
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from geometry.section import build_section
+from geometry.validation import ParameterError
+from magnetics.drag import drag_terms, totals
+from magnetics.dynamics import supply_current
+from magnetics.hot import tau_y_factor
+from magnetics.materials import FLUIDS
+from magnetics.torque import torque_curve
+from mrclutch import duty as D
+from mrclutch.design import design_from_mapping, design_preset, design_to_toml
+from mrclutch.pipeline import evaluate
+
+PAPER = design_preset("paper")
+
+
+@pytest.fixture(scope="module")
+def ctx() -> D.Context:
+    d, op = PAPER, PAPER.operating
+    s = build_section(d.clutch, d.materials)
+    cur = np.linspace(0.0, d.current_limit, D.GRID)
+    tc = torque_curve(s, cur, method="network", speed_rpm=op.input_speed_rpm, support=d.support)
+    return D.context(s.table, cur, tc.yield_torque, d.current_limit, op.input_speed,
+                     d.support, d.amplifier, op.ambient_temperature, 130.0,
+                     op.wire_temperature_limit)  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def ev():
+    return evaluate(replace(PAPER, duty=D.Duty(torque=0.2, time=60.0)))
+
+
+def test_drag_follows_the_viscosity_law(ctx: D.Context) -> None:
+    """The closed form (films ∝ η(T), bearings and seal apart) is the drag module's own sum
+    at 20, 60 and 120 °C; a planted η at 20 °C would miss 60 °C by a factor 2.5."""
+    for t in (20.0, 60.0, 120.0):
+        off, damp = totals(drag_terms(ctx.rg, ctx.slip_speed, t, PAPER.support))
+        got = D.drag_at(ctx, t)
+        assert got[0] == pytest.approx(float(off), rel=1e-12)
+        assert got[1] == pytest.approx(float(damp), rel=1e-12)
+    assert D.drag_at(ctx, 20.0)[1] / D.drag_at(ctx, 60.0)[1] > 2.0
+
+
+def test_peak_hold_current_is_capped_by_the_hot_coil(ctx: D.Context) -> None:
+    """At the end of 30 s at the limit the current is min(7 A, 24 V / R(T_coil)): the hot
+    coil's R(T) (copper law) is what caps it; a planted R at 20 °C would leave 7 A."""
+    h = D.hold(ctx, D.peak_load(ctx), 30.0, evaluate(PAPER).mr, PAPER.transmission.reduction,
+               100.0)  # fmt: skip
+    cap = float(supply_current(ctx.rg.fields, ctx.rg.at, PAPER.amplifier,
+                               h["coil_temperature_C"]))  # fmt: skip
+    assert h["current_A"] == pytest.approx(min(PAPER.current_limit, cap), rel=1e-12)
+    assert h["current_A"] < PAPER.current_limit  # the paper's 24 V cannot hold 7 A hot
+    assert h["beyond_wire_limit"]
+
+
+def test_torque_at_scales_the_yield_by_tau_y_and_adds_the_hot_drag(ctx: D.Context) -> None:
+    """At (coil, fluid, housing) = (60, 80, 50) °C and 3 A: τy factor × the cold yield
+    interpolated at 3 A + the drag at 80 °C. Each part is checked against its own module."""
+    temps = np.array([60.0, 80.0, 50.0])
+    f = float(tau_y_factor(FLUIDS["mrf_132dg"], 80.0))
+    y = float(np.interp(3.0, ctx.currents, ctx.yield_cold))
+    off = float(totals(drag_terms(ctx.rg, ctx.slip_speed, 80.0, PAPER.support))[0])
+    assert D.torque_at(ctx, 3.0, temps) == pytest.approx(f * y + off, rel=1e-12)
+    assert f < 1.0  # the hot fluid is weaker
+
+
+def test_duty_hold_holds_its_torque_with_a_rising_current(ctx: D.Context, ev) -> None:
+    """0.2 N·m for 60 s: the torque is held to the end and the current at the end is more
+    than at the start (τy(T) falls as the fluid warms; with τy(T) planted away it would not
+    rise at all beyond what the falling drag asks)."""
+    h = ev.duty["duty"]
+    assert h["torque_N_m"] == pytest.approx(0.2, rel=1e-9) and h["held"]
+    cold = D.duty_current(ctx, 0.2, np.full(3, 20.0))
+    assert h["current_A"] > cold * 1.01
+    assert h["fluid_temperature_C"] > 40.0
+
+
+def test_hot_b1_is_the_cold_b1_plus_the_films_change(ctx: D.Context, ev) -> None:
+    """b1(T) = b1(20 °C) + 2 r² (c(T) − c(20 °C)), r the transmission's reduction (Eq. 3):
+    recomputed from the fluid temperature the hold reports."""
+    h = ev.duty["duty"]
+    r2 = 2 * PAPER.transmission.reduction**2
+    dc = D.drag_at(ctx, h["fluid_temperature_C"])[1] - D.drag_at(ctx, 20.0)[1]
+    assert h["b1_N_s_per_m"] == pytest.approx(float(ev.mr.b1) + r2 * dc, rel=1e-9)
+    assert h["b1_N_s_per_m"] < float(ev.mr.b1)
+
+
+def test_b1_budget_hand_worked() -> None:
+    """Films 0.268, seal 0, plastic 0, warmed −0.2: total 0.068 against Table 2's 1.0,
+    unexplained 0.932; each share is value / 1.0. A seal's Coulomb torque adds nothing."""
+    b = D.b1_budget(0.268, 0.0, 0.05, -0.2)
+    assert b["total"] == pytest.approx(0.068, rel=1e-12)
+    assert b["unexplained"] == pytest.approx(0.932, rel=1e-12)
+    assert [t["share_of_table2"] for t in b["terms"]] == pytest.approx([0.268, 0, 0, -0.2])
+    assert "50 mN·m" in b["terms"][1]["source"]
+    assert len(D.b1_budget(0.268, 0.0, 0.0, None)["terms"]) == 3
+
+
+def test_life_in_the_evaluation(ev) -> None:
+    """The life is LDE·V/P̄ with P̄ = (0.25 × 0.2 + 0.75 × T_off) ω, the evaluation's own
+    volume and drag."""
+    f = ev.duty["fluid"]
+    w = PAPER.operating.input_speed
+    p = (0.25 * 0.2 + 0.75 * float(ev.clutch.off_state_torque)) * w
+    assert f["mean_power_W"] == pytest.approx(p, rel=1e-6)
+    assert f["life_h"] == pytest.approx(5e12 * f["volume_m3"] / p / 3600, rel=1e-6)
+    assert f["volume_mL"] == pytest.approx(2.8, rel=0.02)
+
+
+def test_duty_in_the_design_file_round_trips_and_is_checked() -> None:
+    d = replace(PAPER, duty=D.Duty(torque=0.2, time=60.0, on_fraction=0.5))
+    back = design_from_mapping(tomllib.loads(design_to_toml(d)))
+    assert back.duty == d.duty
+    with pytest.raises(ParameterError, match=r"duty\.on_fraction"):
+        design_from_mapping({"clutch": {"base": "paper"}, "duty": {"on_fraction": 2.0}})
+    with pytest.raises(ParameterError, match="unknown key"):
+        design_from_mapping({"clutch": {"base": "paper"}, "duty": {"torque": 0.2}})
+    assert D.parse_duty("0.3:10") == D.Duty(torque=0.3, time=10.0)
+    with pytest.raises(ParameterError, match="NM:S"):
+        D.parse_duty("0.3")
+
+
+def test_evaluate_json_and_bad_duty_on_the_command_line() -> None:
+    run = [sys.executable, "-m", "mrclutch", "evaluate", "--preset", "paper", "--no-uncertainty"]
+    out = subprocess.run([*run, "--duty", "0.2:60", "--json"], capture_output=True, text=True,
+                         check=True)  # fmt: skip
+    data = json.loads(out.stdout)["duty"]
+    assert data["asked"]["torque_N_m"] == 0.2 and data["duty"]["held"]
+    assert data["peak"]["time_s"] == 30.0
+    bad = subprocess.run([*run, "--duty=0.2:0"], capture_output=True, text=True)
+    assert bad.returncode == 2
+    assert bad.stderr.count("\n") == 1 and "duty time" in bad.stderr
