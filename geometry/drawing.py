@@ -124,5 +124,6 @@ def section_drawing(section: Section, path: str, tolerance: float, runout: float
     ax.set_ylim(section.z_min * mm - 5.0, top + 4.0 + 1.6 * len(radii))
     ax.set_xlabel("r (mm)")
     ax.set_ylabel("z (mm)")
-    fig.savefig(path, format="svg")
+    with plt.rc_context({"svg.fonttype": "none"}):  # text stays text: searchable, editable
+        fig.savefig(path, format="svg")
     plt.close(fig)
