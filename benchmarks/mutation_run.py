@@ -41,7 +41,44 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = {"geometry": "tests/geometry", "magnetics": "tests/magnetics",
-            "mrclutch/haptics": "tests/mrclutch"}  # fmt: skip
+            "mrclutch/haptics": "tests/mrclutch", "mrclutch": "tests/mrclutch"}  # fmt: skip
+#: The physics run (docs/testing.md's first table): these packages' modules, their tests.
+PHYSICS = ("geometry", "magnetics", "mrclutch/haptics")
+
+#: ``--run round``: the modules touched in the last two rounds of work (git log of issues
+#: 40–45: the robust verdicts, the uncertain inputs, the process limits, the pipeline, the
+#: optimiser, the thermal figures) and the CLI's formatting and plots (what a person reads
+#: and sees), run against tests/mrclutch and the thermal tests, with the doc-figure check
+#: (tests/test_doc_figures.py) left out: it compares printed numbers with the docs' quoted
+#: ones, so it catches a change, not an error.
+ROUND_MODULES = (
+    "mrclutch/robust.py",
+    "mrclutch/uncertainty.py",
+    "mrclutch/process.py",
+    "mrclutch/pipeline.py",
+    "mrclutch/optimize.py",
+    "mrclutch/design.py",
+    "magnetics/thermal.py",
+    "mrclutch/cli/commands/design.py",
+    "mrclutch/cli/commands/haptic.py",
+    "mrclutch/cli/plots/haptic.py",
+    "mrclutch/cli/plots/magnetics.py",
+)
+ROUND_TESTS = ("tests/mrclutch", "tests/magnetics/test_thermal.py",
+               "tests/magnetics/test_thermal_hand.py")  # fmt: skip
+#: Tests no run may count a kill by (deselected): the doc-figure check.
+IGNORED = ["tests/test_doc_figures.py"]
+#: Each run: its modules (None: every module of PHYSICS' packages), the tests the coverage
+#: map is built from, and its output, coverage map and verdict table.
+RUNS: dict[str, dict] = {
+    "physics": {"modules": None, "tests": tuple(sorted({PACKAGES[p] for p in PHYSICS})),
+                "out": "benchmarks/data/mutation.json",
+                "coverage": "benchmarks/data/mutation.coverage", "verdicts": ""},
+    "round": {"modules": ROUND_MODULES, "tests": ROUND_TESTS,
+              "out": "benchmarks/data/mutation_round.json",
+              "coverage": "benchmarks/data/mutation_round.coverage", "verdicts": "round"},
+}  # fmt: skip
+_RUN: dict = dict(RUNS["physics"])  # the run in hand (main sets it)
 
 _BINOPS = {ast.Add: ast.Sub, ast.Sub: ast.Add, ast.Mult: ast.Div, ast.Div: ast.Mult,
            ast.Pow: ast.Mult, ast.FloorDiv: ast.Div, ast.Mod: ast.FloorDiv}  # fmt: skip
@@ -141,8 +178,10 @@ class _Replace(ast.NodeTransformer):
 
 
 def modules() -> list[Path]:
+    if _RUN["modules"] is not None:
+        return [ROOT / m for m in _RUN["modules"]]
     mods: list[Path] = []
-    for pkg in PACKAGES:
+    for pkg in PHYSICS:
         mods += [p for p in sorted((ROOT / pkg).rglob("*.py")) if p.name != "__init__.py"]
     return mods
 
@@ -171,7 +210,7 @@ def mutated_source(m: Mutant) -> str:
 
 
 def _package_tests(module: str) -> str:
-    for pkg, tests in PACKAGES.items():
+    for pkg, tests in PACKAGES.items():  # the first (most specific) package that holds it
         if module.startswith(pkg + "/"):
             return tests
     raise ValueError(module)
@@ -190,15 +229,19 @@ def build_coverage(tree: Path, out: Path) -> None:
     """Run the packages' tests once under pytest-cov, recording which test ran each line."""
     env = dict(os.environ, PYTHONPATH=str(tree), COVERAGE_FILE=str(out),
                NUMBA_CACHE_DIR=str(tree / ".numba"), OPENBLAS_NUM_THREADS="1")  # fmt: skip
-    cov = [f"--cov={p.replace('/', '.')}" for p in PACKAGES]
+    # the top folders, by path: a dotted module name makes coverage import its package
+    # before pytest does (numpy then refuses to load twice)
+    cov = [f"--cov={p}" for p in sorted({m.split("/")[0] for m in _RUN["modules"] or PHYSICS})]
     r = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *cov,
                         "--cov-context=test", "--cov-report=", "-o",
-                        "addopts=--benchmark-disable", *sorted(set(PACKAGES.values()))],
+                        "addopts=--benchmark-disable", *(f"--ignore={t}" for t in IGNORED),
+                        *_RUN["tests"]],
                        cwd=tree, env=env, check=False, capture_output=True, text=True)  # fmt: skip
     # a test that fails unmutated cannot kill a mutant: recorded, and left out of every run
     failing = sorted({ln.split(" ")[1] for ln in r.stdout.splitlines() if ln.startswith("FAILED ")})
     if r.returncode not in (0, 1) or not out.exists():
-        raise SystemExit(f"the unmutated suite did not run in {tree} (exit {r.returncode})")
+        raise SystemExit(f"the unmutated suite did not run in {tree} (exit {r.returncode}):\n"
+                         f"{r.stdout[-1500:]}\n{r.stderr[-1500:]}")  # fmt: skip
     out.with_suffix(".failing.json").write_text(json.dumps(failing, indent=1))
     print(r.stdout[-2000:], flush=True)
 
@@ -234,7 +277,7 @@ def _pytest(tree: Path, targets: list[str], timeout: float) -> tuple[str, str]:
                NUMBA_CACHE_DIR=str(tree / ".numba"), OPENBLAS_NUM_THREADS="1")  # fmt: skip
     cmd = [sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider",
            "--no-header", "-o", "addopts=--benchmark-disable", *targets,
-           *(f"--deselect={t}" for t in _FAILING)]  # fmt: skip
+           *(f"--ignore={t}" for t in IGNORED), *(f"--deselect={t}" for t in _FAILING)]  # fmt: skip
     try:
         r = subprocess.run(cmd, cwd=tree, env=env, capture_output=True, text=True,
                            timeout=timeout)  # fmt: skip
@@ -248,9 +291,20 @@ def _pytest(tree: Path, targets: list[str], timeout: float) -> tuple[str, str]:
     return "killed", f"exit {r.returncode}"
 
 
+#: "work": copy the working tree; "head": the committed tree of HEAD (``git archive``), so a
+#: run on a tree others are editing sees one consistent commit.
+_SOURCE = {"tree": "work", "commit": "HEAD"}
+
+
 def _worker_tree() -> Path:
     """A private copy of the whole tree (the tests read docs/, examples/, benchmarks/)."""
     tree = Path(tempfile.mkdtemp(prefix="mutation-")) / "tree"
+    if _SOURCE["tree"] == "head":
+        tree.mkdir()
+        tar = subprocess.run(["git", "archive", _SOURCE["commit"]], cwd=ROOT, check=True,
+                             capture_output=True).stdout  # fmt: skip
+        subprocess.run(["tar", "-x", "-C", str(tree)], input=tar, check=True)
+        return tree
     shutil.copytree(ROOT, tree, ignore=shutil.ignore_patterns(".git", "__pycache__", "*.pyc"))
     return tree
 
@@ -288,10 +342,12 @@ def verdicts() -> dict[str, dict[str, str]]:
     """Each survivor's verdict, by "module:index": ``equivalent`` (no input a user can give
     tells it from the original; ``why`` says so), ``speed`` (the same answers, only more or
     fewer solver iterations: benchmarks judge those, not tests) or ``test`` (the test added
-    for it)."""
+    for it). The physics run's verdicts are the file's top-level tables; another run's are
+    under its own table (``[round."module:index"]``)."""
     import tomllib
 
-    return tomllib.loads(VERDICTS.read_text()) if VERDICTS.exists() else {}
+    data = tomllib.loads(VERDICTS.read_text()) if VERDICTS.exists() else {}
+    return data.get(_RUN["verdicts"], {}) if _RUN["verdicts"] else data
 
 
 def summary(mutants: list[Mutant]) -> dict[str, float]:
@@ -324,10 +380,12 @@ def summary(mutants: list[Mutant]) -> dict[str, float]:
 def report(mutants: list[Mutant]) -> str:
     done = [m for m in mutants if m.status != "pending"]
     lines = ["| package | mutants | killed | survived |", "|---|---:|---:|---:|"]
-    for pkg in PACKAGES:
-        mine = [m for m in done if m.module.startswith(pkg + "/")]
+    groups = PHYSICS if _RUN["modules"] is None else sorted({m.module for m in done})
+    for pkg in groups:
+        mine = [m for m in done if m.module == pkg or m.module.startswith(pkg + "/")]
         killed = sum(m.status == "killed" for m in mine)
-        lines.append(f"| {pkg}/ | {len(mine)} | {killed} | {len(mine) - killed} |")
+        name = pkg if pkg.endswith(".py") else pkg + "/"
+        lines.append(f"| {name} | {len(mine)} | {killed} | {len(mine) - killed} |")
     killed = sum(m.status == "killed" for m in done)
     lines.append(f"| all | {len(done)} | {killed} | {len(done) - killed} |")
     lines += ["", "| survivor | line | before → after | verdict |", "|---|---:|---|---|"]
@@ -346,11 +404,24 @@ def report(mutants: list[Mutant]) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--run", choices=sorted(RUNS), default="physics",
+                    help="physics: geometry/, magnetics/, mrclutch/haptics/ (the default); "
+                    "round: the last two rounds' modules and the CLI's formatting and "
+                    "plots, without the doc-figure tests")  # fmt: skip
+    ap.add_argument(
+        "--tree",
+        choices=("work", "head"),
+        default="work",
+        help="run on a copy of the working tree (default) or of HEAD's commit",
+    )
+    ap.add_argument("--without", nargs="*", default=[], metavar="TEST_FILE",
+                    help="test files left out of the run too (e.g. tests just added, for the "
+                    "survival before them)")  # fmt: skip
     ap.add_argument("--sample", type=int, default=200)
     ap.add_argument("--seed", type=int, default=35)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--timeout", type=float, default=240.0, help="s per stage-1 run")
-    ap.add_argument("--out", type=Path, default=ROOT / "benchmarks/data/mutation.json")
+    ap.add_argument("--out", type=Path, default=None, help="default: the run's")
     ap.add_argument("--list", action="store_true", help="print the sample, run nothing")
     ap.add_argument("--report", action="store_true", help="print the table of --out")
     ap.add_argument("--summary", action="store_true", help="print --out's counts as JSON")
@@ -358,10 +429,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--coverage",
         type=Path,
-        default=ROOT / "benchmarks/data/mutation.coverage",
-        help="per-test coverage map (built first if missing)",
+        default=None,
+        help="per-test coverage map (built first if missing; default: the run's)",
     )
     args = ap.parse_args(argv)
+    _RUN.clear()
+    _RUN.update(RUNS[args.run])
+    args.out = args.out or ROOT / _RUN["out"]
+    args.coverage = args.coverage or ROOT / _RUN["coverage"]
+    IGNORED.extend(args.without)
     if args.report or args.summary:
         got = [Mutant(**d) for d in json.loads(args.out.read_text())["mutants"]]
         print(json.dumps(summary(got)) if args.summary else report(got))
@@ -377,6 +453,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{len(sample)} of {len(everything)} candidate mutants")
         return 0
     t0 = time.perf_counter()
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, text=True,
+                            capture_output=True, check=False).stdout.strip()  # fmt: skip
+    _SOURCE.update(tree=args.tree, commit=commit or "HEAD")
+    if args.tree == "work":
+        commit += " + working tree"
     if not args.coverage.exists():  # the unmutated suite once: the baseline and the map
         base = _worker_tree()
         build_coverage(base, args.coverage)
@@ -404,6 +485,9 @@ def main(argv: list[str] | None = None) -> int:
             args.out.write_text(
                 json.dumps(
                     {
+                        "run": args.run,
+                        "commit": commit,
+                        "ignored": list(IGNORED),
                         "candidates": len(everything),
                         "seed": args.seed,
                         "mutants": [asdict(x) for x in done],
