@@ -35,8 +35,9 @@ from geometry.cad import (
     tessellate,
 )
 from geometry.mass import check_mesh
-from geometry.materials import DEFAULT_CHOICE, LABEL, MaterialChoice
+from geometry.materials import DEFAULT_CHOICE, DENSITY_RANGE, LABEL, MaterialChoice
 from geometry.params import DrumClutch
+from geometry.reading import read_json
 from geometry.section import build_section
 from geometry.validation import ParameterError, check_positive
 
@@ -174,16 +175,20 @@ def read_materials(step: str | os.PathLike[str]) -> dict[str, dict[str, Any]] | 
     """The sidecar of ``step`` as solid label -> entry, or None when there is none; a
     sidecar that cannot be read or lacks a density raises ParameterError (one line)."""
     path = sidecar_path(step)
-    if not path.is_file():
+    if not os.path.lexists(path):
         return None
+    doc = read_json(path, "materials sidecar")  # regular, bounded, UTF-8 (geometry.reading)
     try:
-        doc = json.loads(path.read_bytes())
         solids = doc["solids"]
         out = {}
         for e in solids:
             rho, vol = float(e["density_kg_m3"]), float(e["volume_mm3"])
             if not (math.isfinite(rho) and rho > 0 and math.isfinite(vol) and vol > 0):
                 raise ValueError(f"solid {e['name']}: density {rho}, volume {vol}")
+            lo, hi = DENSITY_RANGE
+            if not lo <= rho <= hi:
+                raise ParameterError(f"{path}: solid {e['name']}: density_kg_m3 = {rho:g}: "
+                                     f"must be in [{lo:g}, {hi:g}] kg/m³")  # fmt: skip
             out[str(e["name"])] = {**e, "density_kg_m3": rho, "volume_mm3": vol}
     except (OSError, ValueError, KeyError, TypeError) as exc:
         raise ParameterError(f"{path}: not a materials sidecar ({exc})") from None

@@ -17,13 +17,13 @@ from __future__ import annotations
 
 import math
 import re
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
+from geometry.reading import read_toml
 from geometry.validation import ParameterError
 
 STEEL = "steel_1018"  # the default magnetic yoke and the drums' active zones
@@ -53,6 +53,9 @@ LABEL: Mapping[str, str] = MappingProxyType(_LABEL)
 COLOUR: Mapping[str, tuple[float, float, float]] = MappingProxyType(_COLOUR)
 #: The kind of every registered material (``KINDS``).
 KIND: Mapping[str, str] = MappingProxyType(_KIND)
+#: kg/m³ a material's density may take (our plausibility bound: above every element's
+#: density, below any solid's); a material file, a sidecar or --density outside is refused
+DENSITY_RANGE = (1.0, 3e4)
 DENSITY_COPPER = 8960.0  # [materials]
 DENSITY_EPOXY = 1200.0  # bonding epoxy of an epoxy-bonded coil (typical 1.1–1.3 g/cm³)
 
@@ -82,7 +85,7 @@ def check_record(rec: Mapping[str, Any], where: str) -> dict[str, Any]:
     if kind not in KINDS:
         raise ParameterError(f"{where}: kind = {kind!r}: must be one of {', '.join(KINDS)}")
     out = dict(rec)
-    out["density"] = _number(where, "density", rec.get("density"), 1.0, 3e4)
+    out["density"] = _number(where, "density", rec.get("density"), *DENSITY_RANGE)
     out["conductivity"] = _number(where, "conductivity", rec.get("conductivity"), 0.0, 1e9)
     out["specific_heat"] = _number(where, "specific_heat", rec.get("specific_heat"), 1.0, 1e5)
     out["thermal_conductivity"] = _number(
@@ -119,8 +122,7 @@ def register(rec: Mapping[str, Any], where: str, builtin: bool = False) -> str:
 
 def _load_builtin() -> None:
     for path in sorted(DATA.glob("*.toml")):
-        with path.open("rb") as f:
-            rec = tomllib.load(f)
+        rec = read_toml(path, "material file")
         if rec.get("name") != path.stem:
             raise ParameterError(
                 f"{path.name}: name = {rec.get('name')!r}: must be the file's stem"

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import functools
 import math
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,6 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from geometry.materials import COIL, KIND, MRF, RECORDS, STAINLESS, STEEL, check_record, register
+from geometry.reading import read_toml
 from geometry.validation import ParameterError, check_positive, check_range
 
 MU0 = 4e-7 * math.pi  # vacuum permeability, H/m (pre-2019 SI value; differs by 5e-10)
@@ -485,13 +485,7 @@ def load_fluid(path: str | Path) -> str:
     registry under its ``name``. Returns the name."""
     p = Path(path)
     where = p.name
-    try:
-        with p.open("rb") as f:
-            rec = tomllib.load(f)
-    except OSError as e:
-        raise ParameterError(f"{where}: cannot read the fluid file ({e.strerror})") from None
-    except tomllib.TOMLDecodeError as e:
-        raise ParameterError(f"{where}: not valid TOML ({e})") from None
+    rec = read_toml(p, "fluid file")  # regular, bounded, UTF-8, nesting (geometry.reading)
     rec = {"kind": "fluid", "conductivity": 0.0, **rec}
     if rec["kind"] != "fluid":
         raise ParameterError(f"{where}: kind = {rec['kind']!r}: a fluid file must be a fluid")

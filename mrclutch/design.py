@@ -99,6 +99,7 @@ from mrclutch.uncertainty import (
     PAPER_BENCH,
     Measured,
     Uncertainty,
+    check_consistent,
     default_uncertainty,
     measured_from_mapping,
     measured_to_toml,
@@ -400,6 +401,7 @@ def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> Clutc
     if "measured" in data:
         meas = measured_from_mapping(data["measured"], f"{where}: measured", source=str(where))
         design = replace(design, measured=meas)
+    check_consistent(design, where)  # ranges against the gap and their nominal values
     return design
 
 

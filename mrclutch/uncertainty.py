@@ -109,6 +109,9 @@ class Uncertainty:
             if self.delay[1] > 1.0:
                 raise ParameterError(f"delay = {list(self.delay)} s: must be <= 1 s")
         _check_range("bench_damping", *self.bench_damping, " N·s/m")
+        if self.bench_damping[1] > MEASURED_RANGES["b1"][1]:  # as a bench's b1
+            raise ParameterError(f"bench_damping = {list(self.bench_damping)} N·s/m: must be "
+                                 f"<= {MEASURED_RANGES['b1'][1]:g} N·s/m")  # fmt: skip
 
     @property
     def torque_factor(self) -> tuple[float, float]:
@@ -118,6 +121,30 @@ class Uncertainty:
             (1 - self.yield_stress_spread) * (1 - self.bh_spread),
             (1 + self.yield_stress_spread) * (1 + self.bh_spread),
         )
+
+
+#: Most torque points a bench table may hold.
+MAX_TORQUE_POINTS = 1000
+#: What a bench value may be (SI): (low, high] and the unit. Our plausibility bounds, each
+#: orders of magnitude around the paper's bench ([lebel]: 0.4 N·m at 7 A, m1 = 1.5 g,
+#: b1 = 1 N·s/m, 1 ms), wide enough for any haptic clutch and narrow enough that every
+#: model stays finite (a 1e300 N·m torque gave K = 8.6e302 N/m and NaN in the robust table).
+MEASURED_RANGES: dict[str, tuple[float, float, str]] = {
+    "current": (0.0, 1e4, " A"),  # as Operating.max_current
+    "torque": (0.0, 1e3, " N·m"),
+    "step_delay": (0.0, 1.0, " s"),  # as Operating.delay (MAX_DELAY)
+    "m1": (1e-6, 100.0, " kg"),
+    "b1": (1e-6, 1e4, " N·s/m"),  # as the transmission's b (1e4 N·s/m)
+    "off_state_torque": (0.0, 1e3, " N·m"),
+}
+
+
+def _check_bench(name: str, v: float, lo: float, hi: float, unit: str) -> None:
+    """``v`` finite in (lo, hi] (lo = 0) or [lo, hi] (lo > 0), else the error naming it."""
+    inside = (v > lo if lo == 0 else v >= lo) and v <= hi
+    if not (math.isfinite(v) and inside):
+        lb = "(" if lo == 0 else "["
+        raise ParameterError(f"{name} = {v:g}{unit}: must be in {lb}{lo:g}, {hi:g}]{unit}")
 
 
 @dataclass(frozen=True)
@@ -141,18 +168,25 @@ class Measured:
     source: str = ""
 
     def __post_init__(self) -> None:
+        if len(self.torque) > MAX_TORQUE_POINTS:
+            raise ParameterError(f"torque: {len(self.torque)} points: at most "
+                                 f"{MAX_TORQUE_POINTS}")  # fmt: skip
         for i, pt in enumerate(self.torque):
-            if not (math.isfinite(pt.current) and pt.current > 0):
-                raise ParameterError(f"torque[{i}].current = {pt.current:g} A: must be > 0")
-            if not (math.isfinite(pt.torque) and pt.torque > 0):
-                raise ParameterError(f"torque[{i}].torque = {pt.torque:g} N·m: must be > 0")
-        for name, unit in (("step_delay", " s"), ("m1", " kg"), ("b1", " N·s/m"),
-                           ("off_state_torque", " N·m")):  # fmt: skip
+            for name, v in (("current", pt.current), ("torque", pt.torque)):
+                _check_bench(f"torque[{i}].{name}", v, *MEASURED_RANGES[name])
+            # two torques at one current: which one the model uses would be first-come
+            j = next((j for j, q in enumerate(self.torque[:i])
+                      if math.isclose(q.current, pt.current, rel_tol=1e-9)), None)  # fmt: skip
+            if j is not None:
+                raise ParameterError(
+                    f"torque[{i}].current = {pt.current:g} A: torque[{j}] is at the same "
+                    f"current ({self.torque[j].torque:g} and {pt.torque:g} N·m); give one "
+                    "torque per current (their mean, say)"
+                )
+        for name in ("step_delay", "m1", "b1", "off_state_torque"):
             v = getattr(self, name)
-            if v is not None and not (math.isfinite(v) and v > 0):
-                raise ParameterError(f"{name} = {v:g}{unit}: must be > 0")
-        if self.step_delay is not None and self.step_delay > 1.0:
-            raise ParameterError(f"step_delay = {self.step_delay:g} s: must be <= 1 s")
+            if v is not None:
+                _check_bench(name, v, *MEASURED_RANGES[name])
 
     @property
     def empty(self) -> bool:
@@ -269,7 +303,75 @@ def measured_from_mapping(table: Mapping[str, Any], where: str = "measured",
     try:
         return Measured(**kw)
     except ParameterError as exc:
+        name = str(exc).split(" ", 1)[0]  # the field, told with the file's key first
+        key = next((k for k, v in _MEASURED_KEYS.items() if v[0] == name and k in table), None)
+        if key is not None:
+            raise ParameterError(f"{where}.{key} = {table[key]!r}: {exc}") from None
         raise ParameterError(f"{where}: {exc}") from None
+
+
+def check_consistent(design: Any, where: str = "design") -> None:
+    """A design file's ranges checked against the design and each other (ParameterError
+    naming the keys, the values and the rule):
+
+    * ``[uncertainty]`` and ``[process]``: runout plus tolerance must stay below the gap
+      (the film's thinnest point g − (R + T), ``mrclutch.process``; beyond it the film
+      closes and the drag's 1/h has no value), the drum-wall tolerance below the wall;
+    * a declared range must contain its nominal value — the fluid temperature range the
+      operating temperature (and lie in the fluid's own range), the delay range the typed
+      delay (``delay_source = "fixed"``, no measured delay used) — or the robust verdict
+      ("for every value of the ranges") would not contain the nominal verdict beside it.
+    """
+    gap = float(design.clutch.gap)
+    wall = float(design.clutch.drum_thickness)
+    proc = design.process
+    if proc.runout + proc.tolerance >= gap:
+        raise ParameterError(
+            f"{where}: process.runout_mm + process.tolerance_mm = {proc.runout * 1e3:g} + "
+            f"{proc.tolerance * 1e3:g} mm: must be less than the gap ({gap * 1e3:g} mm): the "
+            "film's thinnest point g - (runout + tolerance) would close"
+        )
+    u = design.uncertainty
+    if u is None:
+        return
+    w = f"{where}: uncertainty"
+    if u.runout + u.gap_tolerance >= gap:
+        raise ParameterError(
+            f"{w}.runout_mm + gap_tolerance_mm = {u.runout * 1e3:g} + "
+            f"{u.gap_tolerance * 1e3:g} mm: must be less than the gap ({gap * 1e3:g} mm): "
+            "the thinnest film would close (every geometry corner beyond it is void)"
+        )
+    if u.drum_thickness_tolerance >= wall:
+        raise ParameterError(
+            f"{w}.drum_thickness_tolerance_mm = {u.drum_thickness_tolerance * 1e3:g}: must "
+            f"be less than the drum wall ({wall * 1e3:g} mm)"
+        )
+    if u.fluid_temperature is not None:
+        lo, hi = u.fluid_temperature
+        t = float(design.operating.fluid_temperature)
+        flo, fhi = FLUIDS[design.materials.fluid].temperature_range
+        if not lo <= t <= hi:
+            raise ParameterError(
+                f"{w}.fluid_temperature_C = [{lo:g}, {hi:g}]: must contain the operating "
+                f"temperature ({t:g} °C), where the nominal verdict is computed; widen it "
+                f"to [{min(lo, t):g}, {max(hi, t):g}]"
+            )
+        if lo < flo or hi > fhi:
+            raise ParameterError(
+                f"{w}.fluid_temperature_C = [{lo:g}, {hi:g}]: must lie in the fluid's range "
+                f"[{flo:g}, {fhi:g}] °C ({design.materials.fluid})"
+            )
+    meas = design.measured
+    measured_delay = meas is not None and meas.use_in_model and meas.step_delay is not None
+    if u.delay is not None and design.operating.delay_source == "fixed" and not measured_delay:
+        lo, hi = u.delay
+        d = float(design.operating.delay)
+        if not lo <= d <= hi:
+            raise ParameterError(
+                f"{w}.delay_ms = [{lo * 1e3:g}, {hi * 1e3:g}]: must contain the typed delay "
+                f"({d * 1e3:g} ms), where the nominal verdict is computed; widen it to "
+                f"[{min(lo, d) * 1e3:g}, {max(hi, d) * 1e3:g}]"
+            )
 
 
 #: °C the default fluid temperature range reaches above the operating value.

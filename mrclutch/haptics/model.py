@@ -73,6 +73,9 @@ from mrclutch.haptics.actuator import HapticParams
 
 #: Most frequencies one step of the crossing search may take (memory: 8 bytes each).
 MAX_GRID = 2_000_000
+#: Most live intervals one design's bandwidth search bisects (the paper's design needs
+#: under 100): past it the design's bandwidth is left NaN (unresolved) — a guard on memory.
+MAX_BRACKETS = 4096
 
 __all__ = [
     "BAND_HZ",
@@ -404,6 +407,13 @@ def bandwidth(p: HapticParams, K: Any, *, rtol: float = 1e-8) -> Any:
         split = keep & ~ok & ~tiny
         if not split.any():
             break
+        # the guard on memory: a design whose live intervals pass MAX_BRACKETS (parameters
+        # far outside any device: a 1e-300 kg m1) is left unresolved (NaN), not bisected on
+        live = np.bincount(d[keep], minlength=idx.size)
+        over = live > MAX_BRACKETS
+        if over.any():
+            keep &= ~over[d]
+            split &= ~over[d]
         stay = keep & ~split
         ds = d[split]
         mid = 0.5 * (a[split] + bb[split])

@@ -188,7 +188,7 @@ def test_other_currents_compared_with_the_network(tmp_path):
         ("[uncertainty]\ngap_mm = 1", "uncertainty.gap_mm: unknown key"),
         ("[measured]\ntorque = [{torque_N_m = 0.4}]", "torque[0]: no current_A"),
         ("[measured]\ntorque = [{current_A = -7, torque_N_m = 0.4}]", "current = -7 A: must be"),
-        ("[measured]\nm1_g = -1", "m1 = -0.001 kg: must be > 0"),
+        ("[measured]\nm1_g = -1", "measured.m1_g = -1: m1 = -0.001 kg: must be in [1e-06, 100] kg"),
         ("[measured]\nuse_in_model = 1", "use_in_model = 1: must be true or false"),
         ("[measured]\nm1 = 1", "measured.m1: unknown key"),
     ],

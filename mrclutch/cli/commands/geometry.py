@@ -28,9 +28,11 @@ from geometry.mass import (
     weigh_mesh,
     weigh_shape,
 )
+from geometry.materials import DENSITY_RANGE
 from geometry.params import DrumClutch
+from geometry.reading import check_regular
 from geometry.section import OUTPUT_PARTS, build_section
-from geometry.validation import ParameterError, check_choice, check_positive
+from geometry.validation import ParameterError, check_choice, check_positive, check_range
 from mrclutch.cli.commands._common import add_design_args, load_clutch, load_design_args, print_json
 from mrclutch.cli.commands.handoff import export_handoff
 from mrclutch.cli.errors import CLIError
@@ -196,7 +198,7 @@ def _densities(
             rho = math.nan
         if not sep or not name:
             raise ParameterError(f"--part-density {item!r}: expected NAME=KG_M3")
-        per[name] = check_positive(f"--part-density {name}", rho, " kg/m³")
+        per[name] = check_range(f"--part-density {name}", rho, *DENSITY_RANGE, " kg/m³")
     unknown = sorted(set(per) - set(names))
     if unknown:
         raise ParameterError(
@@ -207,7 +209,7 @@ def _densities(
         if n in per:
             out[n] = per[n]
         elif args.density is not None:
-            out[n] = check_positive("--density", args.density, " kg/m³")
+            out[n] = check_range("--density", args.density, *DENSITY_RANGE, " kg/m³")
         elif optional:
             continue
         else:
@@ -280,8 +282,7 @@ def _weigh_file(args: argparse.Namespace) -> int:
     path = Path(args.design)
     if args.preset is not None:
         raise CLIError("give either a CAD file or --preset, not both")
-    if not path.is_file():
-        raise ParameterError(f"{path}: not found")
+    check_regular(path, "CAD file")  # a FIFO, device or directory refused by name; size cap
     results: dict[str, dict[str, Any]] = {}
     if path.suffix.lower() == ".stl":
         import trimesh
