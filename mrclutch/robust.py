@@ -37,8 +37,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from geometry import regions
+from geometry.materials import SLOTS, MaterialChoice
 from geometry.numerics import illinois
-from geometry.params import broadcast_fields
 from magnetics.drag import drag_terms, totals
 from magnetics.torque import torque_curve
 from mrclutch.design import ClutchDesign
@@ -51,7 +51,7 @@ from mrclutch.haptics.model import (
     rendering_area,
 )
 from mrclutch.haptics.zwidth import zwidth as zwidth_of
-from mrclutch.pipeline import BatchEvaluator, evaluate_batch, mr_at_hand
+from mrclutch.pipeline import BatchEvaluator, batch_fields, evaluate_batch, mr_at_hand
 from mrclutch.uncertainty import Uncertainty, default_uncertainty
 
 TWO_PI = 2.0 * math.pi
@@ -246,9 +246,12 @@ def _hand_of(rows: Mapping[str, np.ndarray], base: Any) -> tuple[np.ndarray, ...
 
 
 def _temperature_factors(p: Mapping[str, np.ndarray], ok: np.ndarray, base: Any,
-                         temps: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+                         temps: tuple[float, float],
+                         mats: MaterialChoice | np.ndarray | None = None,
+                         ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """(low, high) of the drag damping over the fluid temperature range, relative to its
-    value at the operating temperature (η(T) monotone: the range's ends bound it)."""
+    value at the operating temperature (η(T) monotone: the range's ends bound it);
+    ``mats``: the rows' materials (None: the base design's)."""
     op = base.operating
 
     def fn(rg: Any, rows: np.ndarray) -> dict[str, Any]:
@@ -256,7 +259,7 @@ def _temperature_factors(p: Mapping[str, np.ndarray], ok: np.ndarray, base: Any,
              for t in (op.fluid_temperature, *temps)]  # fmt: skip
         return {"lo": d[1] / d[0], "hi": d[2] / d[0]}
 
-    f = regions.per_topology(p, ok, fn, base.materials)
+    f = regions.per_topology(p, ok, fn, base.materials if mats is None else mats)
     return np.fmin(f["lo"], f["hi"]), np.fmax(f["lo"], f["hi"])
 
 
@@ -282,8 +285,11 @@ def hand_box_batch(
     ``nominal``: ``evaluate_batch(fields, base)``'s rows if already computed."""
     base = base if base is not None else ClutchDesign()
     unc = uncertainty if uncertainty is not None else default_uncertainty(base)
-    p = broadcast_fields(fields, base.clutch)
-    rows0 = nominal if nominal is not None else evaluate_batch(p, base)
+    p, mats = batch_fields(fields, base)  # a material column: per row (issue 45)
+    names = {}  # the material columns, one name a row, for the corners' fast-path runs
+    if not isinstance(mats, MaterialChoice):
+        names = {k: np.array([getattr(m, k) for m in mats], object) for k in SLOTS if k in fields}
+    rows0 = nominal if nominal is not None else evaluate_batch({**p, **names}, base)
     m1_0, b1_0, f_0, teq_0, ok = _hand_of(rows0, base)
     stack = [x[None] for x in (m1_0, b1_0, f_0, teq_0)]
     if unc.gap_tolerance > 0 or unc.drum_thickness_tolerance > 0:
@@ -293,7 +299,7 @@ def hand_box_batch(
             for dg in (-unc.gap_tolerance, unc.gap_tolerance)
             for dt in (-unc.drum_thickness_tolerance, unc.drum_thickness_tolerance)
         ]
-        q = {k: np.tile(v, 4) for k, v in p.items()}
+        q = {k: np.tile(v, 4) for k, v in {**p, **names}.items()}
         q["gap"] = np.concatenate([p["gap"] + dg for dg, _ in corners])
         q["drum_thickness"] = np.concatenate([p["drum_thickness"] + dt for _, dt in corners])
         hand = _hand_of(evaluate_batch(q, base), base)[:4]
@@ -305,7 +311,7 @@ def hand_box_batch(
     op = base.operating
     t_lo, t_hi = unc.fluid_temperature if unc.fluid_temperature is not None else (
         op.fluid_temperature, op.fluid_temperature)  # fmt: skip
-    ft_lo, ft_hi = _temperature_factors(p, ok, base, (t_lo, t_hi))
+    ft_lo, ft_hi = _temperature_factors(p, ok, base, (t_lo, t_hi), mats)
     g = p["gap"]
     runout = g / np.sqrt(np.maximum(g * g - unc.runout**2, 1e-30))  # e < g: the drums clear
     b1_lo = b1_lo * (1 - unc.viscosity_spread) * ft_lo + unc.bench_damping[0]

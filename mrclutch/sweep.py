@@ -21,15 +21,19 @@ evaluate the chunks.
 
 from __future__ import annotations
 
+import csv
 import errno
 import fcntl
+import functools
 import hashlib
+import importlib.util
 import json
 import math
 import mmap
 import os
 import re
 import signal
+import tempfile
 import threading
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -42,6 +46,7 @@ from typing import Any
 import numpy as np
 
 from geometry.atomic import OutputError, atomic_path, output_error, write_bytes, write_text
+from geometry.materials import DATA as MATERIAL_DATA
 from geometry.materials import SLOTS, MaterialChoice
 from geometry.params import INT_RANGES, INTEGER_FIELDS, LENGTH_FIELDS, DrumClutch, preset
 from geometry.validation import ParameterError, check_int
@@ -59,8 +64,8 @@ MAX_DESIGNS = 10**8
 @dataclass(frozen=True)
 class ParamRange:
     """One swept DrumClutch field (SI). Either explicit ``values`` or [lo, hi] with a count;
-    or a categorical axis, a part's material (``categories``: registry names; its values are
-    indices into them, ``{name}_index`` in the output)."""
+    or a categorical axis, a part's material (``categories``: registry names; ``chunk``
+    gives indices into them, ``design_fields`` and the output the names themselves)."""
 
     name: str
     lo: float
@@ -76,9 +81,9 @@ class ParamRange:
     @property
     def column(self) -> str:
         """CSV column: lengths in mm with the unit in the name, integers as they are, a
-        material as its index into ``categories``."""
+        material under the part's name (``fluid``), its values the registry names."""
         if self.categories:
-            return f"{self.name}_index"
+            return self.name
         return self.name if self.integer else f"{self.name}_mm"
 
     def named(self, values: np.ndarray) -> np.ndarray:
@@ -104,9 +109,46 @@ class ParamRange:
         return rng.uniform(self.lo, self.hi, size=n)
 
 
+#: Material files loaded in this process from their bytes (``MaterialFile.ensure``):
+#: registry name → SHA-256 of the bytes.
+_LOADED: dict[str, str] = {}
+
+
+@dataclass(frozen=True)
+class MaterialFile:
+    """A user's material file a spec names (``[materials] fluid_file``, or a ``.toml``
+    value of a fluid axis): the path as the spec writes it, the registry name it loads as
+    and its bytes. The bytes travel with the spec to every worker (a Dask worker never read
+    the file: ``ensure``) and into the resume fingerprint (``SweepSpec.input_digests``)."""
+
+    written: str
+    name: str
+    data: bytes = field(repr=False)
+
+    @property
+    def digest(self) -> str:
+        return hashlib.sha256(self.data).hexdigest()
+
+    def ensure(self) -> None:
+        """The file's fluid registered in this process from the bytes, unless these very
+        bytes already were (a long-lived worker may hold an older version of the file)."""
+        if _LOADED.get(self.name) == self.digest:
+            return
+        from magnetics.materials import load_fluid
+
+        with tempfile.TemporaryDirectory() as folder:
+            copy = Path(folder) / Path(self.written).name  # messages name the user's file
+            write_bytes(copy, self.data)
+            load_fluid(copy)
+        _LOADED[self.name] = self.digest
+
+
 @dataclass(frozen=True)
 class SweepSpec:
-    """What to sweep: the base design, the ranges, grid or random, and the chunk size."""
+    """What to sweep: the base design, the ranges, grid or random, and the chunk size;
+    ``inputs``: (what, SHA-256) of every other input the spec file gives (its sections:
+    ``load_spec``), ``material_files``: the user's material files it names. Both enter the
+    fingerprint a resume checks."""
 
     params: tuple[ParamRange, ...]
     mode: str = "grid"
@@ -114,6 +156,8 @@ class SweepSpec:
     seed: int = 0
     base: DrumClutch = field(default_factory=DrumClutch)
     chunk_size: int = DEFAULT_CHUNK
+    inputs: tuple[tuple[str, str], ...] = ()
+    material_files: tuple[MaterialFile, ...] = ()
 
     def __post_init__(self) -> None:
         if self.mode not in ("grid", "random"):
@@ -145,8 +189,16 @@ class SweepSpec:
     def columns(self) -> tuple[str, ...]:
         return tuple(p.column for p in self.params)
 
+    def input_digests(self) -> dict[str, str]:
+        """What → SHA-256 of each input beyond the parameters: the spec's sections
+        (``inputs``) and the contents of each material file it names."""
+        files = {f"material file {m.written}": m.digest for m in self.material_files}
+        return {**dict(self.inputs), **files}
+
     def fingerprint(self) -> str:
-        """A hash of everything that decides the rows (not the chunk size's effect on order)."""
+        """A hash of everything in the spec that decides the rows: the sweep, its ranges and
+        base, every section of the spec file and the material files it names (the model's
+        version is recorded beside it: ``model_version``)."""
         desc = {
             "params": [(p.name, p.lo, p.hi, p.count, p.values, *p.categories) for p in self.params],
             "mode": self.mode,
@@ -154,8 +206,21 @@ class SweepSpec:
             "seed": self.seed,
             "base": self.base.to_mm(),
             "chunk_size": self.chunk_size,
+            "inputs": self.input_digests(),
         }
         return hashlib.sha256(json.dumps(desc, sort_keys=True).encode()).hexdigest()[:16]
+
+    def ensure_materials(self) -> None:
+        """The user's material files registered in this process (a worker's first chunk)."""
+        for m in self.material_files:
+            m.ensure()
+
+    def design_fields(self, k: int) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """``chunk(k)`` as an evaluator takes it: a material axis as its registry names (an
+        object array), the other fields SI."""
+        ids, fields = self.chunk(k)
+        named = {p.name: p.named(fields[p.name]) for p in self.params if p.categories}
+        return ids, {**fields, **named}
 
     def chunk(self, k: int) -> tuple[np.ndarray, dict[str, np.ndarray]]:
         """Design ids and DrumClutch field arrays (SI) of chunk k."""
@@ -253,15 +318,81 @@ def _number(name: str, v: Any) -> float:
     return float(v)
 
 
+#: Spec sections the sweep has no use for, refused (never silently ignored) with the reason.
+UNUSED_SECTIONS = {
+    "measured": "a bench's figures belong to one built device, and a sweep varies the design "
+    "(its rows are the model's); evaluate the built design's file to compare or use them",
+    "process": "the sweep does not apply the builder's limits (the smallest gap and wall); "
+    "mrclutch optimize does",
+}
+
+
+def _digest_of(value: Any) -> str:
+    """SHA-256 of a parsed TOML value (its canonical JSON: keys sorted; dates as text)."""
+    text = json.dumps(value, sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _material_file(spec_path: Path, written: str, where: str) -> MaterialFile:
+    """A fluid file the spec names (relative to the spec's folder), read and registered."""
+    from magnetics.materials import load_fluid
+
+    path = Path(written) if Path(written).is_absolute() else spec_path.parent / written
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise ParameterError(f"{where} = {written!r}: cannot read it ({exc.strerror})") from None
+    name = load_fluid(path)
+    m = MaterialFile(written, name, data)
+    _LOADED[name] = m.digest
+    return m
+
+
+def _material_files(data: dict[str, Any], p: Path) -> list[MaterialFile]:
+    """The user's material files of a spec: ``[materials] fluid_file`` and the ``.toml``
+    values of a fluid axis (each replaced in ``data`` by the name it registers)."""
+    files: list[MaterialFile] = []
+    mats = data.get("materials")
+    if isinstance(mats, dict) and isinstance(mats.get("fluid_file"), str):
+        files.append(_material_file(p, mats["fluid_file"], f"{p}: materials.fluid_file"))
+    axis = data["parameters"].get("fluid")
+    if isinstance(axis, dict) and isinstance(axis.get("values"), list):
+        values = []
+        for v in axis["values"]:
+            if isinstance(v, str) and v.lower().endswith(".toml"):
+                files.append(_material_file(p, v, f"{p}: fluid.values"))
+                v = files[-1].name
+            values.append(v)
+        data["parameters"] = {**data["parameters"], "fluid": {**axis, "values": values}}
+    names: dict[str, MaterialFile] = {}
+    for m in files:
+        if m.name in names and names[m.name].data != m.data:
+            raise ParameterError(f"{p}: {names[m.name].written} and {m.written} both define "
+                                 f"the fluid {m.name!r} differently; rename one")  # fmt: skip
+        names[m.name] = m
+    return files
+
+
 def load_spec(path: str | Path) -> tuple[SweepSpec, dict[str, Any]]:
     """Read a sweep spec file: ``[sweep]`` (mode, samples, seed, base, chunk_size),
-    ``[parameters]``; the other tables (``[operating]``, ``[transmission]``) are returned
-    for the design layer to read."""
+    ``[parameters]``, ``[clutch]`` (fixed dimensions over the base preset); the other
+    tables (``[operating]``, ``[transmission]``, ``[materials]`` …) are returned for the
+    design layer to read. Every section enters the spec's fingerprint (``inputs``), with
+    the contents of the material files it names; a section the sweep cannot use
+    (``UNUSED_SECTIONS``) is refused."""
     p = Path(path)
     data = read_toml(p, "sweep spec")
     for table in ("sweep", "parameters"):
         if table not in data or not isinstance(data[table], dict):
             raise ParameterError(f"sweep spec {p}: missing the [{table}] table")
+    for table, why in UNUSED_SECTIONS.items():
+        if table in data:
+            raise ParameterError(f"{p}: [{table}]: not used by a sweep ({why}); remove it")
+    inputs = {f"[{k}]": _digest_of(v) for k, v in data.items() if isinstance(v, dict)}
+    top = {k: v for k, v in data.items() if not isinstance(v, dict)}
+    if top:
+        inputs["top-level keys"] = _digest_of(top)
+    files = _material_files(data, p)
     sw = dict(data["sweep"])
     known = {"mode", "samples", "seed", "base", "chunk_size"}
     bad = sorted(set(sw) - known)
@@ -272,10 +403,33 @@ def load_spec(path: str | Path) -> tuple[SweepSpec, dict[str, Any]]:
     if not isinstance(base_name, str):
         raise ParameterError(f"{p}: sweep.base = {base_name!r}: must be a preset name")
     base = preset(base_name)
+    if "clutch" in data:  # fixed dimensions over the base preset
+        table = data["clutch"]
+        if not isinstance(table, dict) or "base" in table:
+            raise ParameterError(f"{p}: [clutch]: dimensions (in mm) over the base preset; "
+                                 "the preset itself is [sweep] base")  # fmt: skip
+        base = DrumClutch.from_mm(dict(table), base=base, where=f"{p}: clutch")
     params = parse_parameters(data["parameters"], mode, str(p))
-    spec = SweepSpec(params, mode=mode, base=base, **sw)
-    rest = {k: v for k, v in data.items() if k not in ("sweep", "parameters")}
+    spec = SweepSpec(params, mode=mode, base=base, **sw, inputs=tuple(sorted(inputs.items())),
+                     material_files=tuple(files))  # fmt: skip
+    rest = {k: v for k, v in data.items() if k not in ("sweep", "parameters", "clutch")}
     return spec, rest
+
+
+@functools.lru_cache(maxsize=1)
+def model_version() -> str:
+    """The model that writes a sweep's rows: the installed mrclutch's version and a digest
+    of the data its models read (the error map, the materials library). A resume of rows
+    another model wrote is refused (``run_sweep``)."""
+    import mrclutch
+
+    found = importlib.util.find_spec("magnetics")
+    folders = [Path(f) / "data" for f in (found.submodule_search_locations or [])] if found else []
+    digest = hashlib.sha256()
+    for f in sorted([*MATERIAL_DATA.glob("*.toml"), *(x for d in folders for x in d.glob("*"))]):
+        if f.is_file():
+            digest.update(f.name.encode() + b"\0" + f.read_bytes())
+    return f"mrclutch {mrclutch.__version__}, model data {digest.hexdigest()[:12]}"
 
 
 @dataclass(frozen=True)
@@ -324,14 +478,32 @@ def is_parquet(out: str | Path) -> bool:
 
 def read_results(path: str | Path) -> dict[str, np.ndarray]:
     """A sweep's CSV (or Parquet dataset, a folder ending in .parquet) as columns of floats
-    (empty cells → NaN)."""
+    (empty cells → NaN); a material column (named by its part: ``fluid``, ``SLOTS``) as its
+    names, an object array."""
     if is_parquet(path):
+        import pyarrow as pa
         import pyarrow.parquet as pq
 
         table = pq.read_table(path)
-        return {name: table[name].to_numpy().astype(float) for name in table.column_names}
-    data = np.genfromtxt(path, delimiter=",", names=True, dtype=float, ndmin=1)
-    return {name: np.atleast_1d(data[name]) for name in data.dtype.names}
+        out = {}
+        for name in table.column_names:
+            col = table[name]
+            if pa.types.is_dictionary(col.type) or pa.types.is_string(col.type):
+                out[name] = np.asarray(col.to_pylist(), dtype=object)
+            else:
+                out[name] = col.to_numpy().astype(float)
+        return out
+    with open(path, newline="", encoding="utf-8") as f:
+        header = next(csv.reader(f), [])
+    if not any(h in SLOTS for h in header):
+        data = np.genfromtxt(path, delimiter=",", names=True, dtype=float, ndmin=1)
+        return {name: np.atleast_1d(data[name]) for name in data.dtype.names}
+    with open(path, newline="", encoding="utf-8") as f:
+        rows = list(csv.reader(f))[1:]
+    cols = list(zip(*rows, strict=True)) if rows else [()] * len(header)
+    return {h: np.asarray(c, dtype=object) if h in SLOTS else
+            np.array([float(x) if x else math.nan for x in c], dtype=float)
+            for h, c in zip(header, cols, strict=True)}  # fmt: skip
 
 
 def _meta_path(out: Path) -> Path:
@@ -343,10 +515,30 @@ def _meta(spec: SweepSpec, outputs: Sequence[str]) -> dict[str, Any]:
     return {
         "fingerprint": spec.fingerprint(),
         "n_designs": spec.n_designs,
+        "outputs": list(outputs),
         "columns": describe([k for k in outputs if k in OUTPUTS]),  # units and meanings
-        # a material axis' column holds indices into these names
+        # a material axis' column holds these names (a Parquet dictionary column)
         "categories": {p.column: list(p.categories) for p in spec.params if p.categories},
+        "inputs": spec.input_digests(),  # what changed, when a resume is refused
+        "model": model_version(),
     }
+
+
+def _what_changed(old: dict[str, Any], meta: dict[str, Any]) -> list[str]:
+    """What differs between the record of an earlier run and this one's (empty: nothing)."""
+    if all(old.get(k) == v for k, v in meta.items()):
+        return []
+    was = old.get("inputs")
+    if not isinstance(was, dict):
+        return ["its record names none of the spec's sections (an older mrclutch wrote it)"]
+    now = meta["inputs"]
+    what = [f"{k} {'added' if k not in was else 'removed' if k not in now else 'changed'}"
+            for k in sorted(set(was) | set(now)) if was.get(k) != now.get(k)]  # fmt: skip
+    if old.get("model") != meta["model"]:
+        what.append(f"the model changed (was {old.get('model')}, now {meta['model']})")
+    if old.get("outputs") != meta["outputs"] or old.get("columns") != meta["columns"]:
+        what.append("the output columns differ (--with)")
+    return what or ["the sweep's settings changed"]
 
 
 def _read_or_refuse(path: Path, parse: Callable[[str], Any]) -> Any:
@@ -409,8 +601,11 @@ def output_lock(out: str | Path) -> Iterator[Path]:
             break
         os.close(fd)
     try:
-        os.ftruncate(fd, 0)
-        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        try:  # the holder's pid is a hint for the refusal line; the flock is the lock
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        except OSError:  # a full disk: the work's own writes say so, in one line
+            pass
         yield lock
     finally:
         try:
@@ -688,9 +883,11 @@ def _parquet_part(
     ]
     for p in spec.params:
         meaning = f"swept DrumClutch.{p.name}"
-        if p.categories:
-            meaning = f"swept material of the {p.name}: index into {list(p.categories)}"
-        if p.integer:
+        if p.categories:  # a dictionary column: the names once, an index a row
+            meaning = f"swept material of the {p.name} (registry name)"
+            kind = pa.dictionary(pa.int32(), pa.string())
+            fields.append(pa.field(p.column, kind, metadata={"unit": "", "description": meaning}))
+        elif p.integer:
             fields.append(
                 pa.field(p.column, pa.int64(), metadata={"unit": "1", "description": meaning})
             )
@@ -701,24 +898,41 @@ def _parquet_part(
     for name in outputs:
         fields.append(pa.field(name, pa.float64(), metadata=units.get(name)))
     schema = pa.schema(fields, metadata={"mrclutch.sweep": json.dumps(_meta(spec, outputs))})
-    arrays = [ids, *cols]
-    table = pa.Table.from_arrays(
-        [
-            pa.array(np.asarray(a, dtype=f.type.to_pandas_dtype()))
-            for a, f in zip(arrays, fields, strict=True)
-        ],
-        schema=schema,
-    )
+    arrays = []
+    for a, f, p in zip([ids, *cols], fields, [None, *spec.params, *[None] * len(outputs)],
+                       strict=True):  # fmt: skip
+        if p is not None and p.categories:
+            index = {name: i for i, name in enumerate(p.categories)}
+            codes = np.fromiter((index[x] for x in a), dtype=np.int32, count=len(a))
+            arrays.append(pa.DictionaryArray.from_arrays(codes, pa.array(p.categories)))
+        else:
+            arrays.append(pa.array(np.asarray(a, dtype=f.type.to_pandas_dtype())))
+    table = pa.Table.from_arrays(arrays, schema=schema)
     buf = pa.BufferOutputStream()
     pq.write_table(table, buf)
     return buf.getvalue().to_pybytes()
 
 
 def _format_chunk(ids: np.ndarray, cols: Sequence[np.ndarray]) -> str:
-    """CSV rows of a chunk (NaN written as ``nan``), formatted in one C-level operation."""
-    table = np.column_stack([ids.astype(float), *[np.asarray(c, dtype=float) for c in cols]])
-    row = ",".join(["%d"] + ["%.9g"] * len(cols)) + "\n"
+    """CSV rows of a chunk (NaN written as ``nan``, a material column's names as text),
+    formatted in one C-level operation."""
+    text = [np.asarray(c).dtype == object for c in cols]
+    if not any(text):
+        table = np.column_stack([ids.astype(float), *[np.asarray(c, dtype=float) for c in cols]])
+    else:
+        table = np.empty((ids.size, len(cols) + 1), dtype=object)
+        table[:, 0] = ids
+        for j, (c, t) in enumerate(zip(cols, text, strict=True), start=1):
+            table[:, j] = [csv_text(x) for x in c] if t else np.asarray(c, dtype=float)
+    row = ",".join(["%d"] + ["%s" if t else "%.9g" for t in text]) + "\n"
     return (row * ids.size) % tuple(table.ravel().tolist())
+
+
+def csv_text(name: str) -> str:
+    """A name as one CSV cell (RFC 4180: quoted where it holds a comma, quote or newline)."""
+    if any(c in name for c in ',"\r\n'):
+        return '"' + name.replace('"', '""') + '"'
+    return name
 
 
 def _display(name: str, values: np.ndarray) -> np.ndarray:
@@ -807,8 +1021,14 @@ def _recorded(out: Path, meta: dict[str, Any], spec: SweepSpec, sink: Any
         raise ParameterError(f"{mp}: missing; cannot verify {out}; cannot resume; pass "
                              "--overwrite to start again")  # fmt: skip
     old = _read_or_refuse(mp, json.loads)
-    if not isinstance(old, dict) or {k: old.get(k) for k in meta} != meta:
-        raise ParameterError(f"{out}: written by a different sweep spec; cannot resume")
+    if not isinstance(old, dict):
+        raise ParameterError(f"{mp}: not a sweep's record; cannot resume; pass --overwrite "
+                             "to start again")  # fmt: skip
+    changed = _what_changed(old, meta)
+    if changed:  # its rows and the rest would come from two sets of inputs
+        raise ParameterError(f"{out}: written by a different sweep spec or model "
+                             f"({'; '.join(changed)}); cannot resume; pass --overwrite to "
+                             "start again")  # fmt: skip
     records = old.get("chunks")
     if records is None:
         raise ParameterError(f"{mp}: records no chunk checksums (an older mrclutch wrote "
@@ -900,6 +1120,9 @@ def _run_locked(spec: SweepSpec, out: Path, evaluate: Evaluator, outputs: Sequen
         pass
     except (OSError, OutputError) as exc:
         failed = exc
+    except Exception:  # the evaluator refused a chunk: whole chunks only, or nothing
+        _abandon(out, sink, meta, records, fresh)
+        raise
     finally:
         if bar is not None:
             bar.close()
@@ -907,6 +1130,21 @@ def _run_locked(spec: SweepSpec, out: Path, evaluate: Evaluator, outputs: Sequen
         return _fail(out, sink, meta, records, fresh, failed, start_rows)
     _write_meta(out, meta, records)
     return SweepResult(out, rows, complete, start_rows, tuple(fixed))
+
+
+def _abandon(out: Path, sink: Any, meta: dict[str, Any], records: list[dict[str, Any]],
+             fresh: bool) -> None:  # fmt: skip
+    """The work failed (not the disk): a new output that recorded no chunk is removed (no
+    header-only file left behind); otherwise it is cut back to its recorded chunks."""
+    try:
+        if fresh and not records:
+            sink.remove()
+            _meta_path(out).unlink(missing_ok=True)
+        else:
+            sink.cut(records)
+            _write_meta(out, meta, records)
+    except (OSError, OutputError):  # the error that matters is the one being raised
+        pass
 
 
 def _fail(out: Path, sink: Any, meta: dict[str, Any], records: list[dict[str, Any]],
@@ -933,9 +1171,9 @@ def chunk_rows(
 ) -> tuple[int, bytes, str]:
     """Chunk k evaluated and encoded, as CSV rows or a Parquet file, with its SHA-256 (runs
     in a worker: only the encoded chunk and its checksum return)."""
-    ids, fields = spec.chunk(k)
-    named = {p.name: p.named(fields[p.name]) for p in spec.params if p.categories}
-    res = evaluate({**fields, **named})
+    spec.ensure_materials()  # a worker that never read the user's material files
+    ids, fields = spec.design_fields(k)
+    res = evaluate(fields)
     cols = [fields[p.name] if p.integer else _display(p.name, fields[p.name])
             for p in spec.params]  # fmt: skip
     cols += [res[name] for name in outputs]

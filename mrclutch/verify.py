@@ -4,10 +4,11 @@ error map's reference size, through the same executor as the sweep (one design a
 a Dask cluster runs them in parallel), and tabulates the network's error on each, beside
 the single loop's (``method="circuit"``, solved here one design at a time).
 
-A row's design is rebuilt from the spec and its design id (``SweepSpec.chunk``: the same
-SI fields the sweep evaluated, not the rounded numbers of the file). "max torque" is the
-sweep's: yield + drag at the current limit and the input speed (``clutch_figures``), here
-with the torque by the FEM.
+A row's design is rebuilt from the spec and its design id (``SweepSpec.design_fields``:
+the same SI fields and materials the sweep evaluated, not the rounded numbers of the file);
+a worker registers the spec's material files before it solves (``MaterialFile.ensure``).
+"max torque" is the sweep's: yield + drag at the current limit and the input speed
+(``clutch_figures``), here with the torque by the FEM.
 """
 
 from __future__ import annotations
@@ -22,12 +23,13 @@ from pathlib import Path
 import numpy as np
 
 from geometry.atomic import atomic_path
+from geometry.materials import SLOTS
 from geometry.section import build_section
 from geometry.validation import ParameterError
 from magnetics.error_map import circuit_error
 from magnetics.torque import torque_curve
 from mrclutch.design import ClutchDesign
-from mrclutch.sweep import SweepSpec, read_results
+from mrclutch.sweep import MaterialFile, SweepSpec, read_results
 
 TORQUE = "max_torque_N_m"
 BOUND = "torque_error_bound"
@@ -88,19 +90,26 @@ def top_rows(results: dict[str, np.ndarray], key: str, n: int, maximize: bool) -
 
 
 def design_of(spec: SweepSpec, base: ClutchDesign, design_id: int) -> ClutchDesign:
-    """The sweep's design number ``design_id``: its chunk regenerated (SI fields)."""
+    """The sweep's design number ``design_id``: its chunk regenerated (SI fields, and the
+    materials of a material axis)."""
     if not 0 <= design_id < spec.n_designs:
         raise ParameterError(f"design id {design_id}: not in the sweep (0..{spec.n_designs - 1})")
-    ids, fields = spec.chunk(design_id // spec.chunk_size)
+    ids, fields = spec.design_fields(design_id // spec.chunk_size)
     row = int(design_id - ids[0])
-    values = {k: (int(v[row]) if v.dtype.kind == "i" else float(v[row])) for k, v in fields.items()}
-    return replace(base, clutch=replace(base.clutch, **values))
+    mats = {k: str(v[row]) for k, v in fields.items() if k in SLOTS}
+    dims = {k: (int(v[row]) if v.dtype.kind == "i" else float(v[row]))
+            for k, v in fields.items() if k not in SLOTS}  # fmt: skip
+    return replace(base, clutch=replace(base.clutch, **dims),
+                   materials=replace(base.materials, **mats))  # fmt: skip
 
 
-def fem_max_torque(design: ClutchDesign, fem_size: float) -> float:
+def fem_max_torque(design: ClutchDesign, fem_size: float,
+                   materials: Sequence[MaterialFile] = ()) -> float:  # fmt: skip
     """Max torque (yield + drag, N·m) at the current limit with the FEM's yield torque at
     ``fem_size`` (m) on the uniform grid (the error map's reference mesh); runs in a
-    worker."""
+    worker, which first registers the user's ``materials`` files it may not have read."""
+    for m in materials:
+        m.ensure()
     return _max_torque(design, "fem", fem_size)
 
 
@@ -138,7 +147,8 @@ def verify_top(
     designs = [design_of(spec, base, int(res["design_id"][i])) for i in rows]
     ids = [int(res["design_id"][i]) for i in rows]
     keys, fast, bounds = (res[c][rows].astype(float).tolist() for c in (key, TORQUE, BOUND))
-    return verify_designs(designs, ids, keys, fast, bounds, fem_size, executor)
+    return verify_designs(designs, ids, keys, fast, bounds, fem_size, executor,
+                          spec.material_files)  # fmt: skip
 
 
 def verify_designs(
@@ -149,16 +159,19 @@ def verify_designs(
     bounds: Sequence[float],
     fem_size: float,
     executor: Executor | None = None,
+    materials: Sequence[MaterialFile] = (),
 ) -> list[VerifiedRow]:
     """Designs (with their ids, objective values, fast max torques and torque error bounds)
     re-solved by the FEM at ``fem_size`` (m) on ``executor`` (in this process when None),
-    beside the single loop's torque: the sweep's and the optimiser's --verify-top."""
+    beside the single loop's torque: the sweep's and the optimiser's --verify-top.
+    ``materials``: the user's material files the designs name (shipped to the workers)."""
     if not (math.isfinite(fem_size) and fem_size > 0):
         raise ParameterError(f"FEM size = {fem_size!r} m: must be finite and > 0")
     if executor is None:
         fem = [fem_max_torque(d, fem_size) for d in designs]
     else:
-        futures = [executor.submit(fem_max_torque, d, fem_size) for d in designs]
+        mats = tuple(materials)
+        futures = [executor.submit(fem_max_torque, d, fem_size, mats) for d in designs]
         fem = [f.result() for f in futures]
     circ = [_max_torque(d, "circuit") for d in designs]
     circ_bound = [circuit_error(d.clutch).bound for d in designs]
