@@ -324,3 +324,33 @@ def design_duty(design: Any) -> Duty:
     """The design's ``[duty]`` (``ClutchDesign.duty``), or the defaults."""
     d = getattr(design, "duty", None)
     return d if isinstance(d, Duty) else Duty()
+
+
+#: The sweep's and the optimiser's columns of this module (``outputs.SWEEP_OPTIONAL``).
+DUTY_COLUMNS = ("fluid_volume_m3", "fluid_life_h")
+
+
+def duty_batch(fields: Mapping[str, Any], base: Any, r: Mapping[str, np.ndarray]
+               ) -> dict[str, np.ndarray]:  # fmt: skip
+    """``DUTY_COLUMNS`` for S designs (a sweep's fields around ``base``, a ``ClutchDesign``)
+    beside ``evaluate_batch``'s ``r`` (its off-state and peak torques): the fluid's volume
+    and its life at ``base``'s duty (``duty_figures``' figures on arrays). Rows that fail
+    validation are NaN."""
+    from geometry import regions
+    from geometry.params import valid
+    from mrclutch.pipeline import batch_fields  # the application's batch reader
+
+    p, mats = batch_fields(fields, base)
+    ok = valid(p) & (np.asarray(r["valid"]) == 1)
+    duty = design_duty(base)
+    off = np.asarray(r["off_state_torque_N_m"], float)
+    on = np.full(off.shape, duty.torque) if duty.torque > 0 else np.asarray(r["max_torque_N_m"])
+    power = mean_power(on, off, base.operating.input_speed, duty.on_fraction)
+
+    def fn(rg: Regions, rows: np.ndarray) -> dict[str, np.ndarray]:
+        vol = np.asarray(fluid_volume(rg), float)
+        lde = FLUIDS[rg.materials.fluid].lifetime_energy
+        return {"vol": vol, "life": np.asarray(life_hours(vol, power[rows], lde), float)}
+
+    out = regions.per_topology(p, ok, fn, mats)
+    return {"fluid_volume_m3": out["vol"], "fluid_life_h": out["life"]}

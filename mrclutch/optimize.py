@@ -56,6 +56,7 @@ from geometry.validation import (
 )
 from magnetics import thermal
 from mrclutch.design import ClutchDesign, current_limit
+from mrclutch.duty import duty_batch
 from mrclutch.feel import feel_batch
 from mrclutch.haptics.actuator import HapticParams
 from mrclutch.haptics.model import bandwidth, max_passive_stiffness
@@ -112,6 +113,8 @@ class Constraints:
     max_residual_torque: float | None = None
     #: N of runout ripple at the hand (mrclutch.feel; None: no limit)
     max_ripple_force: float | None = None
+    #: h of fluid life at the base design's [duty] (mrclutch.duty; None: no limit)
+    min_life: float | None = None
 
     def __post_init__(self) -> None:
         check_positive("min_torque", self.min_torque, " N·m")
@@ -129,6 +132,8 @@ class Constraints:
             check_positive("max_residual_torque", self.max_residual_torque, " N·m")
         if self.max_ripple_force is not None:
             check_positive("max_ripple_force", self.max_ripple_force, " N")
+        if self.min_life is not None:
+            check_positive("min_life", self.min_life, " h")
         if (self.duty_torque > 0) != (self.duty_time > 0):
             raise ParameterError(
                 f"duty cycle: duty_torque = {self.duty_torque:g} N·m and "
@@ -170,6 +175,8 @@ class Constraints:
             g["residual torque"] = r["residual_torque_N_m"] / self.max_residual_torque - 1
         if self.max_ripple_force is not None:
             g["ripple"] = r["ripple_force_N"] / self.max_ripple_force - 1
+        if self.min_life is not None:
+            g["fluid life"] = 1 - r["fluid_life_h"] / self.min_life
         if self.passive:
             g["passive"] = r["K_N_per_m"] / r["max_passive_K_N_per_m"] - 1
         if self.stable and "max_stable_K_N_per_m" in r:
@@ -259,6 +266,8 @@ def evaluate_rows(
                                  ("ripple_force_N", cons.max_ripple_force)) if on is not None)
     if feel:  # the steel's memory and the runout ripple (mrclutch.feel)
         out.update(feel_batch(fields, base, feel))
+    if cons.min_life is not None:  # the fluid's life at the base's [duty] (mrclutch.duty)
+        out.update(duty_batch(fields, base, out))
     return out
 
 

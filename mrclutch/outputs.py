@@ -153,6 +153,11 @@ _ALL = (
            "runout ripple", "mN·m", 1e3),
     Output("ripple_force_N", "N", "the runout ripple at the hand, T·nG/l (mrclutch.feel)",
            "runout ripple at the hand", "mN", 1e3),
+    # ---- issue 41: how long the fluid lasts (mrclutch.duty, magnetics.life) -------------
+    Output("fluid_volume_m3", "m³", "MR fluid the clutch holds: films, face films and cavity "
+           "(magnetics.life)", "fluid volume", "mL", 1e6),
+    Output("fluid_life_h", "h", "hours until the fluid has dissipated its lifetime energy "
+           "(LDE, unverified per fluid) at the design's [duty] (mrclutch.duty)", "fluid life"),
 )  # fmt: skip
 
 #: Every output, by key.
@@ -236,6 +241,9 @@ SWEEP_OPTIONAL: tuple[str, ...] = (
     "hysteresis_width_pct",
     "ripple_torque_N_m",
     "ripple_force_N",
+    # issue 41 (mrclutch.duty.duty_batch): the fluid's volume and life, no solve
+    "fluid_volume_m3",
+    "fluid_life_h",
 )
 
 

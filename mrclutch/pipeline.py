@@ -48,7 +48,7 @@ from magnetics.torque import (
     torque_curve,
 )
 from mrclutch.design import ClutchDesign, current_limit
-from mrclutch.duty import DUTY_INFS, DUTY_NULLS, evaluation_duty
+from mrclutch.duty import DUTY_COLUMNS, DUTY_INFS, DUTY_NULLS, duty_batch, evaluation_duty
 from mrclutch.feel import feel_figures
 from mrclutch.haptics.actuator import (
     EM_170,
@@ -756,13 +756,17 @@ class BatchEvaluator:
 
     def __call__(self, fields: Mapping[str, ArrayLike]) -> dict[str, np.ndarray]:
         on = set(self.optional)
-        robust = on - {"max_passive_K_N_per_m", "max_stable_K_N_per_m", "zwidth_area_N2_s_per_m2"}
+        robust = on - {"max_passive_K_N_per_m", "max_stable_K_N_per_m", "zwidth_area_N2_s_per_m2",
+                       *DUTY_COLUMNS}  # fmt: skip
         if robust:  # over the uncertain inputs: the application's robust layer computes them
             raise ParameterError(f"{sorted(robust)[0]}: a robust column; "
                                  "use mrclutch.robust.RobustBatchEvaluator")  # fmt: skip
-        return evaluate_batch(fields, self.base, passivity="max_passive_K_N_per_m" in on,
-                              stability="max_stable_K_N_per_m" in on,
-                              zwidth="zwidth_area_N2_s_per_m2" in on)  # fmt: skip
+        out = evaluate_batch(fields, self.base, passivity="max_passive_K_N_per_m" in on,
+                             stability="max_stable_K_N_per_m" in on,
+                             zwidth="zwidth_area_N2_s_per_m2" in on)  # fmt: skip
+        if on & set(DUTY_COLUMNS):  # the fluid's volume and life (mrclutch.duty)
+            out.update(duty_batch(fields, self.base, out))
+        return {k: out[k] for k in self.columns}
 
 
 def evaluate_batch(

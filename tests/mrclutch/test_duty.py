@@ -142,3 +142,35 @@ def test_evaluate_json_and_bad_duty_on_the_command_line() -> None:
     bad = subprocess.run([*run, "--duty=0.2:0"], capture_output=True, text=True)
     assert bad.returncode == 2
     assert bad.stderr.count("\n") == 1 and "duty time" in bad.stderr
+
+
+def test_batch_columns_are_the_evaluations_figures(ev) -> None:
+    """The sweep's fluid volume and life of the paper row equal ``evaluate``'s (same
+    duty: 0.2 N·m a quarter of the time); a wider gap holds more fluid and lasts longer."""
+    from mrclutch.pipeline import BatchEvaluator
+
+    base = ev.design
+    gap = base.clutch.gap
+    be = BatchEvaluator(base, optional=D.DUTY_COLUMNS)
+    rows = be({"gap": np.array([gap, 1.3 * gap])})
+    assert rows["fluid_volume_m3"][0] == pytest.approx(ev.duty["fluid"]["volume_m3"], rel=1e-9)
+    assert rows["fluid_life_h"][0] == pytest.approx(ev.duty["fluid"]["life_h"], rel=1e-6)
+    assert rows["fluid_volume_m3"][1] > rows["fluid_volume_m3"][0]
+    assert rows["fluid_life_h"][1] > rows["fluid_life_h"][0]
+
+
+def test_optimiser_life_limit_splits_two_gaps() -> None:
+    """A limit between the lives of two gaps: the thinner gap (less fluid, more drag)
+    fails it (g > 0), the wider passes (g < 0); a planted sign error would swap them."""
+    from mrclutch.optimize import Constraints, evaluate_rows
+
+    base = replace(PAPER, duty=D.Duty(torque=0.2, time=60.0))
+    gap = base.clutch.gap
+    f = {"gap": np.array([0.6 * gap, 1.4 * gap])}
+    lives = D.duty_batch(f, base, evaluate_rows(f, base, Constraints().resolved(base)))
+    limit = float(np.sqrt(lives["fluid_life_h"][0] * lives["fluid_life_h"][1]))
+    cons = Constraints(min_life=limit).resolved(base)
+    g = cons.terms(evaluate_rows(f, base, cons))["fluid life"]
+    assert g[0] > 0 > g[1]
+    with pytest.raises(ParameterError, match="min_life"):
+        Constraints(min_life=-1.0)

@@ -294,6 +294,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="a duty cycle: hold NM N·m (yield + drag, slipping) for S seconds before the "
         "wire or fluid limit (default: none)",
     )
+    p.add_argument(
+        "--min-life-h",
+        type=float,
+        default=None,
+        metavar="H",
+        help="hours of fluid life at the duty (--duty's torque, else the design's [duty]; "
+        "the lifetime dissipated energy is unverified per fluid, docs/hot.md; default: none)",
+    )
     for key, what in (("runout", "drums' runout, TIR"), ("tolerance", "diameters' tolerance"),
                       ("min-wall", "thinnest drum wall")):  # fmt: skip
         p.add_argument(f"--{key}-mm", type=float, default=None, metavar="MM",
@@ -850,6 +858,7 @@ def _optimize_inputs(args: argparse.Namespace) -> tuple[ClutchDesign, tuple[int,
             raise CLIError(f"--duty {args.duty!r}: give NM:S, e.g. 0.2:60") from None
         if not (duty[0] > 0 and duty[1] > 0):
             raise CLIError(f"--duty {args.duty!r}: torque and seconds must be > 0")
+        base = replace(base, duty=replace(base.duty, torque=duty[0], time=duty[1]))  # issue 41
     cons = Constraints(
         min_torque=args.min_torque,
         max_mass=args.max_mass_g * 1e-3,
@@ -862,6 +871,7 @@ def _optimize_inputs(args: argparse.Namespace) -> tuple[ClutchDesign, tuple[int,
         peak_time=args.peak_time_s,
         duty_torque=duty[0],
         duty_time=duty[1],
+        min_life=args.min_life_h,
     ).resolved(base)
     if args.verify_top is not None and args.verify_top < 1:
         raise CLIError(f"--verify-top = {args.verify_top}: must be >= 1")
