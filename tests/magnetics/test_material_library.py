@@ -279,7 +279,7 @@ def test_sweep_rows_with_a_fluid_axis_match_single_evaluations() -> None:
 
 
 def test_a_sweep_spec_with_a_fluid_axis_runs_on_the_fast_path(tmp_path: Path) -> None:
-    """The spec's categorical axis: chunk rows carry indices into the canonical names, the
+    """The spec's categorical axis: chunk rows carry the canonical names (issue 45), the
     evaluator gets the names, and each row equals its single evaluation to 1e-6."""
     from mrclutch.design import design_preset
     from mrclutch.pipeline import BatchEvaluator, evaluate
@@ -290,15 +290,15 @@ def test_a_sweep_spec_with_a_fluid_axis_runs_on_the_fast_path(tmp_path: Path) ->
                          'fluid = {values = ["MRF-140CG", "mrf 122eg"]}\n'
                          "gap_mm = {values = [0.3, 0.45]}\n")  # fmt: skip
     spec, _ = load_spec(spec_file)
-    assert spec.columns == ("fluid_index", "gap_mm")
+    assert spec.columns == ("fluid", "gap_mm")
     assert spec.params[0].categories == ("mrf_140cg", "mrf_122eg")
     d = design_preset("paper")
     ev = BatchEvaluator(d)
     n, payload, _ = chunk_rows(spec, ev, ("max_torque_N_m",), 0)
     rows = [line.split(",") for line in payload.decode().strip().splitlines()]
-    assert n == 4 and [r[1] for r in rows] == ["0", "0", "1", "1"]
+    assert n == 4 and [r[1] for r in rows] == ["mrf_140cg"] * 2 + ["mrf_122eg"] * 2
     for r in rows:
-        fluid = spec.params[0].categories[int(r[1])]
+        fluid = r[1]
         one = evaluate(replace(d, clutch=replace(d.clutch, gap=float(r[2]) * 1e-3),
                                materials=MaterialChoice(fluid=fluid)))  # fmt: skip
         assert float(r[3]) == pytest.approx(one.clutch.max_torque, rel=1e-6)

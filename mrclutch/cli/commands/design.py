@@ -668,7 +668,7 @@ def _say_estimate(spec: Any, evaluator: BatchEvaluator, workers: int) -> float |
     n = spec.n_designs
     if n <= 1000:  # under a minute at any rate the fast path has (the slowest column: ×8)
         return None
-    _, fields = spec.chunk(0)
+    _, fields = spec.design_fields(0)  # as the chunks are evaluated: a material as its name
     evaluator({k: v[:8] for k, v in fields.items()})  # warm: imports, first compiles
     step = max(1, min(spec.chunk_size, 1024))
     done, t0 = 0, time.perf_counter()
