@@ -49,3 +49,13 @@ def duty_lines(d: Mapping[str, Any]) -> list[str]:
     lines.append(f"b1 against Table 2's {b['paper_table2']:.3g} N·s/m: {parts}; "
                  f"unexplained {b['unexplained']:.3g} N·s/m")  # fmt: skip
     return lines
+
+
+def duty_html(d: Mapping[str, Any]) -> str:
+    """The report's section for issue 41: ``duty_lines`` as a list (HTML-escaped)."""
+    from html import escape
+
+    lines = [s.strip() for s in duty_lines(d) if s.strip()]
+    items = "".join(f"<li>{escape(s)}</li>" for s in lines[1:])
+    return (f"<h2>After a duty, and the fluid's life</h2><p class=small>{escape(lines[0])}; "
+            'docs/hot.md</p><ul>' + items + "</ul>")  # fmt: skip

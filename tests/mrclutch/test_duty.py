@@ -174,3 +174,18 @@ def test_optimiser_life_limit_splits_two_gaps() -> None:
     assert g[0] > 0 > g[1]
     with pytest.raises(ParameterError, match="min_life"):
         Constraints(min_life=-1.0)
+
+
+def test_text_and_report_section_carry_the_figures(ev) -> None:
+    """The evaluate text and the report's section show the holds, the volume, the life and
+    the b1 terms from the same JSON."""
+    from mrclutch.cli.duty_format import duty_html, duty_lines
+
+    text = "\n".join(duty_lines(ev.duty))
+    f = ev.duty["fluid"]
+    assert f"fluid: {f['volume_mL']:.3g} mL" in text
+    assert f"{f['life_h']:.4g} h" in text
+    assert "after 60 s holding 0.2 N·m" in text and "after 30 s at the current limit" in text
+    page = duty_html(ev.duty)
+    assert page.startswith("<h2>") and page.count("<li>") == len(duty_lines(ev.duty)) - 2
+    assert "N·s/m" in page and "&lt;" not in text
