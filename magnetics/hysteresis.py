@@ -4,9 +4,12 @@ peak current, and the torque–current loop (issue 41, item 1). SI units.
 Model, in two steps.
 
 1. **The steel's loop** from three numbers of each steel's data file (``[hysteresis]``:
-   the major loop's coercivity Hc and remanence Br) and its B–H table (the saturation
-   polarisation Js = B − μ0·H at the table's last point). Takács's T(x) model
-   [takacs2001]: the branches of a loop reaching ±Hm are
+   the major loop's coercivity Hc and remanence Br, each with its source: typical values
+   for the grade, unverified where not read — a sister alloy's read figure for Hiperco
+   50 [modelica-msl-hysteresis]; as-received stainless measures harder than handbooks
+   say [oxley2009]) and its B–H table (the saturation polarisation Js = B − μ0·H at the
+   table's last point). Takács's T(x) model [takacs2001]: the branches of a loop
+   reaching ±Hm are
 
        J↓(H) = Js·tanh((H + Hc)/a) − b,   J↑(H) = Js·tanh((H − Hc)/a) + b,
        a = Hc / artanh(Br/Js)  (the major loop, b → 0, passes through (0, Br)),

@@ -1,8 +1,8 @@
 """Torque ripple from the rotors' runout (issue 41, item 2). SI units.
 
 Each rotor's drum surfaces run out by its total indicated runout R (TIR) about the
-common axis: an eccentricity e = R/2 that turns with the rotor ([process],
-``mrclutch.process``). The input rotor turns at ω_in, the output at ω_out, so the relative
+common axis: an eccentricity e = R/2 that turns with the rotor (the design's process
+table, ``mrclutch.process``). The input rotor turns at ω_in, the output at ω_out, so the relative
 eccentricity of the two drum sets is the vector e_rel(t) = e_in·e^{iω_in t} − e_out·e^{iω_out t},
 of squared length
 
