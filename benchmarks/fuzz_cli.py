@@ -135,8 +135,8 @@ def make_input(rng: random.Random, keys: dict[str, list[str]], folder: Path, k: 
 
 #: Input classes and their weights (most inputs are refused in milliseconds; ``valid``
 #: evaluates a design, ~0.3 s).
-CLASSES = {"extremes": 0.12, "structure": 0.33, "files": 0.06, "options": 0.22,
-           "valid": 0.13, "spec": 0.14}  # fmt: skip
+CLASSES = {"extremes": 0.10, "structure": 0.26, "files": 0.05, "options": 0.17,
+           "valid": 0.10, "spec": 0.12, "material": 0.10, "sections": 0.10}  # fmt: skip
 
 #: Wrong structures for a design file: (section or key, TOML text) pieces.
 BAD_VALUES = ['["paper"]', '{a = 1}', "[[1], [2]]", "1", "true", '"x"', "1979-05-27",
@@ -291,6 +291,104 @@ def make_spec(rng: random.Random, folder: Path, k: int) -> list[str]:
     return ["sweep", str(spec), "--out", str(folder / f"out{k}" / "r.csv"), "--no-progress"]
 
 
+#: The built-in fluid a fuzzed material file starts from (issue 44).
+FLUID_FILE = ROOT / "geometry" / "data" / "materials" / "mrf_132dg.toml"
+#: Keys of a fluid file whose values the fuzzer replaces.
+FLUID_KEYS = ("density", "conductivity", "specific_heat", "thermal_conductivity", "phi",
+              "carrier_c", "viscosity", "viscosity_temperature", "temperature_range",
+              "carrier_points", "colour", "name", "kind")  # fmt: skip
+#: The sections issue 44 hardened, their keys and the values drawn for them.
+NEW_SECTIONS = {
+    "measured": ["m1_g", "b1_N_s_per_m", "step_delay_ms", "off_state_torque_mN_m", "torque",
+                 "use_in_model", "source"],
+    "uncertainty": ["viscosity_spread_pct", "fluid_temperature_C", "gap_tolerance_mm",
+                    "runout_mm", "drum_thickness_tolerance_mm", "delay_ms",
+                    "bench_damping_N_s_per_m", "yield_stress_spread_pct", "bh_spread_pct"],
+    "process": ["runout_mm", "tolerance_mm", "min_wall_mm"],
+}  # fmt: skip
+
+
+def _fuzz_number(rng: random.Random) -> str:
+    if rng.random() < 0.5:
+        return rng.choice(EXTREMES)
+    return repr(rng.choice([1.0, 1.0, -1.0]) * 10 ** rng.uniform(-8, 8))
+
+
+def make_material(rng: random.Random, folder: Path, k: int) -> list[str]:
+    """A design whose ``fluid_file`` is hostile: random bytes, UTF-16, nested past the
+    parser, a FIFO, a device, a directory, a huge file, or the built-in fluid with one to
+    three fields replaced by extremes (viscosity 1e300 …)."""
+    kind = rng.randrange(8)
+    mat = folder / f"m{k}.toml"
+    base = FLUID_FILE.read_text().replace('name = "mrf_132dg"', f'name = "fuzz_{k}"')
+    if kind == 0:
+        mat.write_bytes(bytes(rng.randrange(256) for _ in range(rng.randint(1, 400))))
+    elif kind == 1:
+        mat.write_bytes(base.encode(rng.choice(["utf-16", "utf-16-le", "utf-32", "latin-1"])))
+    elif kind == 2:
+        depth = rng.choice([9, 50, 5000, 100000])
+        mat.write_text(base + "deep = " + "[" * depth + "1" + "]" * depth + "\n")
+    elif kind == 3:
+        os.mkfifo(mat)
+    elif kind == 4:
+        mat = Path(rng.choice(["/dev/zero", "/dev/null", "/dev/urandom", str(folder)]))
+    elif kind == 5:
+        with open(mat, "wb") as f:  # sparse: the size without the bytes
+            f.truncate((1 << 20) + rng.randrange(1, 1 << 30))
+    else:
+        lines = base.splitlines()
+        for _ in range(rng.randint(1, 3)):
+            key = rng.choice(FLUID_KEYS)
+            value = rng.choice(['[1, 2]', '[[1, 1e-300], [2, 1e300]]', '"x"', "[]"]
+                               ) if rng.random() < 0.2 else _fuzz_number(rng)  # fmt: skip
+            lines = [f"{key} = {value}" if ln.startswith(f"{key} =") else ln for ln in lines]
+        if rng.random() < 0.3:  # the B–H table: long, reversed or absurd
+            b = rng.choice(["[" + ", ".join(["1.0"] * 5000) + "]", "[2.0, 1.0]", "[1e300, 2e300]",
+                            "[0.1, 0.2]"])  # fmt: skip
+            lines = [f"b = {b}" if ln.startswith("b = ") else ln for ln in lines]
+        mat.write_text("\n".join(lines) + "\n")
+    design = folder / f"md{k}.toml"
+    design.write_text(f'[clutch]\nbase = "paper"\n[materials]\nfluid_file = "{mat}"\n')
+    argv = ["evaluate", str(design), "--fidelity", "fast"]
+    return argv + (["--json"] if rng.random() < 0.5 else [])
+
+
+def make_sections(rng: random.Random, folder: Path, k: int) -> list[str]:
+    """A design with fuzzed ``[measured]`` (used in the model or not), ``[uncertainty]`` and
+    ``[process]`` tables: extremes, reversed and nominal-free ranges, runout beyond the gap,
+    duplicate and non-finite bench points."""
+    lines = ['[clutch]\nbase = "paper"']
+    if rng.random() < 0.3:
+        lines.append(f"gap_mm = {rng.choice(['0.1', '0.3', '0.7', '2'])}")
+    for sec in rng.sample(list(NEW_SECTIONS), rng.randint(1, 3)):
+        lines.append(f"[{sec}]")
+        for key in rng.sample(NEW_SECTIONS[sec], rng.randint(1, 3)):
+            if key == "torque":
+                pts = [
+                    f"{{current_A = {rng.choice(['7', '7.0', '1', _fuzz_number(rng)])}, "
+                    f"torque_N_m = {_fuzz_number(rng)}}}"
+                    for _ in range(rng.randint(0, 3))
+                ]
+                value = "[" + ", ".join(pts) + "]"
+            elif key == "use_in_model":
+                value = rng.choice(["true", "true", "false", "1"])
+            elif key == "source":
+                value = rng.choice(['"bench"', "1", '"\\u0000"'])
+            elif key in ("fluid_temperature_C", "delay_ms", "bench_damping_N_s_per_m"):
+                value = f"[{_fuzz_number(rng)}, {_fuzz_number(rng)}]"
+            else:
+                value = _fuzz_number(rng)
+            lines.append(f"{key} = {value}")
+        if sec == "measured" and rng.random() < 0.5:
+            lines.append("use_in_model = true")
+    path = folder / f"n{k}.toml"
+    path.write_text("\n".join(dict.fromkeys(lines)) + "\n")
+    argv = [rng.choice(["evaluate", "evaluate", "scale"]), str(path)]
+    if argv[0] == "evaluate":
+        argv += ["--fidelity", "fast"]
+    return argv + (["--json"] if rng.random() < 0.5 else [])
+
+
 def make_any(rng: random.Random, keys: dict[str, list[str]], folder: Path, k: int
              ) -> tuple[str, list[str]]:  # fmt: skip
     """(class, argv) of input k."""
@@ -305,6 +403,10 @@ def make_any(rng: random.Random, keys: dict[str, list[str]], folder: Path, k: in
         return cls, make_options(rng, folder, k)
     if cls == "valid":
         return cls, make_valid(rng, folder, k)
+    if cls == "material":
+        return cls, make_material(rng, folder, k)
+    if cls == "sections":
+        return cls, make_sections(rng, folder, k)
     return cls, make_spec(rng, folder, k)
 
 
@@ -348,6 +450,9 @@ def check_input(cls: str, argv: list[str], code: int, text: str, folder: Path
         rows = csv.read_bytes().count(b"\n") - 1 if csv.exists() else -1
         if spec_rows is not None and rows != spec_rows:
             return "partial", f"sweep wrote {rows} rows for {spec_rows} designs"
+    if cls in ("material", "sections") and code == 0 and "--json" in argv:
+        missing = nulls_unexplained(json.loads(text))  # issue 44: every null with a reason
+        return ("null", f"null without a reason: {missing[0]}") if missing else None
     if cls != "valid":
         return None
     from geometry.validation import ParameterError

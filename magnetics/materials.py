@@ -391,10 +391,27 @@ def _bh_of(rec: Mapping[str, Any], where: str) -> BHCurve:
             isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x) for x in v
         ):
             raise ParameterError(f"{where}: [bh].{key}: must be a list of finite numbers")
+        if len(v) > MAX_BH_POINTS:
+            raise ParameterError(f"{where}: [bh].{key}: {len(v)} points: at most {MAX_BH_POINTS}")
+        top = BH_RANGE[key]
+        if v and max(v) > top:
+            raise ParameterError(f"{where}: [bh].{key}: {max(v):g}: must be <= {top:g} "
+                                 f"{'T' if key == 'b' else 'A/m'}")  # fmt: skip
     try:
         return BHCurve(rec["name"], tuple(map(float, b)), tuple(map(float, h)), src)
     except ParameterError as e:
         raise ParameterError(f"{where}: [bh]: {e}") from None
+
+
+#: Pa·s a fluid's off-state viscosity may take: our plausibility bound, a decade and more
+#: around MRF-132DG's 0.112 Pa·s [lord-mrf132dg]; a fluid outside it is refused.
+VISCOSITY_RANGE = (1e-3, 10.0)
+#: °C any temperature of a material file may name (absolute zero to 1000 °C).
+TEMPERATURE_RANGE = (-273.15, 1000.0)
+#: Most points of a B–H table, and the largest B [T] and H [A/m] in one (our bounds: the
+#: registry's steels saturate near 2.4 T and their tables end below 1e6 A/m).
+MAX_BH_POINTS = 1000
+BH_RANGE = {"b": 100.0, "h": 1e9}
 
 
 def _fluid_of(rec: Mapping[str, Any], where: str) -> MRFluid:
@@ -413,8 +430,13 @@ def _fluid_of(rec: Mapping[str, Any], where: str) -> MRFluid:
             f"{where}: phi = {phi:g}: the iron volume fraction must be in (0, 0.64)"
         )
     visc = num("viscosity")
-    if visc <= 0:
-        raise ParameterError(f"{where}: viscosity = {visc:g} Pa·s: must be > 0")
+    lo_v, hi_v = VISCOSITY_RANGE
+    if not lo_v <= visc <= hi_v:
+        raise ParameterError(f"{where}: viscosity = {visc:g} Pa·s: must be in [{lo_v:g}, "
+                             f"{hi_v:g}] Pa·s")  # fmt: skip
+    c = num("carrier_c")
+    if not 0.1 <= c <= 10.0:  # Carlson's C is 0.95–1.16 for the carriers he lists [carlson]
+        raise ParameterError(f"{where}: carrier_c = {c:g}: must be in [0.1, 10]")
     pts = rec.get("carrier_points")
     tr = rec.get("temperature_range")
     try:
@@ -427,6 +449,15 @@ def _fluid_of(rec: Mapping[str, Any], where: str) -> MRFluid:
         ) from None
     if len(cp) != 2 or not lo < hi:
         raise ParameterError(f"{where}: carrier_points: two points; temperature_range: lo < hi")
+    for key, ts in (("temperature_range", (lo, hi)), ("carrier_points", (cp[0][0], cp[1][0])),
+                    ("viscosity_temperature", (num("viscosity_temperature"),))):  # fmt: skip
+        t_lo, t_hi = TEMPERATURE_RANGE
+        if not all(t_lo <= t <= t_hi for t in ts):
+            raise ParameterError(f"{where}: {key}: {', '.join(f'{t:g}' for t in ts)} °C: must "
+                                 f"be in [{t_lo:g}, {t_hi:g}] °C")  # fmt: skip
+    if not all(0.0 < nu <= 1.0 for _, nu in cp):  # m²/s: above any oil's
+        raise ParameterError(f"{where}: carrier_points: kinematic viscosities "
+                             f"{cp[0][1]:g}, {cp[1][1]:g} m²/s: must be in (0, 1]")  # fmt: skip
 
     def optional(key: str) -> float | None:  # issue 41: absent in a user's file = no data
         return num(key) if key in rec else None

@@ -26,6 +26,7 @@ from mrclutch.cli.commands._common import (
 from mrclutch.cli.duty_format import duty_lines
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.executors import sweep_executor
+from mrclutch.cli.longjobs import announce
 from mrclutch.cli.plots.design import pareto_plot, pareto_set_plot
 from mrclutch.cli.report import write_report
 from mrclutch.design import ClutchDesign, design_from_mapping, design_preset, design_to_toml
@@ -163,8 +164,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--yes",
         action="store_true",
-        help="run a sweep of more than 1e7 designs or a --verify-top of more than 1e4 FEM "
-        "solves (refused without it: hours of work)",
+        help="run a sweep of more than 1e7 designs, a --verify-top of more than 1e4 FEM "
+        "solves, or any sweep estimated above 10 min (refused without it; above 30 s the "
+        "estimate is said first: mrclutch/cli/longjobs.py)",
     )
     p.add_argument("--overwrite", action="store_true", help="replace an existing results file")
     p.add_argument("--workers", type=int, default=0, help="processes (0: in this process)")
@@ -660,14 +662,17 @@ MAX_FEM_UNASKED = 10**4
 ANNOUNCE_AFTER_S = 60.0
 
 
-def _say_estimate(spec: Any, evaluator: BatchEvaluator, workers: int) -> float | None:
+def _say_estimate(spec: Any, evaluator: BatchEvaluator, workers: int, yes: bool = True,
+                  out: str | None = None) -> float | None:  # fmt: skip
     """Time the first designs of the spec (after 8 to warm up; chunks of its chunk size, up
-    to 1024 designs or 0.3 s) and, when the whole sweep is estimated above
-    ANNOUNCE_AFTER_S, say so on stderr (designs, seconds at the measured rate). Returns
-    the estimate (s), None when skipped."""
+    to 1024 designs or 0.3 s) and one chunk's synced write beside ``out``; the whole sweep
+    (designs at the measured rate + chunks × the write) goes to ``longjobs.announce``:
+    said on stderr above 30 s, refused without ``yes`` above 10 min. Returns the
+    estimate (s), None when skipped."""
     n = spec.n_designs
-    if n <= 1000:  # under a minute at any rate the fast path has (the slowest column: ×8)
+    if n <= 1000 and spec.n_chunks <= 100:  # under 30 s at any rate the fast path has
         return None
+    per_chunk = _chunk_write_s(out)
     _, fields = spec.design_fields(0)  # as the chunks are evaluated: a material as its name
     evaluator({k: v[:8] for k, v in fields.items()})  # warm: imports, first compiles
     step = max(1, min(spec.chunk_size, 1024))
@@ -676,12 +681,33 @@ def _say_estimate(spec: Any, evaluator: BatchEvaluator, workers: int) -> float |
         evaluator({k: v[done : done + step] for k, v in fields.items()})
         done += step
     rate = done / max(time.perf_counter() - t0, 1e-9) * max(1, workers)
-    seconds = n / rate
-    if seconds > ANNOUNCE_AFTER_S:
-        print(f"mrclutch sweep: {n:.3g} designs, about {_duration(seconds)} at "
-              f"{rate:.3g} designs/s (measured on the first {done}, {max(1, workers)} "
-              "worker(s)); going on", file=sys.stderr)  # fmt: skip
+    seconds = n / rate + spec.n_chunks * per_chunk
+    announce("sweep", f"{n:.3g} designs", seconds,
+             f"{rate:.3g} designs/s measured on the first {done}, {max(1, workers)} worker(s); "
+             f"{spec.n_chunks} chunks of {spec.chunk_size} at {per_chunk * 1e3:.2g} ms per "
+             "chunk written", yes)  # fmt: skip
     return seconds
+
+
+def _chunk_write_s(out: str | None) -> float:
+    """s one chunk's synced write takes beside ``out`` (a 4 kB file through the output
+    layer, timed once; 0 without ``out``)."""
+    if out is None:
+        return 0.0
+    import tempfile
+
+    from geometry.atomic import write_bytes
+
+    folder = Path(out).resolve().parent
+    while not folder.is_dir() and folder != folder.parent:
+        folder = folder.parent
+    try:
+        with tempfile.TemporaryDirectory(dir=folder, prefix=".mrclutch-probe-") as tmp:
+            t0 = time.perf_counter()
+            write_bytes(Path(tmp) / "chunk", bytes(4096))
+            return time.perf_counter() - t0
+    except OSError:
+        return 0.0
 
 
 def _duration(seconds: float) -> str:
@@ -733,10 +759,8 @@ def _check_fem_work(args: argparse.Namespace, base: ClutchDesign, size: float) -
     if n > MAX_FEM_UNASKED and not args.yes:
         raise CLIError(f"--verify-top {n}: more than {MAX_FEM_UNASKED} FEM solves; add --yes")
     seconds = time_estimate(section, size, n)
-    if seconds > ANNOUNCE_AFTER_S:
-        print(f"mrclutch sweep: --verify-top {n}: {n} FEM solves at {size * 1e3:g} mm, about "
-              f"{_duration(seconds)} on one worker at the FEM's measured rate per grid node; "
-              "going on", file=sys.stderr)  # fmt: skip
+    announce("sweep", f"--verify-top {n}: {n} FEM solves at {size * 1e3:g} mm", seconds,
+             "one worker at the FEM's measured rate per grid node", args.yes)  # fmt: skip
 
 
 def _sweep(args: argparse.Namespace) -> int:
@@ -752,7 +776,7 @@ def _sweep(args: argparse.Namespace) -> int:
     where = (args.workers, args.scheduler, args.dask_local, args.connect_timeout)
     with sweep_executor(*where) as (executor, workers):
         if not (args.resume or args.repair):
-            _say_estimate(spec, evaluator, workers)
+            _say_estimate(spec, evaluator, workers, args.yes, args.results)
         res = run_sweep(
             spec,
             args.results,

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 from typing import Any
 
 import numpy as np
@@ -29,6 +28,7 @@ from mrclutch.cli.commands._common import (
 )
 from mrclutch.cli.commands.handoff import add_map_args, write_torque_map
 from mrclutch.cli.errors import CLIError
+from mrclutch.cli.longjobs import announce
 from mrclutch.cli.plots.magnetics import plot_field, plot_torque
 
 
@@ -68,6 +68,9 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
         "difference)",
     )
     p.add_argument("--speed-rpm", type=float, default=530.0, help="slip speed (rpm)")
+    p.add_argument("--yes", action="store_true",
+                   help="run FEM solves estimated above 10 min (refused without it; above "
+                   "30 s the estimate is said first: mrclutch/cli/longjobs.py)")  # fmt: skip
     p.add_argument(
         "--fluid-temperature-C",
         type=float,
@@ -100,10 +103,9 @@ def _torque(args: argparse.Namespace) -> int:
         section = clutch  # already the section, with the design's materials
         check_memory(section, DEFAULT_SIZE)
         seconds = time_estimate(section, DEFAULT_SIZE, int(currents.size))
-        if seconds > 60:
-            print(f"mrclutch torque: {currents.size} FEM solves at {DEFAULT_SIZE * 1e3:g} mm, "
-                  f"about {seconds / 60:.0f} min (measured rate of the FEM per grid node, "
-                  "magnetics.fem.grid.SECONDS_PER_NODE); going on", file=sys.stderr)  # fmt: skip
+        announce("torque", f"{currents.size} FEM solves at {DEFAULT_SIZE * 1e3:g} mm", seconds,
+                 "the FEM's measured rate per grid node, magnetics.fem.grid.SECONDS_PER_NODE",
+                 args.yes)  # fmt: skip
     try:
         curves = [torque_curve(clutch, currents, method=m, speed_rpm=args.speed_rpm,
                                temperature=args.fluid_temperature_C) for m in methods]  # fmt: skip
