@@ -76,6 +76,8 @@ DUTY_NULLS: dict[str, str] = {
     "lifetime_energy_J_per_m3": "the fluid gives no lifetime dissipated energy",
     "life_h": "the fluid gives no lifetime dissipated energy: no life figure",
     "life_off_h": "the fluid gives no lifetime dissipated energy: no life figure",
+    "duty_fluid_temperature_C": "no duty torque asked: no duty hold to compare",
+    "covered": "no duty torque asked: no duty hold to compare",
 }
 #: What an infinite figure of ``evaluation_duty`` means (pipeline.INF_MEANS).
 DUTY_INFS: dict[str, str] = {
@@ -283,6 +285,7 @@ def evaluation_duty(ev: Any) -> dict[str, Any]:
                                  fig.max_torque))  # fmt: skip
     out["asked"] = {"torque_N_m": duty.torque, "time_s": duty.time,
                     "peak_time_s": duty.peak_time, "on_fraction": duty.on_fraction}  # fmt: skip
+    out["hot_corner"] = hot_corner(design, out["duty"])
     r2 = 2 * design.transmission.reduction**2  # both clutches of the pair, Eq. 3
     terms = fig.drag.terms
     warm = None if out["duty"] is None else out["duty"]["b1_N_s_per_m"] - float(mr.b1)
@@ -293,6 +296,18 @@ def evaluation_duty(ev: Any) -> dict[str, Any]:
         warm,
     )
     return out
+
+
+def hot_corner(design: Any, at_duty: Mapping[str, Any] | None) -> dict[str, Any]:
+    """The ``[uncertainty]`` fluid-temperature range beside what the thermal model gives at
+    the end of the duty hold: ``covered`` False where the duty warms the fluid past the
+    range's hot end (the range's verdicts then miss the duty's; widen it to the duty's
+    temperature). None where no duty torque was asked."""
+    lo, hi = design.ranges.fluid_temperature
+    if at_duty is None:
+        return {"range_C": [lo, hi], "duty_fluid_temperature_C": None, "covered": None}
+    t = float(at_duty["fluid_temperature_C"])
+    return {"range_C": [lo, hi], "duty_fluid_temperature_C": t, "covered": bool(t <= hi)}
 
 
 def b1_budget(films: float, seal: float, seal_torque: float, warm: float | None) -> dict[str, Any]:

@@ -43,6 +43,12 @@ def duty_lines(d: Mapping[str, Any]) -> list[str]:
         f"time (off otherwise), {f['life_off_h']:.4g} h off-state only; LDE "
         f"{lde * 1e-12:.3g} MJ/mL, unverified")  # fmt: skip
     lines.append(f"fluid: {f['volume_mL']:.3g} mL; life {life_text}")
+    hc = d["hot_corner"]
+    if hc["covered"] is False:
+        hi = hc["range_C"][1]
+        lines.append(f"note: the duty warms the fluid to {hc['duty_fluid_temperature_C']:.0f} °C, "
+                     f"past the [uncertainty] range's {hi:g} °C: widen fluid_temperature_C to "
+                     "cover it")  # fmt: skip
     b = d["b1_budget"]
     parts = ", ".join(f"{t['name']} {t['value']:.3g} ({t['share_of_table2']:.0%})"
                       for t in b["terms"])  # fmt: skip

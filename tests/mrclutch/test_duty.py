@@ -189,3 +189,19 @@ def test_text_and_report_section_carry_the_figures(ev) -> None:
     page = duty_html(ev.duty)
     assert page.startswith("<h2>") and page.count("<li>") == len(duty_lines(ev.duty)) - 2
     assert "N·s/m" in page and "&lt;" not in text
+
+
+def test_hot_corner_says_when_the_duty_leaves_the_uncertainty_range(ev) -> None:
+    """The paper's default range is 20–40 °C (20 K of warming, typed); the 0.2 N·m duty
+    warms the fluid past 40 °C, so it is not covered and the text says so; with the range
+    widened to the duty's temperature it is."""
+    from mrclutch.cli.duty_format import duty_lines
+
+    hc = ev.duty["hot_corner"]
+    assert hc["range_C"] == [20.0, 40.0]
+    assert hc["duty_fluid_temperature_C"] == ev.duty["duty"]["fluid_temperature_C"] > 40.0
+    assert hc["covered"] is False
+    assert any("past the [uncertainty] range" in s for s in duty_lines(ev.duty))
+    wide = replace(ev.design.ranges, fluid_temperature=(20.0, 90.0))
+    assert D.hot_corner(replace(ev.design, uncertainty=wide), ev.duty["duty"])["covered"]
+    assert D.hot_corner(ev.design, None)["covered"] is None
