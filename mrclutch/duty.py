@@ -38,9 +38,7 @@ from magnetics.dynamics import Amplifier, supply_current
 from magnetics.hot import Load, march, tau_y_coefficient, tau_y_factor
 from magnetics.life import fluid_volume, life_hours, mean_power
 from magnetics.materials import FLUIDS
-from magnetics.torque import torque_curve
 from mrclutch.haptics.actuator import TABLE2_MR, HapticParams
-from mrclutch.haptics.model import metrics_of
 
 #: The paper's duty rule for rated torque, 25 % [lebel] (docs/haptic.md): the default share
 #: of the fluid's life at the duty torque.
@@ -182,6 +180,8 @@ def hold(ctx: Context, load: Any, seconds: float, mr: HapticParams, reduction: f
     """The state after ``seconds`` of ``load``: current, temperatures, torque, η, the τy
     factor, b1 at the hand (the cold pair's b1 + the films' change of damping, both
     clutches: 2 r² Δc, Eq. 3) and the verdict at ``k`` with that b1."""
+    from mrclutch.haptics.model import metrics_of  # lazy: design.py imports this module
+
     m = march(ctx.net, load, seconds, STEPS)
     temps = m.final
     i = float(load(temps).current)
@@ -269,6 +269,8 @@ def evaluation_duty(ev: Any) -> dict[str, Any]:
     """``duty_figures`` of an evaluation (``mrclutch.pipeline.Evaluation``: its design,
     clutch figures and MR pair, at its rendered K), as JSON (``duty_json``), with the
     duty it was computed for."""
+    from magnetics.torque import torque_curve  # lazy: design.py imports this module
+
     design, fig, mr = ev.design, ev.clutch, ev.mr
     op = design.operating
     duty = design_duty(design)
