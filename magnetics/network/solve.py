@@ -27,9 +27,11 @@ from __future__ import annotations
 
 import functools
 import math
+import os
 import sys
 import threading
 import time
+import types
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -53,6 +55,7 @@ _FLOOR = 1e-8  # relative residual accepted when the line search finds no decrea
 _LINE_STEPS = 30  # step halvings in the line search
 _BAND_ITER = 30  # Newton steps of a band element's inner solve
 _COMPILE_NOTICE_S = 1.0  # a first compile longer than this says so on stderr
+_COMPILE_ESTIMATE_S = 10  # CPU seconds of a kernel's first compile (benchmarks/bench_waits.py)
 
 # The network's per-design arrays, packed in this order one row per design (``_pack``); the
 # kernels read field F of design s at P[s, off[F] + j], j the field's flattened index.
@@ -512,41 +515,125 @@ _KERNELS = ("_jac_layout", "_segment", "_h_dh", "_h_mean_dh", "_odd", "_pair", "
             "_residual", "_solve", "_solve_ladder", "_newton", "_workspace", "_solve_rows",
             "_tangent_rows")  # fmt: skip
 
+#: Rows (design × current) a process solves with the kernels' own Python before it loads
+#: the compiled ones: importing numba and loading a cached kernel cost ≈ 1 s, a row in
+#: Python ≈ 1–2 ms, so a single design (``evaluate``, ``torque``, ``haptic``) never pays
+#: for machinery sized for 10⁵ (issue 40); past the budget, or once loaded, compiled.
+_PY_ROWS = 200
+_used: dict[str, int] = {}  # rows run uncompiled so far, per budget
+_loaded: set[str] = set()  # compiled entries loaded in this process
 
-@functools.cache
-def _kernels() -> Any:
-    """The compiled kernels (numba, cached on disk: a process after the machine's first
-    loads them; this module's globals, the kernels replaced by their compiled dispatchers).
-    Imports numba, then compiles or loads every kernel with ``solve_network``'s argument
-    types (a call on no design). A compile (numba's cache holds no ``_solve_rows`` yet) that
-    runs past ``_COMPILE_NOTICE_S`` says so on stderr while it runs, and its time after."""
+
+def uncompiled(budget: str, rows: int, limit: int) -> bool:
+    """Whether ``rows`` more rows of ``budget``'s kernel run as plain Python: while this
+    process has loaded none of its compiled entry and its rows so far stay within
+    ``limit``. The same functions either way (one implementation)."""
+    if budget in _loaded or _used.get(budget, 0) + rows > limit:
+        return False
+    _used[budget] = _used.get(budget, 0) + rows
+    return True
+
+
+def cache_dir() -> Path:
+    """numba's cache of the compiled kernels: ``NUMBA_CACHE_DIR`` if set, else the user's
+    cache folder (``$XDG_CACHE_HOME``, ``~/.cache``; ``%LOCALAPPDATA%`` on Windows) under
+    ``mrclutch/numba``. Never inside the installed package: a cache left there outlives a
+    reinstall, and Python then takes its folder for the package (issue 39)."""
+    env = os.environ.get("NUMBA_CACHE_DIR")
+    if env:
+        return Path(env)
+    if sys.platform == "win32" and os.environ.get("LOCALAPPDATA"):
+        base = Path(os.environ["LOCALAPPDATA"])
+    else:
+        base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    return base / "mrclutch" / "numba"
+
+
+def numba_module() -> Any:
+    """numba, imported with its cache in ``cache_dir()`` (the environment variable set before
+    the import, so numba's config, and any process this one starts, read it)."""
+    os.environ["NUMBA_CACHE_DIR"] = str(cache_dir())
     import numba
 
+    numba.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]
+    return numba
+
+
+@functools.cache
+def _kernels() -> dict[str, Any]:
+    """The compiled kernels (numba, cached on disk in ``cache_dir()``): a namespace of
+    their own, the module's globals with every kernel replaced by its dispatcher compiled
+    from the same function's code, so the compiled kernels call each other compiled while
+    the module's plain functions stay the uncompiled path. Nothing is compiled or loaded
+    here: each entry on its first call (``_entry``). ``NUMBA_DISABLE_JIT=1``: the module's
+    globals (the debug path)."""
+    numba = numba_module()
     g = globals()
-    for name in _KERNELS:  # in place: the kernels find each other compiled
-        g[name] = numba.njit(cache=True, error_model="numpy")(g[name])
-    entry = (g["_solve_rows"], g["_tangent_rows"])
-    cold = any(_cold(d) for d in entry)
-    timer = threading.Timer(_COMPILE_NOTICE_S, _notice)
+    if numba.config.DISABLE_JIT:
+        return g
+    ns = dict(g)
+    jit = numba.njit(cache=True, error_model="numpy")
+    for name in _KERNELS:
+        f = g[name]
+        ns[name] = jit(types.FunctionType(f.__code__, ns, f.__name__, f.__defaults__))
+    return ns
+
+
+def load(kernel: Any, what: str, warm: Any) -> Any:
+    """``kernel`` (a numba dispatcher) with its one overload compiled or loaded by
+    ``warm(kernel)`` (a call on no design). A compile (numba's cache holds no index of it
+    yet) that runs past ``_COMPILE_NOTICE_S`` says so on stderr while it runs, and its
+    time after."""
+    cold = _cold(kernel)
+    timer = threading.Timer(_COMPILE_NOTICE_S, _notice, (what,))
     timer.daemon = True
     t0 = time.perf_counter()
     if cold:
         timer.start()
     try:
-        tab, inv, nseg = _tables(magnetic("steel_1018"), magnetic("mrf_132dg"))
-        e2, e3 = np.zeros((0, 1)), np.zeros((0, 1, 8))
-        off = np.zeros(len(_PACKED), np.int64)
-        entry[0](e2, off, 1, 6, tab, inv, nseg, e2, np.zeros((0, 1), np.int64), e3, False,
-                 1e-10, 60, e3, np.zeros(0, np.bool_))  # fmt: skip
-        entry[1](e2, off, 1, 6, tab, inv, nseg, e3, e2, np.zeros(8), e3)
+        warm(kernel)
     finally:
         timer.cancel()
     took = time.perf_counter() - t0
-    missed = sum(len(d.stats.cache_misses) for d in entry if hasattr(d, "stats"))
+    missed = len(kernel.stats.cache_misses) if hasattr(kernel, "stats") else 0
     if missed and took > _COMPILE_NOTICE_S:
-        print(f"mrclutch: compiled in {took:.0f} s (cached: later runs load it)",
-              file=sys.stderr)  # fmt: skip
-    return g
+        print(f"mrclutch: compiled in {took:.0f} s (cached in {cache_dir()}: later runs load "
+              "it)", file=sys.stderr)  # fmt: skip
+    return kernel
+
+
+def _warm_solve(kernel: Any) -> None:
+    tab, inv, nseg = _tables(magnetic("steel_1018"), magnetic("mrf_132dg"))
+    e2, e3 = np.zeros((0, 1)), np.zeros((0, 1, 8))
+    off = np.zeros(len(_PACKED), np.int64)
+    kernel(e2, off, 1, 6, tab, inv, nseg, e2, np.zeros((0, 1), np.int64), e3, False, 1e-10,
+           60, e3, np.zeros(0, np.bool_))  # fmt: skip
+
+
+def _warm_tangent(kernel: Any) -> None:
+    tab, inv, nseg = _tables(magnetic("steel_1018"), magnetic("mrf_132dg"))
+    e2, e3 = np.zeros((0, 1)), np.zeros((0, 1, 8))
+    kernel(e2, np.zeros(len(_PACKED), np.int64), 1, 6, tab, inv, nseg, e3, e2, np.zeros(8), e3)
+
+
+_WARM = {"_solve_rows": (_warm_solve, "the reluctance network's solver"),
+         "_tangent_rows": (_warm_tangent, "the network's flux linkage")}  # fmt: skip
+
+
+def _entry(name: str, rows: int) -> Any:
+    """The kernel ``name`` (``_solve_rows``, ``_tangent_rows``) to run ``rows`` rows with:
+    the module's own Python function while ``uncompiled`` allows, else the compiled one
+    (loaded once a process, ``load``)."""
+    if uncompiled("network", rows, _PY_ROWS):
+        return globals()[name]
+    kernel = _kernels()[name]
+    if name not in _loaded:
+        if hasattr(kernel, "stats"):
+            warm, what = _WARM[name]
+            load(kernel, what, warm)
+        _loaded.add(name)
+        _loaded.add("network")
+    return kernel
 
 
 def _cold(kernel: Any) -> bool:
@@ -559,8 +646,8 @@ def _cold(kernel: Any) -> bool:
 
 
 def _notice(what: str = "the reluctance network's solver") -> None:
-    print(f"mrclutch: compiling {what} (numba, once on this machine; ~10 s of CPU) …",
-          file=sys.stderr, flush=True)  # fmt: skip
+    print(f"mrclutch: compiling {what} (numba, once on this machine; ~{_COMPILE_ESTIMATE_S} s "
+          "of CPU) …", file=sys.stderr, flush=True)  # fmt: skip
 
 
 def _materials(net: Network, mats: Mapping[str, Magnetic]):  # type: ignore[no-untyped-def]
@@ -590,12 +677,13 @@ def solve_network(
     from the linear one. Designs that do not converge are refused together."""
     mats = MATERIALS if materials is None else materials
     ni = np.atleast_2d(np.asarray(ampere_turns, dtype=float))
-    ni = np.ascontiguousarray(np.broadcast_to(ni, (net.turns.size, ni.shape[-1])))
+    # writable C arrays, always: a read-only view would be a second overload to compile
+    ni = np.array(np.broadcast_to(ni, (net.turns.size, ni.shape[-1])), order="C")
     if not np.all(np.isfinite(ni)):
         raise ParameterError("current: must be finite")
     shape = (*ni.shape, net.unknowns)
     has_start = start is not None
-    x0 = (np.ascontiguousarray(np.broadcast_to(np.asarray(start, dtype=float), shape))
+    x0 = (np.array(np.broadcast_to(np.asarray(start, dtype=float), shape), order="C")
           if has_start else np.zeros((0, 1, 1)))  # fmt: skip
     order = np.empty(ni.shape, np.int64)
     for lo in range(0, shape[0], _BLOCK):
@@ -604,11 +692,11 @@ def solve_network(
     out = np.zeros(shape)
     ok = np.ones(shape[0], np.bool_)
     if out.size:
-        k = _kernels()
         pk, off = _pack(net)
         tab, inv, nseg = _materials(net, mats)
-        k["_solve_rows"](pk, off, net.m, net.shell_k.shape[1], tab, inv, nseg, ni, order, x0,
-                         has_start, float(rtol), int(max_iter), out, ok)  # fmt: skip
+        kernel = _entry("_solve_rows", out.shape[0] * out.shape[1])
+        kernel(pk, off, net.m, net.shell_k.shape[1], tab, inv, nseg, ni, order, x0, has_start,
+               float(rtol), int(max_iter), out, ok)  # fmt: skip
     if not ok.all():
         rows = np.flatnonzero(~ok).tolist()
         raise NetworkConvergenceError(
@@ -630,8 +718,9 @@ def flux_linkage(
     at the solution (SPD, so L_inc > 0)."""
     mats = MATERIALS if materials is None else materials
     x = solve_network(net, ampere_turns, mats)
-    ni = np.ascontiguousarray(
-        np.broadcast_to(np.atleast_2d(np.asarray(ampere_turns, dtype=float)), x.shape[:-1])
+    ni = np.array(
+        np.broadcast_to(np.atleast_2d(np.asarray(ampere_turns, dtype=float)), x.shape[:-1]),
+        order="C",
     )
     m = net.m
     n = net.turns[:, None]
@@ -641,8 +730,8 @@ def flux_linkage(
     if x.size:
         pk, off = _pack(net)
         tab, inv, nseg = _materials(net, mats)
-        _kernels()["_tangent_rows"](pk, off, m, net.shell_k.shape[1], tab, inv, nseg, x, ni,
-                                    source, v)  # fmt: skip
+        kernel = _entry("_tangent_rows", x.shape[0] * x.shape[1])
+        kernel(pk, off, m, net.shell_k.shape[1], tab, inv, nseg, x, ni, source, v)
     lam = n * (x[..., m - 1] + x[..., m])
     ind = n**2 * (v[..., m - 1] + v[..., m])
     return lam, ind

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import functools
 import math
-import threading
 from collections.abc import Mapping
 from typing import Any
 
@@ -33,13 +32,7 @@ from magnetics.materials import (
     magnetic,
 )
 from magnetics.network.build import Network, network_from_regions
-from magnetics.network.solve import (
-    _COMPILE_NOTICE_S,
-    _cold,
-    _notice,
-    _tables,
-    solve_network,
-)
+from magnetics.network.solve import _loaded, _tables, load, numba_module, solve_network, uncompiled
 
 FloatArray = NDArray[np.float64]
 #: How a gap's torque reads its field across the gap's thickness (``network_film_torque``,
@@ -166,7 +159,7 @@ def network_film_torque(
     law = (fl.tau_y_max, _CARLSON_K, q_inf, s_at, d_at, _S_LO, _S_STEP, float(_S_N))
     if type(fl).tau_y is not MRFluid.tau_y or type(fl).tau_y_decay is not MRFluid.tau_y_decay:
         raise ParameterError(f"fluid {fl.name!r}: the network's torque reads Carlson's law only")
-    read = _reader()
+    read = _reader(phi.size)
     phi, length = np.ascontiguousarray(phi), np.ascontiguousarray(length, dtype=float)
 
     def per_length(r: FloatArray, b_z: FloatArray) -> FloatArray:
@@ -233,28 +226,37 @@ def _read_rows(phi, bz, r, length, w_end, scale, band_end, gt, gw, tab, inv, nse
                 out[s, c, k] = rr**2 * (over * length[s, k] + fringe)
 
 
-@functools.cache
-def _reader():  # type: ignore[no-untyped-def]
-    """``_read_rows`` compiled (numba, cached on disk as the solve's kernels), compiled or
-    loaded here by a call on no design; a compile that runs past a second says so on
-    stderr (``solve._notice``)."""
-    import numba
+#: Cells (design × current × film) a process reads with ``_read_rows``'s own Python before
+#: it loads the compiled reader (``solve.uncompiled``; a cell ≈ 20 µs in Python).
+_PY_CELLS = 20_000
 
-    read = numba.njit(cache=True, error_model="numpy")(_read_rows)
-    timer = threading.Timer(_COMPILE_NOTICE_S, _notice, ("the network's torque reading",))
-    timer.daemon = True
-    if _cold(read):
-        timer.start()
-    try:
-        e2, e3, ends = np.zeros((0, 1)), np.zeros((0, 1, 1)), np.zeros((0, 1, 2))
-        g = np.zeros(_AXIAL_POINTS)
-        tab, inv, nseg = _tables(MATERIALS["steel_1018"], MATERIALS["mrf_132dg"])
-        q_inf, s_at, d_at = _carlson_s_table()
-        read(e3, e3, e2, e2, ends, ends, np.zeros((1, 2)), g, g, tab, inv, nseg, 1.0, 1.0,
-             q_inf, s_at, d_at, 0.0, 1.0, 2.0, e3)  # fmt: skip
-    finally:
-        timer.cancel()
+
+def _reader(cells: int = _PY_CELLS + 1):  # type: ignore[no-untyped-def]
+    """``_read_rows`` to read ``cells`` cells with: its own Python while
+    ``solve.uncompiled`` allows, else compiled (numba, cached on disk as the solve's
+    kernels, ``solve.load``: compiled or loaded once a process by a call on no design)."""
+    if uncompiled("reader", cells, _PY_CELLS):
+        return _read_rows
+    read = _compiled_reader()
+    _loaded.add("reader")  # compiled from now on
     return read
+
+
+@functools.cache
+def _compiled_reader():  # type: ignore[no-untyped-def]
+    read = numba_module().njit(cache=True, error_model="numpy")(_read_rows)
+    if hasattr(read, "stats"):
+        load(read, "the network's torque reading", _warm_reader)
+    return read
+
+
+def _warm_reader(read):  # type: ignore[no-untyped-def]
+    e2, e3, ends = np.zeros((0, 1)), np.zeros((0, 1, 1)), np.zeros((0, 1, 2))
+    g = np.zeros(_AXIAL_POINTS)
+    tab, inv, nseg = _tables(MATERIALS["steel_1018"], MATERIALS["mrf_132dg"])
+    q_inf, s_at, d_at = _carlson_s_table()
+    read(e3, e3, e2, e2, ends, ends, np.zeros((1, 2)), g, g, tab, inv, nseg, 1.0, 1.0, q_inf,
+         s_at, d_at, 0.0, 1.0, 2.0, e3)  # fmt: skip
 
 
 _AXIAL_POINTS = 4  # Gauss–Legendre points along the zone, where the film's B_z builds up

@@ -13,6 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from geometry.params import preset
+
 ROOT = Path(__file__).resolve().parents[2]
 BENCH = ROOT / "benchmarks"
 ENV = {**os.environ, "PYTHONPATH": str(ROOT)}
@@ -63,7 +65,8 @@ print("\\n".join(out), file=sys.__stderr__)
 @pytest.mark.slow
 def test_commands_that_do_not_solve_the_network_never_import_numba():
     """--help, haptic, inertia (a file weighed) and export run without importing numba;
-    torque, which solves the network, imports it (the check can fail)."""
+    nor does torque on one design, which solves the network with the kernels' own Python
+    (a few rows: issue 40); a solve of many rows imports it (the check can fail)."""
     cmds = ["--help", "haptic", "inertia {tmp}/tet.stl --density 7850",
             "export --preset paper --out {tmp}/cad --tolerance-mm 0.05"]  # fmt: skip
     run = subprocess.run([sys.executable, "-c", _IMPORTS, *cmds], env=ENV, capture_output=True,
@@ -74,33 +77,104 @@ def test_commands_that_do_not_solve_the_network_never_import_numba():
         assert ln.endswith("exit 0, numba False"), ln
     run = subprocess.run([sys.executable, "-c", _IMPORTS, "torque --preset paper --current 2"],
                          env=ENV, capture_output=True, text=True, timeout=300)  # fmt: skip
-    assert run.stderr.strip().splitlines()[-1].endswith("exit 0, numba True"), run.stderr
+    assert run.stderr.strip().splitlines()[-1].endswith("exit 0, numba False"), run.stderr
+    many = "from magnetics.torque import network_torque_batch; import sys\n" + _MANY
+    run = subprocess.run([sys.executable, "-c", many], env=ENV, capture_output=True, text=True,
+                         timeout=600, check=True)  # fmt: skip
+    assert run.stdout.split()[-1] == "True", run.stdout
+
+
+#: 300 designs at two currents (600 rows, past ``solve._PY_ROWS``): the compiled kernels.
+_MANY = """
+import numpy as np
+from geometry.params import preset
+f = {k: np.full(300, float(v)) for k, v in vars(preset("paper")).items()}
+f["gap"] = np.linspace(0.3e-3, 0.5e-3, 300)
+assert np.all(network_torque_batch(f, [2.0, 7.0]) > 0)
+print("numba" in sys.modules)
+"""
 
 
 _LOADS = """
 import json, sys
+from pathlib import Path
 import numpy as np
 from geometry.params import preset
 from magnetics.torque import torque_curve
 import magnetics.network.solve as solve
-from magnetics.network.torque import _reader
+import magnetics.network.torque as nt
 
+solve._PY_ROWS = nt._PY_CELLS = 0  # the compiled kernels for every solve
 t = torque_curve(preset("paper"), [2.0, 7.0]).yield_torque
 k = solve._kernels()
-kernels = [k[n] for n in solve._KERNELS] + [_reader()]
+kernels = [k["_solve_rows"], nt._reader()]
 misses = sum(len(d.stats.cache_misses) for d in kernels)
 hits = sum(len(d.stats.cache_hits) for d in kernels)
-print(json.dumps({"misses": misses, "hits": hits, "t": list(t)}))
+package = Path(solve.__file__).parent
+print(json.dumps({"misses": misses, "hits": hits, "t": list(t),
+                  "cache": str(solve.cache_dir()),
+                  "paths": [d.stats.cache_path for d in kernels],
+                  "in_package": [Path(d.stats.cache_path).is_relative_to(package)
+                                 for d in kernels]}))
 """
 
 
-def test_a_later_process_compiles_nothing():
+def test_a_later_process_compiles_nothing(tmp_path):
     """Once the kernels are in numba's cache (the first process on a machine compiles and
     writes them), a process loads every kernel from it: no cache miss, nothing on stderr,
-    the same torque."""
-    runs = [subprocess.run([sys.executable, "-c", _LOADS], env=ENV, capture_output=True,
+    the same torque. The cache is the user's cache folder (here ``XDG_CACHE_HOME``), never
+    the package's folder (issue 39: a cache left there outlives a reinstall)."""
+    env = {k: v for k, v in ENV.items() if k != "NUMBA_CACHE_DIR"}
+    env["XDG_CACHE_HOME"] = str(tmp_path)
+    runs = [subprocess.run([sys.executable, "-c", _LOADS], env=env, capture_output=True,
                            text=True, timeout=600, check=True) for _ in range(2)]  # fmt: skip
     first, second = (json.loads(r.stdout) for r in runs)
-    assert second["misses"] == 0 and second["hits"] >= 3, second
+    assert first["misses"] >= 2 and "compiled in" in runs[0].stderr, runs[0].stderr
+    assert second["misses"] == 0 and second["hits"] == 2, second
     assert runs[1].stderr == ""
     assert second["t"] == first["t"] and all(t > 0 for t in first["t"])
+    assert first["cache"] == str(tmp_path / "mrclutch" / "numba")
+    assert list((tmp_path / "mrclutch" / "numba").rglob("*.nbi"))
+    assert all(Path(p).is_relative_to(tmp_path) for p in first["paths"]), first["paths"]
+    assert first["in_package"] == [False, False]
+
+
+def test_cache_folder_is_the_users_and_numba_cache_dir_wins(monkeypatch, tmp_path):
+    """``cache_dir``: NUMBA_CACHE_DIR if set, else $XDG_CACHE_HOME/mrclutch/numba, else
+    ~/.cache/mrclutch/numba."""
+    from magnetics.network import solve
+
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "nb"))
+    assert solve.cache_dir() == tmp_path / "nb"
+    monkeypatch.delenv("NUMBA_CACHE_DIR")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert solve.cache_dir() == tmp_path / "xdg" / "mrclutch" / "numba"
+    monkeypatch.delenv("XDG_CACHE_HOME")
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    assert solve.cache_dir() == tmp_path / "home" / ".cache" / "mrclutch" / "numba"
+
+
+def test_uncompiled_small_batches_give_the_compiled_answer(monkeypatch):
+    """A few rows run the kernels' own Python (``solve.uncompiled``), many rows the compiled
+    kernels: the same functions, so the same loop fluxes and torques (to 1e-12 relative;
+    both are IEEE double arithmetic in the same order) on 3 designs at 3 currents; once the
+    compiled kernel is loaded, or the process's budget is spent, every solve is compiled."""
+    from magnetics.network import solve
+    from magnetics.network import torque as nt
+    from magnetics.torque import network_torque_batch
+
+    f = {k: np.full(3, float(v)) for k, v in vars(preset("paper")).items()}
+    f["gap"] = np.array([0.3e-3, 0.4e-3, 0.5e-3])
+    cur = [1.0, 3.0, 7.0]
+    monkeypatch.setattr(solve, "_loaded", set())
+    monkeypatch.setattr(nt, "_loaded", solve._loaded)
+    monkeypatch.setattr(solve, "_used", {})
+    py = network_torque_batch(f, cur)
+    assert solve._used == {"network": 9, "reader": 9 * 8} and not solve._loaded
+    monkeypatch.setattr(solve, "_PY_ROWS", 0)
+    monkeypatch.setattr(nt, "_PY_CELLS", 0)
+    jit = network_torque_batch(f, cur)
+    assert {"network", "reader"} <= solve._loaded
+    assert np.all(py > 0)
+    np.testing.assert_allclose(py, jit, rtol=1e-12, atol=0.0)
+    assert not solve.uncompiled("network", 1, 10**9)  # loaded: compiled from now on
