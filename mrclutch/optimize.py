@@ -32,7 +32,7 @@ and reports the first that passes there (docs/optimize.md).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -569,6 +569,7 @@ def pareto(
     members: int = DEFAULT_MEMBERS,
     robust: Any = None,
     materials: Mapping[str, Sequence[str]] | None = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> ParetoSet:
     """The trade-offs on the fast path: NSGA-II (pymoo) over the search box and the drum
     count, maximising the rendering figure and the continuous torque above the drag,
@@ -584,7 +585,9 @@ def pareto(
 
     ``materials``: categorical axes, a part's material (``geometry.materials.SLOTS``) →
     the names to choose among (e.g. {"fluid": ["MRF-122EG", "MRF-140CG"]}): each one more
-    search variable, rounded to an index as the drum count is (issue 33)."""
+    search variable, rounded to an index as the drum count is (issue 33).
+
+    ``progress``: called (generations done, ``generations``) after each generation."""
     from pymoo.algorithms.moo.nsga2 import NSGA2
     from pymoo.core.problem import Problem
     from pymoo.optimize import minimize
@@ -661,8 +664,9 @@ def pareto(
     for slot, choices in cats.items():
         one[slot] = np.array(choices[:1], dtype=object)
     _probe = rows(one)
+    tick = None if progress is None else (lambda alg: progress(alg.n_gen, generations))
     minimize(Clutches(), NSGA2(pop_size=pop_size), ("n_gen", generations), seed=seed,
-             verbose=False)  # fmt: skip
+             verbose=False, callback=tick)  # fmt: skip
     x_all = np.concatenate([x for x, _ in seen])
     r_all = {k: np.concatenate([r[k] for _, r in seen]) for k in seen[0][1]}
     evaluations = len(x_all)

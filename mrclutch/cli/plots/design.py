@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -10,33 +11,75 @@ import numpy as np
 from geometry.materials import COLOUR as REGISTRY_COLOUR
 from geometry.materials import LABEL
 from mrclutch.cli.plots import save_png
-from mrclutch.sweep import pareto_front, read_results
+from mrclutch.sweep import is_parquet, pareto_front, read_results
 
 __all__ = ["pareto_plot", "pareto_set_plot", "read_results"]
 
 
-def pareto_plot(results: str | Path, out: str | Path) -> Path:
+#: Lines a parallel-coordinates panel draws at most: past this many front designs it draws
+#: this many, evenly spaced along the front's bandwidth order (10⁵ lines are a solid block
+#: that takes ~20 s to draw, issue 40), and says so in its title.
+MAX_LINES = 200
+#: The columns ``pareto_plot`` reads (a sweep's CSV has ~40: only these are parsed).
+PLOT_COLUMNS = ("valid", "bandwidth_hz", "max_torque_N_m", "drag_damping_N_m_s",
+                "clutch_mass_kg")  # fmt: skip
+
+
+def plot_columns(results: str | Path, names: tuple[str, ...] = PLOT_COLUMNS) -> dict:
+    """The columns ``names`` of a sweep's results as floats (empty cells NaN): a CSV read by
+    pyarrow's parser, those columns only (``read_results`` parses every column); a Parquet
+    dataset by ``read_results``."""
+    if is_parquet(results):
+        r = read_results(results)
+        return {k: r[k] for k in names}
+    import pyarrow as pa
+    from pyarrow import csv
+
+    conv = csv.ConvertOptions(include_columns=list(names),
+                              column_types={k: pa.float64() for k in names})  # fmt: skip
+    table = csv.read_csv(results, convert_options=conv)
+    return {k: table[k].to_numpy(zero_copy_only=False).astype(float) for k in names}
+
+
+def sample_lines(order: np.ndarray, most: int = MAX_LINES) -> np.ndarray:
+    """At most ``most`` of the indices ``order``, evenly spaced along it (its first and its
+    last kept); all of them when there are no more than ``most``."""
+    if order.size <= most:
+        return order
+    return order[np.unique(np.round(np.linspace(0, order.size - 1, most)).astype(int))]
+
+
+def pareto_plot(results: str | Path, out: str | Path,
+                progress: Callable[[int], None] | None = None) -> Path:  # fmt: skip
     """The Pareto front of three objectives: rendering bandwidth (max), max torque (max) and
     off-state viscous damping (min). Top two panels: bandwidth against each other objective,
     mass as colour, with that panel's own two-objective front (a step line, computed on the
     panel's axes) and the three-objective front outlined (it may lie inside a 2-D cloud: a
     design there wins on the third objective). Bottom: the three-objective front on all three
-    axes at once (parallel coordinates, each axis from the worst to the best valid design)."""
+    axes at once (parallel coordinates, each axis from the worst to the best valid design;
+    at most ``MAX_LINES`` lines, a sample evenly spaced along the front, ``sample_lines``).
+    ``progress(n)``: called with the steps done of ``PLOT_STEPS`` (read, fronts, drawn,
+    written)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
 
-    r = read_results(results)
+    step = progress if progress is not None else (lambda _n: None)
+    r = plot_columns(results)
+    step(1)
     ok = r["valid"] == 1
     bw, tq = r["bandwidth_hz"][ok], r["max_torque_N_m"][ok]
     damp, mass = r["drag_damping_N_m_s"][ok] * 1e6, r["clutch_mass_kg"][ok] * 1e3
     front = pareto_front(np.column_stack([bw, tq, damp]), [True, True, False])
+    step(2)
     fig, axes = plt.subplots(3, 1, figsize=(6, 11), constrained_layout=True)
     for ax, x, label, big in ((axes[0], tq, "max torque (N·m; more is better)", True),
                               (axes[1], damp, "viscous damping (µN·m·s; less is better)",
                                False)):  # fmt: skip
-        sc = ax.scatter(x, bw, c=mass, s=6, cmap="viridis", alpha=0.6, linewidths=0)
+        sc = ax.scatter(x, bw, c=mass, s=6, cmap="viridis", alpha=0.6, linewidths=0,
+                        rasterized=True)  # fmt: skip
         two = pareto_front(np.column_stack([bw, x]), [True, big])
         k = np.flatnonzero(two)
         k = k[np.argsort(x[k])]
@@ -52,22 +95,33 @@ def pareto_plot(results: str | Path, out: str | Path) -> Path:
     names = ("bandwidth\n(max)", "max torque\n(max)", "damping\n(min)")
     cols = [bw, tq, -damp]  # larger is better on every axis
     ax = axes[2]
+    title = "the three-objective front on its own axes"
     if ok.any():
         lo = [float(np.nanmin(c)) for c in cols]
         hi = [float(np.nanmax(c)) for c in cols]
         scaled = np.column_stack([(c - a) / (b - a) if b > a else np.ones_like(c)
                                   for c, a, b in zip(cols, lo, hi, strict=True)])  # fmt: skip
-        for row in scaled[front]:
-            ax.plot(range(3), row, color="crimson", alpha=0.5, lw=0.8)
+        k = np.flatnonzero(front)
+        shown = sample_lines(k[np.argsort(bw[k], kind="stable")])
+        lines = [np.column_stack([np.arange(3), scaled[j]]) for j in shown]
+        ax.add_collection(LineCollection(lines, colors="crimson", alpha=0.5, linewidths=0.8))
+        if shown.size < k.size:
+            title += f"\n({shown.size} of its {k.size} designs, evenly spaced in bandwidth)"
     ax.set_xticks(range(3), names, fontsize=9)
     ax.set_yticks([0, 1], ["worst", "best"])
     ax.set_xlim(-0.1, 2.1)
-    ax.set_title("the three-objective front on its own axes", fontsize=10)
+    ax.set_ylim(-0.05, 1.05)
+    ax.set_title(title, fontsize=10)
     ax.grid(alpha=0.3)
     fig.suptitle(f"Pareto front: max bandwidth, max torque, min damping\n"
                  f"({ok.sum()} valid designs of {ok.size})", fontsize=11)  # fmt: skip
+    step(3)
     save_png(fig, out, dpi=110)
+    step(PLOT_STEPS)
     return Path(out)
+
+
+PLOT_STEPS = 4  # pareto_plot's progress: read, fronts, drawn, written
 
 
 #: Colours by material for the section drawing (matches the 3D view's palette in spirit).
