@@ -61,8 +61,8 @@ class Duty:
     on_fraction: float = ON_FRACTION  # share of the life at the duty torque
 
     def __post_init__(self) -> None:
-        check_range("duty torque", self.torque, 0.0, 1e3, " N·m")
-        check_range("duty time", self.time, 0.0, 1e7, " s", lo_open=True)
+        check_range("torque", self.torque, 0.0, 1e3, " N·m")
+        check_range("time", self.time, 0.0, 1e7, " s", lo_open=True)
         check_range("peak_time", self.peak_time, 0.0, 1e7, " s", lo_open=True)
         check_range("on_fraction", self.on_fraction, 0.0, 1.0)
 
@@ -101,7 +101,10 @@ def parse_duty(text: str, base: Duty | None = None) -> Duty:
         raise ParameterError(f"--duty {text!r}: give NM:S, e.g. 0.2:60") from None
     if not sep:
         raise ParameterError(f"--duty {text!r}: give NM:S, e.g. 0.2:60")
-    return replace(base if base is not None else Duty(), torque=t, time=s)
+    try:
+        return replace(base if base is not None else Duty(), torque=t, time=s)
+    except ParameterError as e:
+        raise ParameterError(f"--duty {text!r}: {e}") from None
 
 
 @dataclass(frozen=True)

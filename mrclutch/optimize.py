@@ -819,11 +819,9 @@ class WorstCase:
         k = np.minimum(k_max, k_cap)  # NaN (no finite worst case) stays NaN: refused
         ok = np.isfinite(k) & (k > 0) & box.valid
         bw = np.full(k.shape, np.nan)
-        if ok.any():
-            nom = box.nominal
-            sub = HapticParams(*(np.asarray(getattr(nom, f))[ok] if np.ndim(getattr(nom, f))
-                                 else getattr(nom, f) for f in ("m1", "b1", "k", "b", "m2")),
-                               delay=np.asarray(nom.delay)[ok])  # fmt: skip
+        if ok.any():  # the nominal pair of the valid rows only (an invalid row is NaN)
+            sub = HapticParams(box.m1[0][ok], box.b1[0][ok], box.k[ok], box.b[ok], box.m2[ok],
+                               delay=box.delay[0][ok])  # fmt: skip
             bw[ok] = bandwidth(sub, k[ok])
         return {"K_max_N_per_m": k_max, "K_N_per_m": k, "bandwidth_hz": bw}
 

@@ -667,16 +667,6 @@ def measured_comparison(ev: Any) -> list[dict[str, Any]]:
     return rows
 
 
-def verdicts_json(ev: Any, robust: bool = True) -> dict[str, Any]:
-    """``Evaluation.as_json()`` with ``robust``: the robust verdicts over the design's ranges
-    (None where ``robust`` is False: the nominal answer only) and ``measured``: the model
-    against the bench (:func:`measured_comparison`). What ``evaluate`` and the report print."""
-    data = ev.as_json()
-    data["robust"] = robust_verdicts(ev) if robust else None
-    data["measured"] = measured_comparison(ev)
-    return data
-
-
 @dataclass(frozen=True)
 class RobustBatchEvaluator(BatchEvaluator):
     """``pipeline.BatchEvaluator`` that also computes the robust columns (``ROBUST_COLUMNS``,

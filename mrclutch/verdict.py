@@ -85,10 +85,37 @@ def judge_evaluation(ev: Evaluation, robust: bool | None = None) -> dict[str, An
     data["render"] = {"rule": ev.design.render.rule, "describe": ev.design.render.describe(),
                       "verdict": "robust" if over_ranges else "nominal",
                       "K_N_per_m": K, "note": note}  # fmt: skip
-    if note:
-        data["clutch"]["notes"] = [*data["clutch"]["notes"], note]
+    extra = ([note] if note else []) + resonance_notes(data)
+    if extra:
+        data["clutch"]["notes"] = [*data["clutch"]["notes"], *extra]
     data["verdict"] = verdict_of(data)
     return data
+
+
+#: Relative nearness of a full-response bandwidth to the free lever's resonance below which
+#: the bandwidth is the resonance's (``resonance_notes``).
+AT_RESONANCE = 0.05
+
+
+def resonance_notes(data: dict[str, Any]) -> list[str]:
+    """Why a full-response bandwidth equal to a resonance is no error: where a side's first
+    k_eff crossing (the bandwidth, mrclutch.haptics.model.bandwidth) lies within
+    ``AT_RESONANCE`` of the free lever's resonance (Eq. 2), the crossing is that mode's
+    (its reflected mass is too large for √(K/(m1+m2)) to come first), and a gain on the
+    full response compares a spring's bandwidth with a mode."""
+    out = []
+    for side, label in (("haptic", "MR pair"), ("motor", "Maxon 136206")):
+        h = data.get(side) or {}
+        bw, res, lumped = h.get("bandwidth_hz"), h.get("resonance_hz"), h.get("bandwidth_lumped_hz")
+        if bw is None or res is None or not (math.isfinite(bw) and math.isfinite(res)):
+            continue
+        if abs(bw / res - 1.0) <= AT_RESONANCE:
+            out.append(f"the {label}'s full-response bandwidth {bw:.4g} Hz is its transmission "
+                       f"resonance ({res:.4g} Hz): its effective stiffness stays spring-like up "
+                       f"to that mode, far above its lumped √(K/(m1+m2)) = {lumped:.4g} Hz; "
+                       "read the lumped figure for the spring it renders, and a gain on the "
+                       "full response as spring against mode")  # fmt: skip
+    return out
 
 
 def _holds_nominal(h: dict[str, Any]) -> dict[str, dict[str, Any]]:
@@ -179,8 +206,8 @@ def hand_verdict(data: dict[str, Any]) -> dict[str, Any]:
     coupled to the lever, mrclutch.haptics.hand), at the same K, labelled as such."""
     hm = (data.get("hand") or {}).get("mr") or {}
     if hm.get("note") or hm.get("coupled_stable") is None:
-        why = hm.get("note", "not computed")
-        return {"stable": None, "line": f"held by a hand: unknown ({why})"}
+        why = hm.get("note", "the hand figures were not computed")
+        return {"stable": None, "line": f"held by a hand: unknown ({why})", "note": why}
     ok = bool(hm["coupled_stable"])
     w = hm["worst_hand"]
     line = (f"held by a hand (second verdict, docs/hand.md): "

@@ -50,10 +50,10 @@ from mrclutch.cli.plots.haptic import compare_figure, zwidth_figure
 from mrclutch.cli.plots.magnetics import plot_torque
 from mrclutch.cli.view import screenshot
 from mrclutch.design import ClutchDesign
-from mrclutch.outputs import CLUTCH_ROWS, HAND_ROWS, format_kmax, output, row_label
+from mrclutch.outputs import CLUTCH_ROWS, HAND_ROWS, output, row_label
 from mrclutch.pipeline import evaluate
-from mrclutch.robust import verdicts_json
 from mrclutch.sweep import sigterm_as_interrupt
+from mrclutch.verdict import judge_evaluation
 
 #: Currents of the report's torque curve (A): the paper's Fig. 2b range.
 CURVE_CURRENTS = np.linspace(0.0, 7.0, 29)
@@ -149,7 +149,7 @@ def _build_in(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[st
               tmp: Path) -> Report:  # fmt: skip
     tick("evaluating the design")
     ev = evaluate(design, fidelity)
-    data = verdicts_json(ev)
+    data = judge_evaluation(ev)  # the design's [render] rule, its one verdict
     tick("CAD: STEP and STL")
     cad = _cad(design, tmp)
     tick("3D view")
@@ -160,7 +160,7 @@ def _build_in(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[st
     curve = _torque(design, tmp / "torque.png")
     tick("haptic plots")
 
-    k = float(ev.mr.k_max)
+    k = float(data["haptic"]["K_N_per_m"])  # the K rendered (the design's [render] rule)
     sides = {"MR pair": ev.mr, "Maxon 136206 (equal force)": ev.motor}
     compare_figure({n: p for n, p in sides.items() if p is not None}, k, tmp / "haptic.png")
     zw = {"MR pair": ev.zwidth["mr"]}
@@ -235,35 +235,21 @@ def _fmt(v: Any, scale: float = 1.0, digits: int = 4) -> str:
 def findings(m: dict[str, Any]) -> list[str]:
     """Plain-language statements a designer should read first."""
     h, e, c = m["haptic"], m["motor"], m["clutch"]
-    out = [m["robust"]["headline"]] if m.get("robust") else []
-    kmax = format_kmax(h["K_N_per_m"], "MR pair, " + m.get("source", "model"))
+    out = []  # the verdict itself is the badge above (verdict.verdict_of): said once
+    rule = (m.get("render") or {}).get("describe", "K_max = F_max/d")
+    kmax = f"K = {h['K_N_per_m']:.4g} N/m ({rule}, {m.get('source', 'model')})"
     gain = m["bandwidth_gain"]
-    stable = h["K_N_per_m"] <= h["max_stable_K_N_per_m"] * (1 + 1e-9)
-    if gain is not None and stable:
+    if gain is not None:
         out.append(
             f"At {kmax} the MR pair renders the "
-            f"spring up to {h['bandwidth_hz']:.1f} Hz, the equal-force Maxon 136206 up to "
-            f"{e['bandwidth_hz']:.1f} Hz ({gain * 100:+.0f} %)."
-        )
-    elif gain is not None:
-        out.append(
-            f"At {kmax} the MR pair's loop is "
-            f"UNSTABLE when released (stable hands off only up to "
-            f"{h['max_stable_K_N_per_m']:.0f} N/m), so its rendering bandwidth "
-            f"({h['bandwidth_hz']:.1f} Hz, the first k_eff crossing) describes a loop that "
-            f"only a hand keeps stable; the equal-force Maxon 136206 renders up to "
-            f"{e['bandwidth_hz']:.1f} Hz."
+            f"spring up to {h['bandwidth_hz']:.1f} Hz (the first k_eff crossing), the "
+            f"equal-force Maxon 136206 up to {e['bandwidth_hz']:.1f} Hz ({gain * 100:+.0f} %); "
+            f"hands off it is stable up to {h['max_stable_K_N_per_m']:.0f} N/m and passive up "
+            f"to {h['max_passive_K_N_per_m']:.0f} N/m at nominal values."
         )
     hand = m.get("hand")
     if hand is not None and not hand["mr"].get("note") and not hand["motor"].get("note"):
         hm, he = hand["mr"], hand["motor"]
-        w = hm["worst_hand"]
-        verdict = "stable" if hm["coupled_stable"] else "NOT stable"
-        out.append(
-            f"Held by a hand (range in docs/hand.md) the MR pair is {verdict} at K, and stable "
-            f"up to {hm['max_stable_K_all_hands_N_per_m']:.0f} N/m for every hand checked "
-            f"(worst: {w['m_kg']:g} kg, {w['b_N_s_per_m']:g} N·s/m, {w['k_N_per_m']:g} N/m)."
-        )
         mo = hm["motion"]
         out.append(
             f"In free motion (K = 0, ±{mo['amplitude_m'] * 1e3:g} mm at {mo['frequency_hz']:g} Hz)"
@@ -272,10 +258,9 @@ def findings(m: dict[str, Any]) -> list[str]:
         )
     if not h["passive"]:
         out.append(
-            f"The MR pair is NOT passive at K_max: with its {h['delay_s'] * 1e3:.3g} ms delay "
-            f"and b1 = {h['b1_N_s_per_m']:.3g} N·s/m it stays passive only up to "
-            f"{h['max_passive_K_N_per_m']:.0f} N/m (stable up to "
-            f"{h['max_stable_K_N_per_m']:.0f} N/m). More drag (smaller gaps, more drums) or "
+            f"At nominal values, with its {h['delay_s'] * 1e3:.3g} ms delay and b1 = "
+            f"{h['b1_N_s_per_m']:.3g} N·s/m, the MR pair stays passive only up to "
+            f"{h['max_passive_K_N_per_m']:.0f} N/m: more drag (smaller gaps, more drums) or "
             "less delay raises that limit."
         )
     if e.get("note"):  # the equal-force motor is unavailable
@@ -385,6 +370,16 @@ def response_caption(r: dict[str, Any]) -> str:
             f"docs/dynamics.md).")  # fmt: skip
 
 
+def verdict_badge(m: dict[str, Any]) -> str:
+    """The design's one verdict (``mrclutch.verdict.verdict_of``) as the page's first block:
+    the status word, its sentence and, labelled as the second verdict, the hand-held case."""
+    v = m["verdict"]
+    e_ = html.escape
+    return (f'<div class="verdict {e_(v["status"])}" id="verdict"><b>Verdict: '
+            f'{e_(v["status"].upper())}</b> — {e_(v["line"].split(" — ", 1)[1])}<br>'
+            f'<span class=small>{e_(v["hand"]["line"])}</span></div>')  # fmt: skip
+
+
 def render_html(m: dict[str, Any]) -> str:
     """One page: findings, the clutch, the hand, the figures, the files."""
     c, h, e = m["clutch"], m["haptic"], m["motor"]
@@ -427,12 +422,17 @@ td.n{{text-align:right;font-variant-numeric:tabular-nums}}
 img{{max-width:100%;height:auto;border:1px solid #eee;box-sizing:border-box}}
 .grid{{display:grid;grid-template-columns:1fr 1fr;gap:1em}} .grid>div{{min-width:0}}
 .small{{color:#666;font-size:.9em}}
+.verdict{{padding:.6em 1em;border-radius:6px;margin:1em 0;border:2px solid}}
+.verdict.pass{{background:#e6f4ea;border-color:#2e7d32}}
+.verdict.fail{{background:#fdecea;border-color:#c62828}}
+.verdict.depends{{background:#fff8e1;border-color:#f9a825}}
 @media (max-width:700px){{.grid{{grid-template-columns:1fr}} body{{margin:1em auto}}
 td,th{{padding:.2em .4em}}}}
 </style></head><body>
 <h1>MR drum clutch design “{e_(m["design"])}”</h1>
 <p class=small>Fidelity <b>{e_(m["fidelity"])}</b> ({e_(methods)}). All figures SI unless marked.
 Generated by mrclutch; the numbers are in <a href="metrics.json">metrics.json</a>.</p>
+{verdict_badge(m)}
 <h2>What the hand feels, in short</h2><ul>{items}</ul>
 <div class=grid>
 <div><h2>The clutch</h2><table>{rows1}</table></div>

@@ -260,10 +260,7 @@ def _walk(v, path=""):
 @pytest.mark.parametrize(
     "extra",
     ["",
-     pytest.param("[measured]\nuse_in_model = true\nm1_g = 1e-3\nb1_N_s_per_m = 1e4\n",
-                  marks=pytest.mark.xfail(strict=True, reason="verdict/hand/stable is null "
-                                          "without a reason (mrclutch/verdict.py, issue 44 "
-                                          "report)")),
+     "[measured]\nuse_in_model = true\nm1_g = 1e-3\nb1_N_s_per_m = 1e4\n",
      "[measured]\nuse_in_model = true\ntorque = [{current_A = 7.0, torque_N_m = 1000}]\n"],
 )  # fmt: skip
 def test_accepted_extremes_print_no_nan_and_explain_every_null(tmp_path, capsys, extra):

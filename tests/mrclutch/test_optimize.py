@@ -11,12 +11,13 @@ import pytest
 import mrclutch.optimize as opt_mod
 from geometry import ParameterError
 from mrclutch.cli.commands import design as design_cmd
-from mrclutch.cli.commands.design import haptic_verdict, requirement_violations
+from mrclutch.cli.commands.design import requirement_violations
 from mrclutch.cli.main import main
 from mrclutch.design import design_preset, load_design
 from mrclutch.optimize import Constraints, optimize, parse_bounds
 from mrclutch.pipeline import evaluate, evaluate_batch
 from mrclutch.process import Process
+from mrclutch.verdict import verdict_of
 
 
 @pytest.fixture(scope="module")
@@ -37,8 +38,9 @@ def test_default_optimum_is_stable_and_passive_at_its_K_at_reference_fidelity(
     assert small_reference["fidelity"] == "reference"
     assert h["passive"] and h["K_N_per_m"] <= h["max_passive_K_N_per_m"]
     assert h["K_N_per_m"] < h["max_stable_K_N_per_m"]
-    v = haptic_verdict(small_reference)
-    assert v["stable"] and v["passive"]
+    v = verdict_of(small_reference)  # the one verdict, nominal: no ranges in this data
+    assert v["over"] == "nominal" and v["status"] == "pass"
+    assert v["stable"]["holds"] == v["passive"]["holds"] == "always"
     assert requirement_violations(small_reference, Constraints()) == []
 
 
@@ -172,7 +174,7 @@ def test_cli_json_and_design_file(tmp_path, capsys):
     assert code == 0
     data = json.loads(capsys.readouterr().out)
     assert data["verdict"]["fidelity"] == "fast" and data["requirements_met"] is True
-    assert data["verdict"]["stable"] and data["verdict"]["passive"]
+    assert data["verdict"]["status"] == "pass"
     assert data["required"] == {"passive": True, "stable": True}
     assert 0.3 <= data["design_mm"]["gap_mm"] <= 0.6
     assert data["design_mm"]["n_drums"] == 2
@@ -191,8 +193,9 @@ def test_cli_prints_the_reference_verdict(tmp_path, capsys):
     assert main(["optimize", "--objective", "bandwidth", "--drums", "1", "--out", str(out)]) == 0
     text = capsys.readouterr().out
     assert "haptic verdict (reference fidelity)" in text
-    assert "stable at K:  yes (required)" in text
-    assert "passive at K: yes (required)" in text
+    assert "stable at K over the ranges:  yes     (required)" in text
+    assert "passive at K over the ranges: yes     (required)" in text
+    assert text.startswith("VERDICT: PASS")  # the design written, its one verdict first
     assert "requirements: all met" in text
     assert out.exists()
 
@@ -228,13 +231,13 @@ def test_cli_exits_3_when_the_reference_check_violates_a_requirement(
     cap = capsys.readouterr()
     assert phrase in cap.err and "reference fidelity" in cap.err
     data = json.loads(cap.out)
-    assert data["requirements_met"] is False and data["verdict"][key] is False
+    assert data["requirements_met"] is False and data["verdict"][key]["holds"] == "never"
     assert data["verdict"]["fidelity"] == "reference"
     assert out.exists()
     # the same violation is no violation when that requirement is relaxed
     assert main([*argv, allow]) == 0
     data = json.loads(capsys.readouterr().out)
-    assert data["requirements_met"] is True and data["verdict"][key] is False
+    assert data["requirements_met"] is True and data["verdict"][key]["holds"] == "never"
 
 
 def test_removed_require_passive_flag_is_refused(capsys):
@@ -352,7 +355,8 @@ def test_cli_tries_the_next_candidate_when_the_best_fails_at_reference(
     assert second["violations"] == [] and data["requirements_met"] is True
     assert data["design_mm"] == second["design_mm"] != first["design_mm"]
     assert data["objective_value"] == second["objective_value"]
-    assert data["verdict"]["passive"] and data["verdict"]["fidelity"] == "reference"
+    assert data["verdict"]["passive"]["holds"] == "always"
+    assert data["verdict"]["fidelity"] == "reference"
     assert load_design(out).clutch.to_mm() == second["design_mm"]
 
 

@@ -352,12 +352,19 @@ def test_every_k_max_printed_agrees_or_names_another_source(report_dir, capsys):
             "maxon-136206, Table 1 catalogue"} <= labels  # fmt: skip
 
 
-def test_report_leads_with_the_robust_verdict_and_shows_the_bench(report_dir):
+def test_report_leads_with_the_verdict_badge_and_shows_the_bench(report_dir):
+    """Issue 39: the one verdict is the page's first block (a badge), said once; the
+    hand-held case is labelled as the second verdict."""
     metrics = json.loads((report_dir / "metrics.json").read_text())
     page = (report_dir / "report.html").read_text()
-    head = metrics["robust"]["headline"]
-    assert head.startswith("Robust verdict at K")
-    assert html.escape(head) in page
+    v = metrics["verdict"]
+    assert v["line"].startswith("VERDICT: ")
+    body = page.split("<body>", 1)[1]
+    assert body.index('id="verdict"') < body.index("<h2>")  # above everything else
+    assert page.count('id="verdict"') == 1 and f'class="verdict {v["status"]}"' in page
+    assert html.escape(v["line"].split(" — ", 1)[1]) in page
+    assert html.escape(v["hand"]["line"]) in page and "second verdict" in v["hand"]["line"]
+    assert "UNSTABLE when released" not in page
     assert "Model against the bench" in page
     rows = {r["quantity"] for r in metrics["measured"]}
     assert rows == {"torque at 7 A", "delay of a torque step", "m1 at the hand", "b1 at the hand"}

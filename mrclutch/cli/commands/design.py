@@ -27,12 +27,11 @@ from mrclutch.cli.duty_format import duty_lines
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.executors import sweep_executor
 from mrclutch.cli.longjobs import announce
-from mrclutch.cli.plots.design import pareto_plot, pareto_set_plot
+from mrclutch.cli.plots.design import PLOT_STEPS, pareto_plot, pareto_set_plot
+from mrclutch.cli.progress import bar as progress_bar
 from mrclutch.cli.report import write_report
 from mrclutch.design import ClutchDesign, design_from_mapping, design_preset, design_to_toml
 from mrclutch.duty import parse_duty
-from mrclutch.haptics.actuator import HapticParams
-from mrclutch.haptics.model import bandwidth
 from mrclutch.optimize import (
     CONTINUOUS,
     DEFAULT_MEMBERS,
@@ -47,6 +46,7 @@ from mrclutch.optimize import (
     Member,
     Optimum,
     ParetoSet,
+    WorstCase,
     active_limits,
     evaluate_rows,
     limit_columns,
@@ -69,11 +69,12 @@ from mrclutch.pipeline import (
     FAST_BANDWIDTH_ERROR,
     FIDELITIES,
     BatchEvaluator,
-    evaluate,
     null_notes,
 )
-from mrclutch.robust import ROBUST_COLUMNS, RobustBatchEvaluator, verdicts_json
+from mrclutch.robust import ROBUST_COLUMNS, RobustBatchEvaluator
 from mrclutch.sweep import is_parquet, load_spec, run_sweep
+from mrclutch.uncertainty import Uncertainty
+from mrclutch.verdict import for_workshop, judge, verdict_lines, verdict_of
 from mrclutch.verify import TORQUE, verified_path, verify_designs, verify_top, write_verified
 
 
@@ -348,15 +349,18 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--designs",
         metavar="DIR",
-        help="write each Pareto member as a design file DIR/member_NN.toml (Pareto mode)",
+        help="write each Pareto member as a design file DIR/member_NN.toml (Pareto mode); "
+        "a folder holding member files of an earlier run needs --overwrite",
     )
+    p.add_argument("--overwrite", action="store_true",
+                   help="with --designs: replace the member files of an earlier run")  # fmt: skip
     p.add_argument("--no-verify", action="store_true", help="skip the reference-fidelity check")
     p.add_argument(
         "--nominal",
         action="store_true",
-        help="Pareto set: take the nominal haptic verdict at K = K_max instead of the worst "
-        "case over the uncertainty ranges (by default each member renders the largest K it "
-        "keeps stable and passive over them: docs/optimize.md); --objective is nominal",
+        help="take the nominal haptic verdict at K = K_max instead of the worst case over "
+        "the uncertainty ranges (by default each design renders the largest K it keeps "
+        "stable and passive over them, and its files say so in [render]: docs/optimize.md)",
     )
     p.add_argument(
         "--workers",
@@ -383,6 +387,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--out", metavar="DESIGN.toml",
                    help="one objective: write the optimum as a design file")  # fmt: skip
     p.add_argument("--json", action="store_true")
+    p.add_argument("--no-progress", action="store_true",
+                   help="no progress bar (the Pareto set's generations, its checks)")  # fmt: skip
     p.set_defaults(func=_optimize)
 
 
@@ -392,8 +398,8 @@ def _evaluate(args: argparse.Namespace) -> int:
         raise CLIError(f"--accuracy = {args.accuracy}: need 0 < accuracy < 1 (relative)")
     if args.duty is not None:  # issue 41
         design = replace(design, duty=parse_duty(args.duty, design.duty))
-    ev = evaluate(design, args.fidelity, accuracy=args.accuracy)
-    data = verdicts_json(ev, robust=not args.no_uncertainty)
+    data = judge(design, args.fidelity, accuracy=args.accuracy,
+                 robust=False if args.no_uncertainty else None)  # fmt: skip
     data["nulls"] = null_notes(data)  # the verdicts' sections too
     if args.json:
         print_json(data)
@@ -408,17 +414,6 @@ def _evaluate(args: argparse.Namespace) -> int:
             seen.add(why)
             print(f"note: {path} — {why}")
     return 0
-
-
-def verdict_headline(data: dict) -> str:
-    """The one-sentence verdict: robust over the ranges, or nominal without them."""
-    if data.get("robust"):
-        return str(data["robust"]["headline"])
-    h = data["haptic"]
-    stable = h["K_N_per_m"] <= h["max_stable_K_N_per_m"] * (1 + 1e-9)
-    return (f"Verdict at K = {h['K_N_per_m']:.4g} N/m (nominal, no uncertainty): "
-            f"{'stable' if stable else 'unstable'} and "
-            f"{'passive' if h['passive'] else 'not passive'}.")  # fmt: skip
 
 
 def format_robust(r: dict) -> list[str]:
@@ -469,13 +464,19 @@ CAP_NOTE = "the current-density limit caps the current"
 SUPPLY_NOTE = "supply holds at most"
 
 
-def format_evaluation(data: dict) -> str:
-    """A person's view of ``robust.verdicts_json``."""
+def format_evaluation(data: dict, lead: bool = True) -> str:
+    """A person's view of ``verdict.judge``'s data: the verdict first, said once (``lead``
+    False: a table inside another command's output, which leads with its own verdict
+    line; the table then names its verdict's status and fidelity only)."""
     c = data["clutch"]
+    v = data["verdict"]
+    head = (verdict_lines(data) if lead else
+            [f"(verdict at {v['fidelity']} fidelity: {v['status']}; the line above is the "
+             "design's)"])  # fmt: skip
     lines = [
+        *head,
         f"design {data['design']}  (fidelity {data['fidelity']}: inertia by "
         f"{c['methods']['inertia']}, torque by {c['methods']['torque']})",
-        verdict_headline(data),
         "",
         "clutch",
     ]
@@ -498,8 +499,10 @@ def format_evaluation(data: dict) -> str:
         lines.append(f"  (motor unavailable: {m['note']})")
     else:
         lines.append(f"  (motor geared ×{m['gearing']:.3g} to the MR pair's force)")
-    lines.append(f"  K rendered = {format_kmax(h['K_N_per_m'], 'MR pair, ' + data['source'])}, "
-                 "Eq. 4 of its force; m1, b1 and the bandwidths from the same source")  # fmt: skip
+    rule = (data.get("render") or {}).get("describe", "K_max = F_max/d")
+    lines.append(f"  K rendered {h['K_N_per_m']:.4g} N/m ({rule}; "
+                 f"{format_kmax(h['K_max_N_per_m'], 'MR pair, ' + data['source'])}, Eq. 4 of "
+                 "its force); m1, b1 and the bandwidths from the same source")  # fmt: skip
     g, gl = data["bandwidth_gain"], data["bandwidth_gain_lumped"]
     lines.append(f"bandwidth gain MR over motor: {_pct(gl)} lumped, {_pct(g)} on the full response")
     if data.get("robust"):
@@ -649,6 +652,7 @@ def _report(args: argparse.Namespace) -> int:
                 bar.update(1)
 
             rep = write_report(design, args.out, fidelity=args.fidelity, progress=tick)
+    print(rep.metrics["verdict"]["line"])  # the one verdict, as the page's badge says it
     print(f"report written to {rep.out_dir}/report.html ({len(rep.files)} files)")
     return 0
 
@@ -816,7 +820,8 @@ def _sweep(args: argparse.Namespace) -> int:
         print(format_verified(verified, args.objective or TORQUE, fem_size, workers, t_verify))
         print(f"verified rows: {side}")
     if args.pareto:
-        pareto_plot(res.path, args.pareto)
+        with progress_bar(PLOT_STEPS, "sweep plot", "step", not args.no_progress) as done:
+            pareto_plot(res.path, args.pareto, progress=done)
         print(f"Pareto front: {args.pareto}")
     return 0
 
@@ -917,6 +922,9 @@ def _optimize(args: argparse.Namespace) -> int:
         if given:
             raise CLIError(f"{opt}: only for the Pareto set (without --objective)")
     check_int("--tries", args.tries, 1, MAX_CANDIDATES)
+    if args.out:
+        check_writable("--out", args.out, folder=False)
+    wc = None if args.nominal else robust_verdict(base)
     t0 = time.perf_counter()
     opt = optimize(
         base,
@@ -925,6 +933,7 @@ def _optimize(args: argparse.Namespace) -> int:
         bounds=parse_bounds(args.vary) if args.vary else None,
         drum_counts=drums,
         seed=args.seed,
+        robust=wc,
     )
     t_fast = time.perf_counter() - t0
     if not opt.feasible:
@@ -935,7 +944,7 @@ def _optimize(args: argparse.Namespace) -> int:
     for rank, cand in enumerate(
         opt.candidates[: args.tries] or (Candidate(opt.design, opt.value),)
     ):
-        data = _check_candidate(args, cand, cons)
+        data = _check_candidate(args, for_workshop(cand.design, _ranges(wc))[0], cons)
         tried.append({"rank": rank + 1, "n_drums": cand.design.clutch.n_drums,
                       "design_mm": cand.design.clutch.to_mm(), "objective_value": cand.value,
                       "fidelity": data["verdict"]["fidelity"],
@@ -964,9 +973,11 @@ def _optimize(args: argparse.Namespace) -> int:
         **data,
         "tried": tried,
     }
+    shipped, notes = for_workshop(cand.design, _ranges(wc))
+    data["notes"] = notes
     if args.out:
         with atomic_path(args.out) as tmp:
-            tmp.write_text(design_to_toml(cand.design))
+            tmp.write_text(design_to_toml(shipped))
     verified = None
     if args.verify_top is not None:
         t2 = time.perf_counter()
@@ -984,7 +995,7 @@ def _optimize(args: argparse.Namespace) -> int:
     if args.json:
         print_json(data)
     else:
-        _print_optimum(args, opt, cand, t_fast, data)
+        _print_optimum(args, opt, cand, t_fast, data, wc)
         if verified is not None:
             print()
             print(format_verified(verified, key, fem_size, max(args.workers, 1), t_verify)
@@ -1004,7 +1015,7 @@ def _optimize(args: argparse.Namespace) -> int:
     return 0
 
 
-def _limits_line(base: ClutchDesign, cons: Constraints) -> str:
+def _limits_line(base: ClutchDesign, cons: Constraints, wc: WorstCase | None) -> str:
     """Every limit enforced, in one paragraph."""
     pr = base.process
     parts = [
@@ -1022,17 +1033,42 @@ def _limits_line(base: ClutchDesign, cons: Constraints) -> str:
     parts.append(f"drum wall ≥ {pr.min_wall * 1e3:g} mm")
     need = [w for w, on in (("stable", cons.stable), ("passive", cons.passive)) if on]
     if need:
-        parts.append(" and ".join(need) + " at K = K_max")
+        parts.append(" and ".join(need) + (" over the uncertainty ranges at the K each design "
+                     "renders (the largest K that holds them, at most K_max)" if wc is not None
+                     else " at K = K_max (nominal values)"))  # fmt: skip
     return "limits: " + "; ".join(parts)
 
 
-def _reference_all(designs: list[ClutchDesign], workers: int) -> list[dict]:
-    """Every design at reference fidelity, on ``workers`` processes (0: here)."""
+def _judge_all(designs: list[ClutchDesign], fidelity: str, workers: int,
+               done: Any = None) -> list[dict]:  # fmt: skip
+    """Every design judged (``verdict.judge``) at ``fidelity``, on ``workers`` processes
+    (0: here); ``done(n)`` after each (a progress bar's)."""
+    check = reference_check if fidelity == "reference" else fast_check
+    out: list[dict] = []
     with sweep_executor(workers) as (executor, _):
-        if executor is None:
-            return [reference_check(d) for d in designs]
-        futures = [executor.submit(reference_check, d) for d in designs]
-        return [f.result() for f in futures]
+        futures = None if executor is None else [executor.submit(check, d) for d in designs]
+        for i, d in enumerate(designs):
+            out.append(check(d) if futures is None else futures[i].result())
+            if done is not None:
+                done(i + 1)
+    return out
+
+
+def _ranges(wc: WorstCase | None) -> Uncertainty | None:
+    """The ranges the optimiser's worst case is taken over (None: ``--nominal``)."""
+    return None if wc is None else wc.uncertainty
+
+
+def _old_members(args: argparse.Namespace) -> set[Path]:
+    """The member files an earlier run left in ``--designs``: refused without
+    ``--overwrite`` (a folder of two runs' members would mix them), else to be removed."""
+    if not args.designs or not Path(args.designs).is_dir():
+        return set()
+    old = set(Path(args.designs).glob("member_*.toml"))
+    if old and not args.overwrite:
+        raise CLIError(f"--designs {args.designs}: holds {len(old)} member file(s) of an "
+                       "earlier run; give --overwrite to replace them, or another folder")
+    return old
 
 
 def _member_json(i: int, m: Member, ev: dict | None, violations: list[str]) -> dict:
@@ -1061,12 +1097,16 @@ def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...]
     for opt, path, folder in (("--plot", args.plot, False), ("--designs", args.designs, True)):
         if path:
             check_writable(opt, path, folder=folder)
+    old_members = _old_members(args)
+    wc = None if args.nominal else robust_verdict(base)
     t0 = time.perf_counter()
-    ps = pareto(base, rendering=args.rendering, constraints=cons,
-                bounds=parse_bounds(args.vary) if args.vary else None, drum_counts=drums,
-                seed=args.seed, members=args.members,
-                robust=None if args.nominal else robust_verdict(base),
-                materials=_material_axes(args.material))  # fmt: skip
+    gens = 100  # pareto's default generations
+    with progress_bar(gens, "optimize: generations", "gen", not args.no_progress) as done:
+        ps = pareto(base, rendering=args.rendering, constraints=cons,
+                    bounds=parse_bounds(args.vary) if args.vary else None, drum_counts=drums,
+                    seed=args.seed, members=args.members, robust=wc,
+                    materials=_material_axes(args.material), generations=gens,
+                    progress=lambda n, _total: done(n))  # fmt: skip
     t_fast = time.perf_counter() - t0
     if not ps.members and ps.dropped_robust:
         raise CLIError(f"no design of the front is stable and passive at its K over the "
@@ -1074,19 +1114,18 @@ def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...]
                        "declare narrower ranges ([uncertainty]) or give --nominal")  # fmt: skip
     if not ps.members:
         raise CLIError("no design meets the constraints in the search box; relax a limit")
-    refs: list[dict | None] = [None] * len(ps.members)
-    t_ref = 0.0
-    if not args.no_verify:
-        t1 = time.perf_counter()
-        refs = list(_reference_all([m.design for m in ps.members], args.workers))
-        t_ref = time.perf_counter() - t1
+    # each member as its file says (its [render] rule, its ranges, no bench), judged by the
+    # one verdict every command uses, at reference fidelity (or the fast path: --no-verify)
+    shipped = [for_workshop(m.design, _ranges(wc)) for m in ps.members]
+    t1 = time.perf_counter()
+    desc = "optimize: members checked"
+    with progress_bar(len(shipped), desc, "design", not args.no_progress) as done:
+        refs = _judge_all([d for d, _ in shipped], "fast" if args.no_verify else "reference",
+                          args.workers, done)  # fmt: skip
+    t_ref = 0.0 if args.no_verify else time.perf_counter() - t1
     rows = []
-    if not args.nominal:  # the verdict at the K each member renders
-        refs = [at_K(ev, m.row["K_N_per_m"]) if ev is not None else None
-                for m, ev in zip(ps.members, refs, strict=True)]  # fmt: skip
-    for i, (m, ev) in enumerate(zip(ps.members, refs, strict=True), 1):
-        viol = requirement_violations(ev, cons, m.design) if ev is not None else []
-        rows.append(_member_json(i, m, ev, viol))
+    for i, (m, ev, (d, _)) in enumerate(zip(ps.members, refs, shipped, strict=True), 1):
+        rows.append(_member_json(i, m, ev, requirement_violations(ev, cons, d)))
     kept = [r for r in rows if not r["violations"]]
     verified = None
     if args.verify_top is not None and kept:
@@ -1104,17 +1143,15 @@ def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...]
         folder = Path(args.designs)
         folder.mkdir(parents=True, exist_ok=True)
         for r in kept:
-            m = ps.members[r["member"] - 1]
             path = folder / f"member_{r['member']:02d}.toml"
+            design = shipped[r["member"] - 1][0]
             with atomic_path(path) as tmp:
-                tmp.write_text(design_to_toml(replace(m.design, name=path.stem)))
+                tmp.write_text(design_to_toml(replace(design, name=path.stem)))
             written.append(str(path))
-    paper = _paper_beside(base, "fast" if args.no_verify else "reference")
-    if not args.nominal:
-        pd = _paper_on(base)
-        pf = {k: np.array([getattr(pd.clutch, k)]) for k in (*ps.box, "n_drums")}
-        prow = evaluate_rows(pf, pd, cons)
-        paper = at_K(paper, float(robust_verdict(pd).full(pf, pd, prow)["K_N_per_m"][0]))
+        for path in old_members - {Path(w) for w in written}:  # --overwrite: none left over
+            path.unlink(missing_ok=True)
+    notes = shipped[0][1] if shipped else []
+    paper = _paper_beside(base, "fast" if args.no_verify else "reference", wc)
     if args.plot:
         pareto_set_plot(ps, [r["member"] for r in kept], paper, args.plot)
     data = {
@@ -1138,6 +1175,7 @@ def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...]
         "box_mm": {f"{k}_mm": [lo * 1e3, hi * 1e3] for k, (lo, hi) in ps.box.items()},
         "box_source": {f"{k}_mm": v for k, v in ps.box_source.items()},
         "designs_written": written,
+        "notes": notes,
         "paper_preset": _explain_json(paper),
     }
     if verified is not None:
@@ -1145,14 +1183,17 @@ def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...]
     if args.json:
         print_json(data)
     else:
-        _print_pareto(args, ps, rows, kept, t_fast, t_ref, base, cons, paper)
+        _print_pareto(args, ps, rows, kept, t_fast, t_ref, base, cons, paper, wc)
         if verified is not None:
             print()
             print(format_verified(verified, ps.objectives[0][1],
                                   load_error_map().reference_fem_size, max(args.workers, 1),
                                   t_verify).replace("rows", "members"))  # fmt: skip
         if written:
-            print(f"\n{len(written)} design files in {args.designs}")
+            print(f"\n{len(written)} design files in {args.designs} (each renders by its "
+                  "[render] rule: evaluate, report and compare give the verdict above)")
+        for note in notes:
+            print(f"note: {note}")
         if args.plot:
             print(f"Pareto plot: {args.plot}")
     if not kept:
@@ -1199,25 +1240,10 @@ def _paper_on(base: ClutchDesign) -> ClutchDesign:
                    transmission=base.transmission, process=base.process)  # fmt: skip
 
 
-def _paper_beside(base: ClutchDesign, fidelity: str) -> dict:
-    """The paper preset's clutch (``_paper_on``) evaluated at ``fidelity``."""
-    return evaluate(_paper_on(base), fidelity).as_json()
-
-
-def at_K(ev: dict, K: float) -> dict:
-    """``Evaluation.as_json()`` with the MR pair rendering ``K`` instead of K_max: K, the
-    passive verdict (K at most the largest passive K) and the bandwidths at it (the full
-    response's, ``haptics.model.bandwidth``, and Eq. 1's); the largest stable and passive K
-    do not depend on K. K_max stays under ``K_max_N_per_m``."""
-    h = dict(ev["haptic"])
-    p = HapticParams(h["m1_kg"], h["b1_N_s_per_m"], h["k_N_per_m"], h["b_N_s_per_m"],
-                     h["m2_kg"], delay=h["delay_s"])  # fmt: skip
-    h.update(K_max_N_per_m=h.get("K_max_N_per_m", h["K_N_per_m"]), K_N_per_m=K,
-             passive=bool(K <= h["max_passive_K_N_per_m"]),
-             bandwidth_hz=float(bandwidth(p, K)),
-             bandwidth_lumped_hz=math.sqrt(K / (h["m1_kg"] + h["m2_kg"])) / (2 * math.pi),
-             )  # fmt: skip
-    return {**ev, "haptic": h}
+def _paper_beside(base: ClutchDesign, fidelity: str, wc: WorstCase | None) -> dict:
+    """The paper preset's clutch (``_paper_on``) judged at ``fidelity`` by the optimiser's
+    rule (``verdict.for_workshop``), as its own designs are."""
+    return judge(for_workshop(_paper_on(base), _ranges(wc))[0], fidelity)
 
 
 def explain(ev: dict, paper: dict, label: str) -> str:
@@ -1277,7 +1303,7 @@ def explain(ev: dict, paper: dict, label: str) -> str:
 
 def _print_pareto(args: argparse.Namespace, ps: ParetoSet, rows: list[dict], kept: list[dict],
                   t_fast: float, t_ref: float, base: ClutchDesign, cons: Constraints,
-                  paper: dict) -> None:  # fmt: skip
+                  paper: dict, wc: WorstCase | None) -> None:  # fmt: skip
     dropped = [r for r in rows if r["violations"]]
     fid = "fast path (--no-verify)" if args.no_verify else "reference fidelity"
     print(f"Pareto set: {len(kept)} members meet every limit at {fid}"
@@ -1287,11 +1313,11 @@ def _print_pareto(args: argparse.Namespace, ps: ParetoSet, rows: list[dict], kep
           f"unstable at their K, {ps.dropped_robust} by the worst case)"
           + (f"; reference checks {t_ref:.1f} s" if t_ref else ""))  # fmt: skip
     print(f"  haptic verdict: {ps.robust}")
-    print("  " + _limits_line(base, cons))
+    print("  " + _limits_line(base, cons, wc))
     rend = "BW Hz" if args.rendering == "bandwidth" else "Z-width"
     print(f"\n{'#':>3} {'drums':>5} {'gap':>6} {'wall':>6} {'d_in':>6} {'zone':>6} "
           f"{rend:>8} {'backdr N':>8} {'cont mNm':>8} {'mass g':>7} {'K N/m':>7} "
-          f"{'Ks':>7} {'Kp':>7}  active limits")  # fmt: skip
+          f"{'Ks':>7} {'Kp':>7} {'verdict':>8}  active limits")  # fmt: skip
     for r in rows:
         m = ps.members[r["member"] - 1]
         c = m.design.clutch
@@ -1309,13 +1335,16 @@ def _print_pareto(args: argparse.Namespace, ps: ParetoSet, rows: list[dict], kep
                     f["clutch_mass_kg"] * 1e3, f["K_N_per_m"], f["max_stable_K_N_per_m"],
                     f["max_passive_K_N_per_m"])  # fmt: skip
         mark = " DROPPED" if r["violations"] else ""
+        status = src["verdict"]["status"] if src is not None and "verdict" in src else "—"
         print(f"{r['member']:>3} {c.n_drums:>5} {c.gap * 1e3:>6.3f} {c.drum_thickness * 1e3:>6.3f} "
               f"{c.drum_inner_diameter * 1e3:>6.2f} {c.zone_length * 1e3:>6.2f} "
               f"{vals[0]:>8.4g} {vals[1]:>8.3g} {vals[2]:>8.3g} {vals[3]:>7.4g} {vals[4]:>7.4g} "
-              f"{vals[5]:>7.4g} {vals[6]:>7.4g}  {', '.join(m.active) or '—'}{mark}")  # fmt: skip
+              f"{vals[5]:>7.4g} {vals[6]:>7.4g} {status:>8}  {', '.join(m.active) or '—'}"
+              f"{mark}")  # fmt: skip
     print("  (lengths in mm: gap, drum wall, drum inner diameter, zone length; values at "
           f"{'the fast path' if args.no_verify else 'reference fidelity'}; Ks, Kp: largest "
-          "stable and passive K)")  # fmt: skip
+          "stable and passive K at nominal values; verdict: the one verdict of the member's "
+          "file, as evaluate prints it)")  # fmt: skip
     for r in rows:
         for e in r["edges"]:
             print(f"  #{r['member']}: {e}")
@@ -1324,52 +1353,42 @@ def _print_pareto(args: argparse.Namespace, ps: ParetoSet, rows: list[dict], kep
     if kept:
         first = kept[0]
         ev = first["reference"]
-        if ev is None:
-            ev = evaluate(ps.members[first["member"] - 1].design, "fast").as_json()
         print(explain(ev, paper, f"member #{first['member']}"))
 
 
-def _check_candidate(args: argparse.Namespace, cand: Candidate, cons: Constraints) -> dict:
-    """One candidate on the fast path and (unless --no-verify) at reference fidelity: its
-    evaluations, verdict and the requirements it misses at the highest fidelity run."""
-    fast = evaluate(cand.design, "fast").as_json()
+def _check_candidate(args: argparse.Namespace, design: ClutchDesign, cons: Constraints) -> dict:
+    """One candidate (as its file will say: ``verdict.for_workshop``) judged on the fast path
+    and (unless --no-verify) at reference fidelity: its evaluations, its one verdict and the
+    requirements it misses at the highest fidelity run."""
+    fast = fast_check(design)
     data: dict = {
-        "design_mm": cand.design.clutch.to_mm(),
+        "design_mm": design.clutch.to_mm(),
         "required": {"passive": cons.passive, "stable": cons.stable},
         "fast": fast,
         "fast_bandwidth_error_stated": FAST_BANDWIDTH_ERROR,
     }
     checked = fast
     if not args.no_verify:
-        ref = reference_check(cand.design)
+        ref = reference_check(design)
         b_fast, b_ref = fast["haptic"]["bandwidth_hz"], ref["haptic"]["bandwidth_hz"]
         data["reference"] = ref
         data["bandwidth_change_reference_vs_fast"] = b_ref / b_fast - 1
         checked = ref
-    violations = requirement_violations(checked, cons, cand.design)
-    data["verdict"] = {**haptic_verdict(checked), "fidelity": checked["fidelity"]}
+    violations = requirement_violations(checked, cons, design)
+    data["verdict"] = verdict_of(checked)
     data["requirements_met"] = not violations
     data["violations"] = violations
     return data
 
 
 def reference_check(design: ClutchDesign) -> dict:
-    """The optimum at reference fidelity, as JSON (a seam for the tests)."""
-    return evaluate(design, "reference").as_json()
+    """A design judged at reference fidelity (``verdict.judge``; a seam for the tests)."""
+    return judge(design, "reference")
 
 
-def haptic_verdict(ev: dict) -> dict:
-    """Stable and passive at the design's K, and the largest stable and passive K, from
-    ``Evaluation.as_json()``; stable below the first destabilising crossing gain."""
-    h = ev["haptic"]
-    k, ks, kp = h["K_N_per_m"], h["max_stable_K_N_per_m"], h["max_passive_K_N_per_m"]
-    return {
-        "K_N_per_m": k,
-        "stable": bool(k < ks),
-        "passive": bool(h["passive"]),
-        "max_stable_K_N_per_m": ks,
-        "max_passive_K_N_per_m": kp,
-    }
+def fast_check(design: ClutchDesign) -> dict:
+    """A design judged on the fast path (``verdict.judge``)."""
+    return judge(design, "fast")
 
 
 def reference_row(ev: dict, design: ClutchDesign, cons: Constraints) -> dict[str, np.ndarray]:
@@ -1408,7 +1427,7 @@ def requirement_violations(ev: dict, cons: Constraints, design: ClutchDesign | N
     default power and peak limits; the paper preset's when None)."""
     design = design if design is not None else design_preset("paper")
     cons = cons.resolved(design)
-    c, v = ev["clutch"], haptic_verdict(ev)
+    c, v = ev["clutch"], verdict_of(ev)  # the one verdict, from the evaluation's own data
     tol = 1e-9
     out = []
     if c["max_torque_N_m"] < cons.min_torque * (1 - tol):
@@ -1424,20 +1443,27 @@ def requirement_violations(ev: dict, cons: Constraints, design: ClutchDesign | N
         if term in terms and terms[term][0] > tol:
             out.append(f"{label} {row[col][0] * scale:.4g} {unit} {side} the "
                        f"{getattr(cons, limit) * scale:.4g} {unit} limit")  # fmt: skip
-    k = v["K_N_per_m"]
-    if cons.stable and not v["stable"]:
-        out.append(f"not stable at K = {k:.4g} N/m (largest stable K "
-                   f"{v['max_stable_K_N_per_m']:.4g} N/m); stability was required")  # fmt: skip
-    if cons.passive and not v["passive"]:
-        out.append(f"not passive at K = {k:.4g} N/m (largest passive K "
-                   f"{v['max_passive_K_N_per_m']:.4g} N/m); passivity was required")  # fmt: skip
+    k, h = v["K_N_per_m"], ev["haptic"]
+    scope = "over the uncertainty ranges" if v["over"] == "ranges" else "at nominal values"
+    for need, name, key, what in ((cons.stable, "stable", "max_stable_K_N_per_m", "stability"),
+                                  (cons.passive, "passive", "max_passive_K_N_per_m",
+                                   "passivity")):  # fmt: skip
+        holds = v[name]["holds"]
+        if need and holds != "always":
+            how = "for part of them" if holds == "depends" else ""
+            out.append(f"not {name} at K = {k:.4g} N/m {scope}{' ' + how if how else ''} "
+                       f"(largest {name} K {h[key]:.4g} N/m at nominal values); {what} was "
+                       "required")  # fmt: skip
     return out
 
 
 def _print_optimum(
-    args: argparse.Namespace, opt: Optimum, cand: Candidate, t_fast: float, data: dict
+    args: argparse.Namespace, opt: Optimum, cand: Candidate, t_fast: float, data: dict,
+    wc: WorstCase | None,
 ) -> None:
     c = cand.design.clutch
+    print(f"{data['verdict']['line']}  [the design written, at {data['verdict']['fidelity']} "
+          "fidelity]")  # fmt: skip
     key = data["objective_column"]
     varied = ", ".join(f"{n}_mm {getattr(c, n) * 1e3:.4g}" for n in opt.varied)
     print(f"optimum ({opt.evaluations} designs in {t_fast:.2f} s): n_drums {c.n_drums}, {varied}")
@@ -1450,10 +1476,10 @@ def _print_optimum(
             print(f"  candidate #{t['rank']} ({t['n_drums']} drums, {key} "
                   f"{t['objective_value']:.4g}) fails at {t['fidelity']} fidelity: "
                   f"{'; '.join(t['violations'])}")  # fmt: skip
-    print(f"\nfast path:\n{format_evaluation(data['fast'])}")
+    print(f"\nfast path:\n{format_evaluation(data['fast'], lead=False)}")
     if "reference" in data:
         change = data["bandwidth_change_reference_vs_fast"]
-        print(f"\nreference fidelity:\n{format_evaluation(data['reference'])}")
+        print(f"\nreference fidelity:\n{format_evaluation(data['reference'], lead=False)}")
         within = "within" if abs(change) <= FAST_BANDWIDTH_ERROR else "OUTSIDE"
         print(
             f"\nbandwidth, reference vs fast: {change * 100:+.2f} % ({within} the fast "
@@ -1464,28 +1490,32 @@ def _print_optimum(
     for e in data["edges"]:
         print(f"  {e}")
     if "reference" in data:
-        paper = _paper_beside(cand.design, "reference")
+        paper = _paper_beside(cand.design, "reference", wc)
         print(explain(data["reference"], paper, "optimum"))
+    for note in data.get("notes", ()):
+        print(f"note: {note}")
     if args.out:
-        print(f"design written to {args.out}")
+        print(f"design written to {args.out} (its [render] rule renders the K above: evaluate, "
+              "report and compare give the same verdict)")  # fmt: skip
 
 
 def format_verdict(data: dict) -> str:
     """The optimum's haptic verdict beside its objective, and which limits were required."""
     v, req = data["verdict"], data["required"]
-
-    def yn(b: bool) -> str:
-        return "yes" if b else "no"
-
+    h = (data.get("reference") or data["fast"])["haptic"]
+    scope = "over the ranges" if v["over"] == "ranges" else "at nominal values"
+    words = {"always": "yes", "never": "no", "depends": "depends"}
     need = {True: "required", False: "not required"}
     return "\n".join(
         [
             f"\nhaptic verdict ({v['fidelity']} fidelity) at K = {v['K_N_per_m']:.4g} N/m, "
-            f"{data['objective']} {data['objective_value']:.4g}:",
-            f"  stable at K:  {yn(v['stable']):<4}({need[req['stable']]}); largest stable K "
-            f"{v['max_stable_K_N_per_m']:.4g} N/m",
-            f"  passive at K: {yn(v['passive']):<4}({need[req['passive']]}); largest passive K "
-            f"{v['max_passive_K_N_per_m']:.4g} N/m",
+            f"{data['objective']} {data['objective_value']:.4g}: {v['status'].upper()}",
+            f"  stable at K {scope}:  {words[v['stable']['holds']]:<8}"
+            f"({need[req['stable']]}); largest stable K {h['max_stable_K_N_per_m']:.4g} N/m "
+            "at nominal values",
+            f"  passive at K {scope}: {words[v['passive']['holds']]:<8}"
+            f"({need[req['passive']]}); largest passive K {h['max_passive_K_N_per_m']:.4g} N/m "
+            "at nominal values",
             "  requirements: " + ("all met" if data["requirements_met"] else "VIOLATED"),
         ]
     )

@@ -1,5 +1,8 @@
 """``mrclutch haptic`` (one actuator on the lever → metrics) and ``mrclutch compare`` (the
-paper's equal-force comparison, Fig. 7c). Imports nothing heavy at module level."""
+paper's equal-force comparison, Fig. 7c). Given a design (``DESIGN.toml`` or ``--preset``)
+both judge it as ``evaluate`` does (``mrclutch.verdict``: its ``[render]`` K, its verdict,
+the equal-force Maxon geared from its K_max at the same fidelity). Imports nothing heavy at
+module level."""
 
 from __future__ import annotations
 
@@ -9,7 +12,8 @@ from dataclasses import replace
 from typing import Any
 
 from geometry.validation import check_choice, check_range
-from mrclutch.cli.commands._common import print_json
+from mrclutch.cli.commands._common import add_design_args, load_design_args, print_json
+from mrclutch.cli.errors import CLIError
 from mrclutch.cli.plots.haptic import compare_figure
 from mrclutch.design import MAX_DELAY
 from mrclutch.haptics.actuator import (
@@ -45,6 +49,7 @@ def register(sub: Any) -> None:
     p.add_argument("--lever-mm", type=float, default=170.0, help="lever length [mm] (170)")
     p.add_argument("--gearing", type=float, default=1.0, help="gear factor G multiplying n (1)")
     _common(p)
+    _design(p)
     p.set_defaults(func=run_haptic)
 
     c = sub.add_parser(
@@ -55,8 +60,42 @@ def register(sub: Any) -> None:
         "smaller K_max, i.e. the force both can produce).",
     )
     _common(c)
+    _design(c)
     c.add_argument("--plot", metavar="FILE.png", help="write Bode / effective impedance figure")
     c.set_defaults(func=run_compare)
+
+
+def _design(p: argparse.ArgumentParser) -> None:
+    """A design instead of the catalogue: judged as ``evaluate`` judges it."""
+    add_design_args(p)
+    p.add_argument("--fidelity", default="fast",
+                   help="with a design: the fidelity it is evaluated at (default fast), as "
+                   "evaluate --fidelity")  # fmt: skip
+
+
+def _judged(args: argparse.Namespace, command: str) -> tuple[Any, dict[str, Any]] | None:
+    """(Evaluation, ``verdict.judge`` data) of the design the options name, or None for the
+    catalogue. The catalogue's options are refused beside a design (the design has its own
+    K rule, delay and transmission)."""
+    if args.design is None and args.preset is None:
+        return None
+    for opt, given in (("--stiffness", args.stiffness is not None),
+                       ("--delay-ms", args.delay_ms is not None),
+                       ("--workspace-mm", args.workspace_mm != 50.0),
+                       ("--actuator", getattr(args, "actuator", "mr-paper") != "mr-paper"),
+                       ("--lever-mm", getattr(args, "lever_mm", 170.0) != 170.0),
+                       ("--gearing", getattr(args, "gearing", 1.0) != 1.0)):  # fmt: skip
+        if given:
+            raise CLIError(f"{command} {opt}: not with a design (its [render], [operating] and "
+                           "[transmission] tables set it)")  # fmt: skip
+    from mrclutch.pipeline import evaluate
+    from mrclutch.verdict import judge_evaluation
+
+    check_choice("--fidelity", args.fidelity, ("fast", "reference"))
+
+    ev = evaluate(load_design_args(args), args.fidelity)
+    data = judge_evaluation(ev)
+    return ev, data
 
 
 def _common(p: argparse.ArgumentParser) -> None:
@@ -87,6 +126,20 @@ def _edge(args: argparse.Namespace) -> tuple[float | None, float | None, float]:
 
 def run_haptic(args: argparse.Namespace) -> int:
     K, delay, workspace = _edge(args)
+    judged = _judged(args, "haptic")
+    if judged is not None:
+        _, data = judged
+        h = data["haptic"]
+        if args.json:
+            print_json({**h, "source": data["source"], "verdict": data["verdict"],
+                        "render": data["render"]})  # fmt: skip
+            return 0
+        from mrclutch.verdict import verdict_lines
+
+        print("\n".join(verdict_lines(data)))
+        print(f"MR pair of design {data['design']} ({data['source']})")
+        _print_metrics(h, f"MR pair, {data['source']}", rule=data["render"]["describe"])
+        return 0
     lo, hi = LEVER_RANGE  # Transmission's own rule, stated in the option's unit
     lever = check_range("--lever-mm", args.lever_mm, lo * 1e3, hi * 1e3, " mm") * 1e-3
     gearing = check_range("--gearing", args.gearing, *GEARING_RANGE)
@@ -152,6 +205,9 @@ def compare_result(mr: Any, em: Any, K: float) -> dict[str, Any]:
 
 def run_compare(args: argparse.Namespace) -> int:
     K, delay, workspace = _edge(args)
+    judged = _judged(args, "compare")
+    if judged is not None:
+        return _compare_design(args, *judged)
     typed = K is not None
     mr, em, K = compare_params(K, delay, workspace)
     res = compare_result(mr, em, K)
@@ -163,9 +219,10 @@ def run_compare(args: argparse.Namespace) -> int:
     if args.json:
         print_json(res)
         return 0
-    for side, title in (("mr", "MR pair (Table 2 identified)"), ("em", "Maxon 136206")):
+    for side, title, p in (("mr", "MR pair (Table 2 identified)", mr),
+                           ("em", "Maxon 136206", em)):  # fmt: skip
         print(title)
-        _print_metrics(res[side], src, res["sources"][side])
+        _print_metrics(res[side], src, res["sources"][side], own_kmax=float(p.k_max))
     g, g0 = res["bandwidth_gain"], res["bandwidth_gain_mr_without_delay"]
     print(
         f"At {format_kmax(K, src) if not typed else f'K = {K:.4g} N/m [typed]'} (the smaller "
@@ -183,19 +240,68 @@ def run_compare(args: argparse.Namespace) -> int:
     return 0
 
 
+def _compare_design(args: argparse.Namespace, ev: Any, data: dict[str, Any]) -> int:
+    """``compare`` of a design: its MR pair at the K its ``[render]`` rule picks beside the
+    Maxon 136206 geared to the pair's force at the same fidelity (what ``evaluate`` puts
+    side by side), led by the design's one verdict."""
+    from mrclutch.verdict import verdict_lines
+
+    h, m = data["haptic"], data["motor"]
+    K = float(h["K_N_per_m"])
+    src = f"MR pair, {data['source']}"
+    res = {"design": data["design"], "fidelity": data["fidelity"], "verdict": data["verdict"],
+           "render": data["render"], "mr": h, "em": m, "K_N_per_m": K,
+           "bandwidth_gain": data["bandwidth_gain"],
+           "bandwidth_gain_lumped": data["bandwidth_gain_lumped"],
+           "sources": {"mr": src, "em": f"Maxon 136206 geared to the pair's force ({src})"}}
+    if args.plot:
+        sides = {"MR pair": ev.mr, "Maxon 136206 (equal force)": ev.motor}
+        compare_figure({n: p for n, p in sides.items() if p is not None}, K, args.plot)
+    if args.json:
+        print_json(res)
+        return 0
+    print("\n".join(verdict_lines(data)))
+    print(f"MR pair of design {data['design']} ({data['source']})")
+    _print_metrics(h, src, rule=data["render"]["describe"])
+    if m.get("gearing") is None:
+        print(f"Maxon 136206: unavailable: {m.get('note')}")
+    else:
+        print(f"Maxon 136206, geared ×{m['gearing']:.3g} to the MR pair's force ({src})")
+        _print_metrics(m, f"Maxon 136206 geared to the MR pair's force, {data['source']}",
+                       rule=f"the MR pair's K ({data['render']['describe']})")  # fmt: skip
+        gl, g = data["bandwidth_gain_lumped"], data["bandwidth_gain"]
+        full = "none" if g is None else f"{100 * g:.1f} %"
+        print(f"At K = {K:.4g} N/m the MR lever renders {100 * gl:.1f} % more lumped bandwidth, "
+              f"{full} on the full response.")  # fmt: skip
+    if args.plot:
+        print(f"figure: {args.plot}")
+    return 0
+
+
 def _ps(passive: bool, stable: bool) -> str:
     return f"{'passive' if passive else 'NOT passive'}, {'stable' if stable else 'UNSTABLE'}"
 
 
-def _print_metrics(m: dict[str, Any], k_source: str, source: str | None = None) -> None:
+def _print_metrics(m: dict[str, Any], k_source: str, source: str | None = None,
+                   rule: str | None = None, own_kmax: float | None = None) -> None:  # fmt: skip
     """The metrics of one side; ``k_source``: where K comes from ("typed", or the source of
-    the K_max rendered), ``source``: where m1, b1 come from (default ``k_source``)."""
+    the K_max rendered), ``source``: where m1, b1 come from (default ``k_source``);
+    ``rule``: the design's K rule (K then printed as "K … N/m (rule; K_max …)");
+    ``own_kmax``: this side's own K_max where the K rendered is another's (catalogue)."""
 
     def f(v: float, scale: float = 1.0, unit: str = "") -> str:
-        return "none" if not math.isfinite(v) else f"{v * scale:.4g}{unit}"
+        return "none" if v is None or not math.isfinite(v) else f"{v * scale:.4g}{unit}"
 
-    k_text = (f"K {f(m['K_N_per_m'])} N/m [typed]" if k_source == "typed"
-              else format_kmax(m["K_N_per_m"], k_source))  # fmt: skip
+    if rule is not None:
+        k_text = (f"K {f(m['K_N_per_m'])} N/m ({rule}; "
+                  f"{format_kmax(m['K_max_N_per_m'], k_source)})")  # fmt: skip
+    elif k_source == "typed":
+        k_text = f"K {f(m['K_N_per_m'])} N/m [typed]"
+    else:
+        k_text = format_kmax(m["K_N_per_m"], k_source)
+    if own_kmax is not None and rule is None and k_source != source and source is not None:
+        k_text = (f"K {f(m['K_N_per_m'])} N/m (the smaller K_max of the two, [{k_source}]; "
+                  f"this side's own K_max {f(own_kmax)} N/m [{source}])")  # fmt: skip
     print(
         f"  m1 {f(m['m1_kg'], 1e3)} g  m2 {f(m['m2_kg'], 1e3)} g  b1 {f(m['b1_N_s_per_m'])} N·s/m"
         f"  k {f(m['k_N_per_m'])} N/m  b {f(m['b_N_s_per_m'])} N·s/m"

@@ -1,0 +1,295 @@
+"""Issue 39: one design, one answer. A design file holds how it renders ([render]) and every
+command that judges it — evaluate, report, compare, haptic, optimize — gives the same K,
+K_max and verdict at one fidelity, leading with one verdict line."""
+
+import json
+import re
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from geometry.validation import ParameterError
+from mrclutch.cli.commands import design as design_cmd
+from mrclutch.cli.main import main
+from mrclutch.design import design_from_mapping, design_preset, design_to_toml, load_design
+from mrclutch.render import Render
+from mrclutch.verdict import inside, judge, verdict_of
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+QUICK = dict(pop_size=24, generations=6, members=2)
+
+
+def _run(capsys, argv):
+    code = main(argv)
+    return code, capsys.readouterr()
+
+
+def _json(capsys, argv):
+    code, cap = _run(capsys, [*argv, "--json"])
+    assert code == 0, cap.err
+    return json.loads(cap.out)
+
+
+def _triple(data):
+    """(status, K, K_max) of a judged design's JSON."""
+    v = data["verdict"]
+    return v["status"], v["K_N_per_m"], v["K_max_N_per_m"]
+
+
+# ---- [render] in the design file ---------------------------------------------------------
+
+
+@pytest.mark.parametrize("render", [Render(), Render("worst_case"), Render("typed", 123.4),
+                                    Render("K_max", verdict="nominal")])  # fmt: skip
+def test_render_table_reads_back(render, tmp_path):
+    d = replace(design_preset("paper"), render=render)
+    p = tmp_path / "d.toml"
+    p.write_text(design_to_toml(d))
+    assert load_design(p).render == render
+
+
+@pytest.mark.parametrize(("table", "phrase"), [
+    ({"rule": "loudest"}, "render.rule = 'loudest': must be one of K_max, worst_case, typed"),
+    ({"rule": "typed"}, "give render.K_N_per_m"),
+    ({"rule": "K_max", "K_N_per_m": 100}, "only with rule = 'typed'"),
+    ({"K_N_per_m": -3}, "render.K_N_per_m = -3"),
+    ({"K_N_per_m": "stiff"}, "must be a number"),
+    ({"verdict": "optimistic"}, "must be one of robust, nominal"),
+    ({"colour": "red"}, "render.colour: unknown key"),
+])  # fmt: skip
+def test_bad_render_tables_are_refused_naming_the_key(table, phrase, tmp_path, capsys):
+    with pytest.raises(ParameterError, match=re.escape(phrase)):
+        design_from_mapping({"clutch": {"base": "paper"}, "render": table}, "d.toml")
+    p = tmp_path / "d.toml"
+    lines = [f"{k} = {json.dumps(v)}" for k, v in table.items()]
+    p.write_text('[clutch]\nbase = "paper"\n[render]\n' + "\n".join(lines) + "\n")
+    code, cap = _run(capsys, ["evaluate", str(p)])
+    assert code == 2 and cap.err.count("\n") == 1 and "render" in cap.err
+
+
+def test_a_typed_K_is_rendered_and_judged_there():
+    """K typed in [render] is the K every figure at the hand is taken at; K_max is still
+    F_max/d; the verdict's K is the typed one."""
+    d = replace(design_preset("paper"), render=Render("typed", 100.0))
+    data = judge(d, robust=False)
+    assert data["haptic"]["K_N_per_m"] == data["motor"]["K_N_per_m"] == 100.0
+    plain = judge(design_preset("paper"), robust=False)
+    assert data["haptic"]["K_max_N_per_m"] == plain["haptic"]["K_max_N_per_m"]
+    assert plain["haptic"]["K_N_per_m"] == plain["haptic"]["K_max_N_per_m"]
+    # below the nominal largest stable and passive K (≈ 251 N/m) the nominal verdict passes
+    assert data["verdict"]["status"] == "pass" and plain["verdict"]["status"] == "fail"
+
+
+def test_worst_case_rule_renders_the_largest_K_that_holds_over_the_ranges():
+    d = replace(design_preset("paper"), render=Render("worst_case"))
+    data = judge(d)
+    r = data["robust"]
+    cap = min(r["max_stable_K_N_per_m"]["worst"], r["max_passive_K_N_per_m"]["worst"])
+    assert data["haptic"]["K_N_per_m"] == pytest.approx(cap, rel=2e-6)
+    assert data["haptic"]["K_N_per_m"] <= cap
+    assert data["verdict"]["status"] == "pass"
+    assert data["verdict"]["stable"]["holds"] == data["verdict"]["passive"]["holds"] == "always"
+
+
+# ---- the one verdict ---------------------------------------------------------------------
+
+
+def _data(stable, passive, thresholds=None):
+    """A judged design's minimal JSON: verdicts as robust_verdicts gives them."""
+    th = thresholds or {}
+    return {
+        "haptic": {"K_N_per_m": 300.0, "K_max_N_per_m": 300.0, "delay_s": 1e-3,
+                   "max_stable_K_N_per_m": 250.0, "passive": False},
+        "robust": {"verdicts": {
+            "stable": {"nominal": False, "holds": stable, "thresholds": th},
+            "passive": {"nominal": False, "holds": passive, "thresholds": {}}}},
+        "fidelity": "fast", "source": "fast model", "response": {"delay_source": "fixed"},
+        "hand": {"mr": {"note": "not computed here"}},
+    }  # fmt: skip
+
+
+def test_status_is_pass_only_when_both_hold_everywhere_and_fail_when_one_never_does():
+    assert verdict_of(_data("always", "always"))["status"] == "pass"
+    assert verdict_of(_data("never", "always"))["status"] == "fail"
+    assert verdict_of(_data("always", "never"))["status"] == "fail"
+    assert verdict_of(_data("depends", "always"))["status"] == "depends"
+    assert verdict_of(_data("depends", "never"))["status"] == "fail"
+
+
+def test_a_threshold_outside_its_range_is_not_named_as_deciding():
+    """Issue 39: "stable only if b1 ≥ 9.18 N·s/m (outside its range 11.5–41.8)" named an
+    input that every value of its range satisfies."""
+    out = {"b1": {"value": 9.18, "sense": "≥", "range": [11.5, 41.8]}}
+    inn = {"b1": {"value": 20.0, "sense": "≥", "range": [11.5, 41.8]}}
+    assert not inside(out["b1"]) and inside(inn["b1"])
+    v_out = verdict_of(_data("depends", "always", out))
+    assert "9.18" not in v_out["line"] and "no one input decides it" in v_out["line"]
+    assert v_out["stable"]["thresholds"] == {}
+    v_in = verdict_of(_data("depends", "always", inn))
+    assert "b1 ≥ 20 N·s/m (its range 11.5–41.8 N·s/m)" in v_in["line"]
+
+
+def _verdict_lines(text):
+    return [ln for ln in text.splitlines() if ln.startswith("VERDICT:")]
+
+
+@pytest.mark.parametrize("target", ["--preset=paper", "thin_drums.toml", "paper_bench.toml"])
+def test_commands_lead_with_one_verdict_and_agree(target, capsys):
+    """evaluate, compare and haptic on one design at one fidelity: the first line is the
+    verdict, said once, the same line in each; their JSON gives the same K, K_max, status."""
+    args = [target] if target.startswith("--") else [str(EXAMPLES / target)]
+    texts, triples = [], []
+    for cmd in ("evaluate", "compare", "haptic"):
+        code, cap = _run(capsys, [cmd, *args])
+        assert code == 0, cap.err
+        lines = _verdict_lines(cap.out)
+        assert len(lines) == 1 and cap.out.startswith("VERDICT:"), cap.out[:300]
+        texts.append(lines[0])
+        data = _json(capsys, [cmd, *args])
+        triples.append(_triple(data))
+    assert len(set(texts)) == 1 and len(set(triples)) == 1
+
+
+def test_evaluate_no_uncertainty_is_nominal_and_says_so(capsys):
+    data = _json(capsys, ["evaluate", "--preset", "paper", "--no-uncertainty"])
+    assert data["verdict"]["over"] == "nominal" and data["robust"] is None
+    assert "not asked" in data["nulls"]["robust"]
+
+
+# ---- the user's path: optimize → files → every command ----------------------------------
+
+
+@pytest.fixture(scope="module")
+def members(tmp_path_factory):
+    """A small seeded Pareto run at reference fidelity writing its members."""
+    folder = tmp_path_factory.mktemp("members")
+    mp = pytest.MonkeyPatch()
+    real = design_cmd.pareto
+    mp.setattr(design_cmd, "pareto", lambda *a, **k: real(*a, **{**k, **QUICK}))
+    try:
+        import io
+        from contextlib import redirect_stdout
+
+        buf = io.StringIO()
+        with redirect_stdout(buf):
+            code = main(["optimize", "--preset", "paper", "--drums", "2", "--seed", "3",
+                         "--designs", str(folder), "--json"])  # fmt: skip
+    finally:
+        mp.undo()
+    assert code == 0
+    return folder, json.loads(buf.getvalue())
+
+
+@pytest.mark.slow
+def test_members_get_the_optimisers_verdict_K_and_K_max_from_every_command(members, capsys,
+                                                                          tmp_path):  # fmt: skip
+    folder, opt = members
+    files = sorted(folder.glob("member_*.toml"))
+    assert files and len(files) == len(opt["designs_written"])
+    by_member = {r["member"]: r for r in opt["members"]}
+    for f in files:
+        d = load_design(f)
+        assert d.measured is None and d.render.rule == "worst_case"  # no inherited bench
+        row = by_member[int(f.stem.split("_")[1])]["reference"]
+        want = _triple(row)
+        assert want[0] == "pass"  # kept members hold over the ranges
+        for cmd in ("evaluate", "compare"):
+            got = _triple(_json(capsys, [cmd, str(f), "--fidelity", "reference"]))
+            assert got == want, (cmd, f.name)
+        code, cap = _run(capsys, ["report", str(f), "--out", str(tmp_path / f.stem),
+                                  "--no-progress"])  # fmt: skip
+        assert code == 0, cap.err
+        metrics = json.loads((tmp_path / f.stem / "metrics.json").read_text())
+        assert _triple(metrics) == want
+        html = (tmp_path / f.stem / "report.html").read_text()
+        assert html.count('id="verdict"') == 1 and "Verdict: PASS" in html
+        assert _verdict_lines(cap.out) == [metrics["verdict"]["line"]]
+    assert opt["notes"] and "[measured]" in opt["notes"][0]
+
+
+def test_designs_folder_of_an_earlier_run_needs_overwrite(members, capsys, monkeypatch):
+    folder, _ = members
+    (folder / "member_99.toml").write_text("stale")
+    code, cap = _run(capsys, ["optimize", "--preset", "paper", "--designs", str(folder)])
+    assert code == 2 and "--overwrite" in cap.err and cap.err.count("\n") == 1
+    real = design_cmd.pareto
+    monkeypatch.setattr(design_cmd, "pareto", lambda *a, **k: real(*a, **{**k, **QUICK}))
+    code, cap = _run(capsys, ["optimize", "--preset", "paper", "--drums", "2", "--seed", "3",
+                              "--designs", str(folder), "--overwrite", "--no-verify"])  # fmt: skip
+    assert code == 0, cap.err
+    assert not (folder / "member_99.toml").exists()
+
+
+@pytest.mark.slow
+def test_objective_out_file_gets_the_optimisers_verdict(tmp_path, capsys, monkeypatch):
+    real = design_cmd.optimize
+    monkeypatch.setattr(design_cmd, "optimize",
+                        lambda *a, **k: real(*a, **k, maxiter=6, popsize=6))  # fmt: skip
+    out = tmp_path / "best.toml"
+    data = _json(capsys, ["optimize", "--objective", "bandwidth", "--drums", "2", "--tries",
+                          "1", "--out", str(out)])  # fmt: skip
+    d = load_design(out)
+    assert d.render.rule == "worst_case" and d.measured is None
+    want = _triple(data["reference"])
+    assert data["verdict"]["status"] == want[0]
+    for cmd in ("evaluate", "compare"):
+        assert _triple(_json(capsys, [cmd, str(out), "--fidelity", "reference"])) == want
+
+
+# ---- torque: the current limit and --for -------------------------------------------------
+
+
+def test_torque_for_finds_the_current_of_a_torque(capsys):
+    """The network's current for 0.3 N·m on the paper preset gives 0.3 N·m back (Brent to
+    1e-4 A; the curve's slope near 3 A is ~0.07 N·m/A, so within ~1e-5 N·m)."""
+    from magnetics.torque import torque_curve
+
+    data = _json(capsys, ["torque", "--preset", "paper", "--for", "0.3"])
+    (row,) = data["methods"]
+    i = row["current_A"]
+    assert 0 < i < 7
+    back = torque_curve(design_preset("paper").clutch, [i], method="network").torque[0]
+    assert back == pytest.approx(0.3, abs=1e-4)
+    # out of reach: the most, at the limit; below the drag: 0 A
+    far = _json(capsys, ["torque", "--preset", "paper", "--for", "5"])["methods"][0]
+    assert far["current_A"] is None and far["torque_at_limit_N_m"] < 5
+    code, cap = _run(capsys, ["torque", "--preset", "paper", "--for", "5"])
+    assert "out of reach: the most is" in cap.out and "at 7 A" in cap.out
+    low = _json(capsys, ["torque", "--preset", "paper", "--for", "1e-6"])["methods"][0]
+    assert low["current_A"] == 0.0
+
+
+@pytest.mark.parametrize("argv", [
+    ["--for", "-1"], ["--for", "0.3", "--current", "2"], ["--for", "nan"],
+    ["--current", "-1"], ["--current", "20"],
+])  # fmt: skip
+def test_torque_bad_input_is_one_line_exit_2(argv, capsys):
+    code, cap = _run(capsys, ["torque", "--preset", "paper", *argv])
+    assert code == 2 and cap.err.count("\n") == 1 and cap.out == ""
+
+
+def test_torque_applies_the_designs_current_limit(capsys):
+    """thin_drums asks for 7 A but its wire allows 4.856 A: the default curve stops at the
+    cap with evaluate's note; 7 A is refused unless --ignore-limit."""
+    f = str(EXAMPLES / "thin_drums.toml")
+    data = _json(capsys, ["torque", f])
+    cap_a = load_design(f).current_limit
+    assert data["points"][-1]["current_A"] == pytest.approx(cap_a)
+    assert max(p["current_A"] for p in data["points"]) <= cap_a
+    assert any("caps the current" in n for n in data["notes"])
+    code, cap = _run(capsys, ["torque", f, "--current", "7"])
+    assert code == 2 and "current limit" in cap.err and "--ignore-limit" in cap.err
+    assert _json(capsys, ["torque", f, "--current", "7", "--ignore-limit"])["points"]
+
+
+@pytest.mark.parametrize("argv", [
+    ["compare", "--preset", "paper", "--fidelity", "bogus"],
+    ["compare", "--preset", "paper", "--stiffness", "100"],
+    ["haptic", "--preset", "paper", "--actuator", "maxon-136206"],
+    ["haptic", "--preset", "paper", "--delay-ms", "2"],
+    ["compare", "/no/such/design.toml"],
+])  # fmt: skip
+def test_design_options_of_compare_and_haptic_refuse_bad_input_in_one_line(argv, capsys):
+    code, cap = _run(capsys, argv)
+    assert code == 2 and cap.err.count("\n") == 1 and cap.out == ""
