@@ -77,8 +77,9 @@ def scaling_study(
             )
             continue
         # not reachable: report the best this route can do (the steel saturates)
-        grid = np.linspace(v0, hi, 200)
-        best = grid[int(np.argmax([torque(name, v) for v in grid]))]
+        grid = np.linspace(v0, hi, 200)  # one batch, not 200 single designs (issue 40)
+        r = evaluate_batch({name: grid}, design)
+        best = grid[int(np.argmax(np.where(r["valid"] == 1, r["max_torque_N_m"], -np.inf)))]
         routes.append((route, name, float(best)))
         notes.append(
             f"{route}: {factor:g}× torque is out of reach — the magnetic circuit saturates; "
