@@ -141,7 +141,7 @@ def test_evaluate_json_and_bad_duty_on_the_command_line() -> None:
     assert data["peak"]["time_s"] == 30.0
     bad = subprocess.run([*run, "--duty=0.2:0"], capture_output=True, text=True)
     assert bad.returncode == 2
-    assert bad.stderr.count("\n") == 1 and "duty time" in bad.stderr
+    assert bad.stderr.count("\n") == 1 and "--duty '0.2:0': time = 0 s" in bad.stderr
 
 
 def test_batch_columns_are_the_evaluations_figures(ev) -> None:
