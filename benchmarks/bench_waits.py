@@ -1,0 +1,161 @@
+"""Every wait a designer notices, measured in one run (issue 40): the wall time of each
+command a designer runs, against its goal.
+
+    python benchmarks/bench_waits.py [--rounds 3] [--skip-install] [--skip-long]
+
+Runs each command in a fresh subprocess (this checkout first on ``PYTHONPATH``, the
+user's numba cache as it is: run it once before to measure the "after the first run"
+times) and prints the median of ``--rounds`` runs (one for the long jobs) and the goal:
+
+- interactive (≤ 0.5 s after the first run): ``evaluate --preset paper`` with and without
+  its uncertainty, ``haptic``, ``torque``, ``compare``;
+- ``report`` (≤ 8 s), ``optimize`` (default Pareto set, ≤ 30 s with progress), ``scale``
+  (progress past 2 s), ``sweep examples/random_sweep.toml --pareto`` (its plot ≤ 2 s:
+  the time from the sweep's last row to the plot written, read from its stderr);
+- the first run after a fresh ``pip install .`` into a temporary venv
+  (``--system-site-packages``: the dependencies of this environment; the project with
+  ``--no-deps``; an empty numba cache), ``evaluate --preset paper --no-uncertainty`` and a
+  solve of 10³ designs (which compiles the kernels), each run twice: the first run's excess
+  over the second (goal ≤ 5 s).
+
+Times depend on the machine and its load: the script prints the load average beside them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+INTERACTIVE = {
+    "evaluate --preset paper": "evaluate --preset paper",
+    "evaluate --preset paper --no-uncertainty": "evaluate --preset paper --no-uncertainty",
+    "haptic": "haptic",
+    "torque --preset paper": "torque --preset paper",
+    "compare": "compare",
+}
+LONG = {
+    "report --preset paper": ("report --preset paper --out {tmp}/report", 8.0),
+    "optimize --preset paper": ("optimize --preset paper", 30.0),
+    "scale --preset paper": ("scale --preset paper", None),
+    "sweep random_sweep.toml --pareto": (
+        "sweep examples/random_sweep.toml --out {tmp}/sweep.csv --pareto {tmp}/pareto.png "
+        "--overwrite --yes",
+        None,
+    ),
+}
+
+#: 10³ designs at two currents: past the uncompiled budget, so the kernels compile.
+SOLVE = """
+import numpy as np
+from geometry.params import preset
+from magnetics.torque import network_torque_batch
+f = {k: np.full(1000, float(v)) for k, v in vars(preset("paper")).items()}
+f["gap"] = np.linspace(0.3e-3, 0.5e-3, 1000)
+print(float(network_torque_batch(f, [2.0, 7.0]).sum()))
+"""
+
+
+def _run(argv: list[str], env: dict[str, str], cwd: Path) -> tuple[float, str]:
+    t = time.perf_counter()
+    run = subprocess.run(argv, env=env, cwd=cwd, capture_output=True, text=True)
+    took = time.perf_counter() - t
+    if run.returncode != 0:
+        raise SystemExit(f"{' '.join(argv)}: exit {run.returncode}\n{run.stderr[-2000:]}")
+    return took, run.stderr
+
+
+def _mrclutch(cmd: str, tmp: Path) -> list[str]:
+    return [sys.executable, "-m", "mrclutch", *cmd.replace("{tmp}", str(tmp)).split()]
+
+
+#: The sweep's plot alone, on the sweep's results (imports included: what the sweep adds
+#: after its last row).
+PLOT = """
+import sys
+from mrclutch.cli.plots.design import pareto_plot
+pareto_plot(sys.argv[1], sys.argv[2])
+"""
+
+
+def _plot_wait(tmp: Path, env: dict[str, str]) -> str:
+    """The sweep's plot step timed alone on the sweep's CSV, in a fresh process."""
+    took, _ = _run([sys.executable, "-c", PLOT, str(tmp / "sweep.csv"), str(tmp / "p2.png")],
+                   env, ROOT)  # fmt: skip
+    return f"{took:.2f} s (≤ 2 s {'met' if took <= 2 else 'NOT met'})"
+
+
+def install_first_run(tmp: Path) -> list[tuple[str, float, float]]:
+    """(what, first run s, second run s) in a fresh venv with the project installed from a
+    copy of this working tree and an empty numba cache."""
+    ls = ["git", "ls-files", "-z", "--cached", "--others", "--exclude-standard"]
+    names = subprocess.run(ls, cwd=ROOT, capture_output=True, check=True).stdout.decode()
+    src = tmp / "src"
+    for name in filter(None, names.split("\0")):
+        if (ROOT / name).is_file():
+            (src / name).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(ROOT / name, src / name)
+    venv = tmp / "venv"
+    subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", str(venv)],
+                   check=True)  # fmt: skip
+    py = str(venv / "bin" / "python")
+    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "PYTHONPATH")}
+    env.update(XDG_CACHE_HOME=str(tmp / "cache"), PATH=f"{venv / 'bin'}:{env['PATH']}",
+               PIP_DISABLE_PIP_VERSION_CHECK="1")  # fmt: skip
+    subprocess.run([py, "-m", "pip", "install", "-q", "--no-deps", str(src)], env=env,
+                   check=True)  # fmt: skip
+    out = []
+    for what, argv in (
+        ("evaluate --preset paper --no-uncertainty",
+         ["mrclutch", "evaluate", "--preset", "paper", "--no-uncertainty"]),
+        ("a solve of 10^3 designs (compiles)", [py, "-c", SOLVE]),
+    ):  # fmt: skip
+        first, _ = _run(argv, env, tmp)
+        second, _ = _run(argv, env, tmp)
+        out.append((what, first, second))
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--rounds", type=int, default=3, help="runs of each interactive command")
+    ap.add_argument("--skip-install", action="store_true", help="no fresh-venv first run")
+    ap.add_argument("--skip-long", action="store_true", help="interactive commands only")
+    a = ap.parse_args()
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "OPENBLAS_NUM_THREADS": "1"}
+    print(f"load average before: {os.getloadavg()[0]:.2f} ({os.cpu_count()} CPUs)")
+    with tempfile.TemporaryDirectory(prefix="mrclutch-waits-") as t:
+        tmp = Path(t)
+        _run(_mrclutch("evaluate --preset paper", tmp), env, ROOT)  # the first run, untimed
+        print(f"{'command':44s} {'median s':>9s}  goal")
+        for name, cmd in INTERACTIVE.items():
+            ts = [_run(_mrclutch(cmd, tmp), env, ROOT)[0] for _ in range(a.rounds)]
+            med = statistics.median(ts)
+            print(f"{name:44s} {med:9.2f}  ≤ 0.5 s {'met' if med <= 0.5 else 'NOT met'}")
+        if not a.skip_long:
+            for name, (cmd, goal) in LONG.items():
+                took, err = _run(_mrclutch(cmd, tmp), env, ROOT)
+                said = "progress on stderr" if ("%|" in err or "eta" in err.lower()) else ""
+                verdict = "" if goal is None else (
+                    f"≤ {goal:g} s {'met' if took <= goal else 'NOT met'}")  # fmt: skip
+                extra = f"  plot alone: {_plot_wait(tmp, env)}" if name.startswith("sweep") else ""
+                print(f"{name:44s} {took:9.2f}  {verdict} {said}{extra}")
+        if not a.skip_install:
+            for what, first, second in install_first_run(tmp):
+                excess = first - second
+                print(f"fresh install, {what:30s} first {first:6.2f} s  second "
+                      f"{second:6.2f} s  excess {excess:+6.2f} s  ≤ 5 s "
+                      f"{'met' if excess <= 5 else 'NOT met'}")  # fmt: skip
+    print(f"load average after: {os.getloadavg()[0]:.2f}")
+
+
+if __name__ == "__main__":
+    main()
