@@ -45,11 +45,13 @@ from typing import Any
 
 import numpy as np
 
+import mrclutch
 from geometry.atomic import OutputError, atomic_path, output_error, write_bytes, write_text
 from geometry.materials import DATA as MATERIAL_DATA
 from geometry.materials import SLOTS, MaterialChoice
 from geometry.params import INT_RANGES, INTEGER_FIELDS, LENGTH_FIELDS, DrumClutch, preset
 from geometry.validation import ParameterError, check_int
+from magnetics.materials import load_fluid
 from mrclutch.inputs import read_toml
 from mrclutch.outputs import OUTPUTS, describe
 
@@ -134,8 +136,6 @@ class MaterialFile:
         bytes already were (a long-lived worker may hold an older version of the file)."""
         if _LOADED.get(self.name) == self.digest:
             return
-        from magnetics.materials import load_fluid
-
         with tempfile.TemporaryDirectory() as folder:
             copy = Path(folder) / Path(self.written).name  # messages name the user's file
             write_bytes(copy, self.data)
@@ -335,8 +335,6 @@ def _digest_of(value: Any) -> str:
 
 def _material_file(spec_path: Path, written: str, where: str) -> MaterialFile:
     """A fluid file the spec names (relative to the spec's folder), read and registered."""
-    from magnetics.materials import load_fluid
-
     path = Path(written) if Path(written).is_absolute() else spec_path.parent / written
     try:
         data = path.read_bytes()
@@ -421,8 +419,6 @@ def model_version() -> str:
     """The model that writes a sweep's rows: the installed mrclutch's version and a digest
     of the data its models read (the error map, the materials library). A resume of rows
     another model wrote is refused (``run_sweep``)."""
-    import mrclutch
-
     found = importlib.util.find_spec("magnetics")
     folders = [Path(f) / "data" for f in (found.submodule_search_locations or [])] if found else []
     digest = hashlib.sha256()
@@ -495,15 +491,25 @@ def read_results(path: str | Path) -> dict[str, np.ndarray]:
         return out
     with open(path, newline="", encoding="utf-8") as f:
         header = next(csv.reader(f), [])
-    if not any(h in SLOTS for h in header):
+    text = {*SLOTS, *_recorded_categories(Path(path))}  # the columns of names
+    if not any(h in text for h in header):
         data = np.genfromtxt(path, delimiter=",", names=True, dtype=float, ndmin=1)
         return {name: np.atleast_1d(data[name]) for name in data.dtype.names}
     with open(path, newline="", encoding="utf-8") as f:
         rows = list(csv.reader(f))[1:]
     cols = list(zip(*rows, strict=True)) if rows else [()] * len(header)
-    return {h: np.asarray(c, dtype=object) if h in SLOTS else
+    return {h: np.asarray(c, dtype=object) if h in text else
             np.array([float(x) if x else math.nan for x in c], dtype=float)
             for h, c in zip(header, cols, strict=True)}  # fmt: skip
+
+
+def _recorded_categories(out: Path) -> list[str]:
+    """The categorical columns the sidecar of ``out`` lists (none when it has none)."""
+    try:
+        cats = json.loads(_meta_path(out).read_text(encoding="utf-8")).get("categories", {})
+    except (OSError, ValueError, AttributeError):
+        return []
+    return [str(k) for k in cats] if isinstance(cats, dict) else []
 
 
 def _meta_path(out: Path) -> Path:
