@@ -13,7 +13,7 @@ from geometry import ParameterError
 from geometry.materials import SLOTS
 from geometry.params import preset
 from mrclutch import sweep as sweep_mod
-from mrclutch.sweep import load_spec, run_sweep
+from mrclutch.sweep import load_spec, read_results, run_sweep
 
 OUTPUTS = ("outer_radius", "pole_radius")
 
@@ -265,3 +265,36 @@ def test_an_evaluator_error_leaves_no_header_only_file(tmp_path):
     assert len(lines) == 1 + 4 and all(line.count(",") == 4 for line in lines)
     res = run_sweep(spec, out, geometric_outputs, OUTPUTS, resume=True, progress=False)
     assert res.complete and res.resumed_from == 4
+
+
+@pytest.mark.parametrize("name", ["r.csv", "r.parquet"])
+def test_resume_and_repair_keep_working_with_a_material_column(tmp_path, name):
+    """Material names in the file (CSV text, a Parquet dictionary column): a resumed run
+    and a repaired one equal the uninterrupted run byte for byte."""
+    sections = {"sweep": 'mode = "grid"\nchunk_size = 2',
+                "parameters": 'fluid = {values = ["MRF-122EG", "MRF-140CG"]}\n'
+                              "gap_mm = {values = [0.3, 0.4, 0.5, 0.6]}"}  # fmt: skip
+    spec, _ = load_spec(write_spec(tmp_path, sections))
+    whole, out = tmp_path / f"whole-{name}", tmp_path / name
+    run_sweep(spec, whole, dims_only(geometric_outputs), OUTPUTS, progress=False)
+    part = run_sweep(spec, out, dims_only(InterruptAfter(2)), OUTPUTS, progress=False)
+    assert not part.complete
+    res = run_sweep(spec, out, dims_only(geometric_outputs), OUTPUTS, resume=True,
+                    progress=False)  # fmt: skip
+    assert res.complete and res.resumed_from == 4
+
+    def files(p):
+        return {f.name: f.read_bytes() for f in p.iterdir()} if p.is_dir() else p.read_bytes()
+
+    assert files(out) == files(whole)
+    if name.endswith(".csv"):  # a name altered in chunk 2's first row
+        text = out.read_text()
+        out.write_text(text.replace("\n4,mrf_140cg,", "\n4,mrf_122eg,", 1))
+    else:
+        (out / "part-000002.parquet").write_bytes(b"not parquet")
+    with pytest.raises(ParameterError, match=r"chunk 2 .* cannot resume; run again with --repair"):
+        run_sweep(spec, out, dims_only(geometric_outputs), OUTPUTS, resume=True, progress=False)
+    res = run_sweep(spec, out, dims_only(geometric_outputs), OUTPUTS, repair=True,
+                    progress=False)  # fmt: skip
+    assert res.repaired == (2,) and files(out) == files(whole)
+    assert read_results(out)["fluid"].tolist() == ["mrf_122eg"] * 4 + ["mrf_140cg"] * 4
