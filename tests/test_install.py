@@ -1,0 +1,90 @@
+"""The README's two Quick start lines in one environment, in either order (issue 39): the
+compiled kernel's cache lives in the user's cache folder, never inside the installed
+package, so replacing the wheel by an editable install (or back) leaves no folder that
+Python would take for ``magnetics.network``."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: Solves 300 designs at two currents (600 rows: past the uncompiled budget, so numba
+#: compiles the solver and the torque reading) and says where the package was imported from.
+_COMPILE = """
+import sys
+import numpy as np
+import magnetics
+from geometry.params import preset
+from magnetics.torque import network_torque_batch
+f = {k: np.full(300, float(v)) for k, v in vars(preset("paper")).items()}
+f["gap"] = np.linspace(0.3e-3, 0.5e-3, 300)
+t = network_torque_batch(f, [2.0, 7.0])
+print(magnetics.__file__, "numba" in sys.modules, repr(float(t.sum())))
+"""
+
+
+def _run(args: list[str], env: dict[str, str], cwd: Path) -> subprocess.CompletedProcess:
+    run = subprocess.run(args, env=env, cwd=cwd, capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, f"{args}: exit {run.returncode}\n{run.stdout}\n{run.stderr}"
+    return run
+
+
+@pytest.mark.slow
+def test_quick_start_lines_in_either_order_in_one_venv(tmp_path):
+    """In a fresh venv (``--system-site-packages``: the dependencies of this environment,
+    so only the build backend is fetched, as pip does; the project installed with
+    ``--no-deps``) from a copy of the working tree (its files git does not ignore): install
+    the wheel (``pip install .``), run a solve that compiles (its cache in
+    $XDG_CACHE_HOME/mrclutch/numba, no file of it in site-packages), then
+    ``pip install -e .`` on top: ``mrclutch evaluate --preset paper`` runs (it failed with
+    ``cannot import name 'Network'`` when the cache lived in the package), the package is
+    imported from the source copy and site-packages holds no ``magnetics`` folder; the
+    solve compiles for the new source and gives the same torque; the wheel again on top
+    of the editable install: ``evaluate`` runs."""
+    ls = ["git", "ls-files", "-z", "--cached", "--others", "--exclude-standard"]
+    files = subprocess.run(ls, cwd=ROOT, capture_output=True, check=True).stdout.decode()
+    files = files.split("\0")
+    src = tmp_path / "src"
+    for name in filter(None, files):
+        if (ROOT / name).is_file():
+            (src / name).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(ROOT / name, src / name)
+    venv = tmp_path / "venv"
+    subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", str(venv)],
+                   check=True, timeout=120)  # fmt: skip
+    py = venv / "bin" / "python"
+    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "PYTHONPATH")}
+    env.update(XDG_CACHE_HOME=str(tmp_path / "cache"), PATH=f"{venv / 'bin'}:{env['PATH']}",
+               OPENBLAS_NUM_THREADS="1", PIP_DISABLE_PIP_VERSION_CHECK="1")  # fmt: skip
+    pip = [str(py), "-m", "pip", "install", "-q", "--no-deps"]
+    site = Path(_run([str(py), "-c", "import sysconfig; print(sysconfig.get_path('purelib'))"],
+                     env, tmp_path).stdout.strip())  # fmt: skip
+    cache = tmp_path / "cache" / "mrclutch" / "numba"
+    evaluate = ["mrclutch", "evaluate", "--preset", "paper", "--no-uncertainty"]
+
+    _run([*pip, str(src)], env, tmp_path)  # pip install .
+    first = _run([str(py), "-c", _COMPILE], env, tmp_path)
+    where, numba, torque = first.stdout.split()
+    assert Path(where).is_relative_to(site) and numba == "True"
+    assert list(cache.rglob("*.nbi")), "the compiled kernels are cached in the user's folder"
+    assert not list((site / "magnetics").rglob("*.nb[ic]")), "no kernel cache in the package"
+    _run(evaluate, env, tmp_path)
+
+    _run([*pip, "-e", str(src)], env, tmp_path)  # pip install -e . on top
+    assert not (site / "magnetics").exists(), "the wheel's package folder is gone"
+    out = _run(evaluate, env, tmp_path)
+    assert "K_max" in out.stdout or "N/m" in out.stdout, out.stdout
+    again = _run([str(py), "-c", _COMPILE], env, tmp_path)
+    where, numba, torque_again = again.stdout.split()
+    assert Path(where).is_relative_to(src) and torque_again == torque
+    assert not list(src.rglob("*.nb[ic]")), "no kernel cache in the source tree either"
+
+    _run([*pip, str(src)], env, tmp_path)  # and the wheel again on top of the editable
+    _run(evaluate, env, tmp_path)
