@@ -50,8 +50,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
               "or a larger diameter (Fig. 7b)"),
     "fidelity": ("mrclutch.cli.commands.fidelity", "speed against accuracy: time and error of "
                  "every method (chart + table)"),
-    "materials": ("mrclutch.cli.commands.handoff", "the material library as CSV tables (B-H, "
-                  "yield stress, viscosity)"),
+    "tables": ("mrclutch.cli.commands.handoff", "the material library as CSV tables (B-H, "
+               "yield stress, viscosity)"),
     "device": ("mrclutch.cli.commands.handoff", "the device description a haptic rendering "
                "framework clamps its commands to"),
 }  # fmt: skip

@@ -25,7 +25,7 @@ def _rows(path: Path) -> list[dict[str, str]]:
 
 
 def test_materials_export_round_trips_every_table(tmp_path: Path) -> None:
-    assert main(["materials", "--export", str(tmp_path)]) == 0
+    assert main(["tables", "--export", str(tmp_path)]) == 0
     index = _rows(tmp_path / "materials.csv")
     assert {r["name"] for r in index} >= {"steel_1018", "mrf_132dg", "stainless_304"}
     for r in index:
@@ -108,7 +108,7 @@ def test_drawing_carries_the_process_tolerance(tmp_path: Path) -> None:
                  str(tmp_path)]) == 0  # fmt: skip
     svg = (tmp_path / "paper.svg").read_text()
     assert svg.startswith("<?xml") and "</svg>" in svg
-    # [process] defaults: IT band 0.02 mm -> ±0.01 mm on every diameter, runout 0.03 mm TIR
+    # the process defaults: IT band 0.02 mm -> ±0.01 mm on every diameter, runout 0.03 mm TIR
     assert svg.count("±0.01") >= 2 * 2 + 1 and "0.03 mm TIR" in svg
     assert "Ø25.800" in svg  # the housing: 2 × 12.9 mm
 

@@ -1,5 +1,5 @@
 """Hand-offs to the next tool in the chain: ``export --format femm|onelab|dxf|drawing``
-(called by ``mrclutch export``), ``mrclutch materials --export DIR`` (the material
+(called by ``mrclutch export``), ``mrclutch tables --export DIR`` (the material
 library as CSV) and ``mrclutch device DESIGN --out FILE.json`` (what a haptic rendering
 framework clamps its commands to). docs/handoff.md.
 
@@ -29,7 +29,7 @@ from mrclutch.handoff import MAP_COLUMNS, device_description, material_tables, t
 
 def register(sub: Any) -> None:
     p = sub.add_parser(
-        "materials",
+        "tables",
         help="the material library as CSV tables (B-H, yield stress, viscosity)",
         description="Write DIR/<material>_bh.csv (B-H of every magnetic material), "
         "DIR/<fluid>_tau_y.csv (Carlson's yield stress against H), DIR/<fluid>_viscosity.csv "
