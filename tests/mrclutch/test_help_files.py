@@ -49,6 +49,8 @@ CASES: dict[str, tuple[list[str], dict[str, str], bool]] = {
                  {"set": "DIR", "front.png": "FILE.png"}, True),
     "scale": ([], {}, False),
     "fidelity": ([], {}, True),  # the docs' figures' run, shared: test_fidelity_files_…
+    "tables": (["--export", "mat"], {"mat": "DIR"}, False),
+    "device": (["--out", "d.json"], {"d.json": "FILE.json"}, False),
 }  # fmt: skip
 
 
