@@ -56,6 +56,10 @@ the key name too::
     [measured]               # optional: what a bench measured (mrclutch/uncertainty.py)
     m1_g = 1.5
 
+    [render]                 # optional: the K rendered and what the verdict is over
+    rule = "K_max"           # K_max (default) | worst_case | typed (mrclutch/render.py)
+    verdict = "robust"       # robust (over the ranges, default) | nominal
+
     [duty]                   # optional, defaults in `mrclutch.duty.Duty` (issue 41)
     torque_N_m = 0.2         # held slipping for time_s (0: none); --duty NM:S
     time_s = 60
@@ -95,6 +99,7 @@ from mrclutch.haptics.actuator import MR_170, MR_DELAY, Transmission
 from mrclutch.inputs import read_toml
 from mrclutch.inputs import toml_value as _toml
 from mrclutch.process import PROCESS_KEYS, Process
+from mrclutch.render import Render, render_from_mapping, render_to_toml
 from mrclutch.uncertainty import (
     PAPER_BENCH,
     Measured,
@@ -186,6 +191,8 @@ class ClutchDesign:
     materials: MaterialChoice = field(default_factory=MaterialChoice)
     #: how it is used: a torque held, the peak hold, the life's duty (``[duty]``, issue 41)
     duty: Duty = field(default_factory=Duty)
+    #: the K it renders and what its verdict is over (``[render]``, mrclutch/render.py)
+    render: Render = field(default_factory=Render)
 
     def __post_init__(self) -> None:
         lo, hi = FLUIDS[self.materials.fluid].temperature_range
@@ -321,7 +328,8 @@ def _short(v: Any) -> str:
 def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> ClutchDesign:
     """Build a design from a parsed design file (see the module docstring)."""
     known = {"clutch", "operating", "transmission", "support", "amplifier", "laminations",
-             "uncertainty", "measured", "process", "materials", "duty", "name"}  # fmt: skip
+             "uncertainty", "measured", "process", "materials", "render", "duty",
+             "name"}  # fmt: skip
     for key in data:
         if key not in known and not isinstance(data[key], dict):
             raise ParameterError(f"{where}: {key}: not in a table; dimensions go under [clutch]")
@@ -393,6 +401,8 @@ def design_from_mapping(data: Mapping[str, Any], where: str = "design") -> Clutc
         unc = uncertainty_from_mapping(data["uncertainty"], f"{where}: uncertainty",
                                        base=default_uncertainty(design))  # fmt: skip
         design = replace(design, uncertainty=unc)
+    if "render" in data:
+        design = replace(design, render=render_from_mapping(data["render"], f"{where}: render"))
     if "duty" in data:
         duty_table = data["duty"]
         with _file_key(duty_table, DUTY_KEYS, f"{where}: duty"):
@@ -466,6 +476,7 @@ def design_to_toml(design: ClutchDesign) -> str:
     lines += [
         f"{k} = {_toml(_si(getattr(design.process, n), f))}" for k, (n, f) in PROCESS_KEYS.items()
     ]
+    lines += ["", "[render]", *render_to_toml(design.render)]
     lines += ["", "[duty]"]
     lines += [f"{k} = {_toml(_si(getattr(design.duty, n), f))}" for k, (n, f) in DUTY_KEYS.items()]
     return "\n".join(lines) + "\n"

@@ -194,7 +194,7 @@ def _uncertainty_sections() -> list[tuple[str, str, list[tuple[str, str, str, st
     meas += [("torque", "—", "none", "[[current_A, torque_N_m], …]: torques measured at "
               "currents"), ("use_in_model", "—", "false", "true: the model uses the "
               "measured m1, b1 and step delay"), ("source", "—", "none", "text")]  # fmt: skip
-    assert Measured  # the class the [measured] table builds
+    assert Measured  # the class the `[measured]` table builds
     return [("uncertainty", "mrclutch.uncertainty.Uncertainty: the ranges robust verdicts "
              "are taken over (docs/verdicts.md)", rows),
             ("measured", "mrclutch.uncertainty.Measured: a built device's bench "
@@ -218,7 +218,7 @@ def reference_markdown() -> str:
         "",
     ]
     for name, reader, rows in sections():
-        lines += [f"## [{name}]", "", f"Read by {reader}.", "",
+        lines += [f"## `[{name}]`", "", f"Read by {reader}.", "",
                   "| key | unit | default | allowed |", "|---|---|---|---|"]  # fmt: skip
         lines += [f"| `{k}` | {u} | {d} | {r} |" for k, u, d, r in rows]
         lines.append("")

@@ -87,6 +87,11 @@ _ALL = (
            "time to fluid limit"),
     Output("thermal_time_constant_s", "s", "longest time constant of the thermal network",
            "thermal time constant"),
+    Output("idle_coil_temperature_C", "°C", "steady coil temperature slipping unenergised at "
+           "the input speed (the drag's heat alone): why a continuous rating is 0",
+           "idle coil temperature"),
+    Output("idle_fluid_temperature_C", "°C", "steady fluid temperature slipping "
+           "unenergised at the input speed (the drag's heat alone)", "idle fluid temperature"),
     Output("torque_per_inertia_N_m_per_kg_m2", "N·m/(kg·m²)", "max torque / rotor "
            "inertia", "torque / inertia"),
     Output("coil_resistance_ohm", "Ω", "coil resistance at the coil temperature",
@@ -111,8 +116,10 @@ _ALL = (
     Output("b1_N_s_per_m", "N·s/m", "actuator-side damping at the hand (Eq. 3)", "b1"),
     Output("k_N_per_m", "N/m", "transmission stiffness", "k"),
     Output("b_N_s_per_m", "N·s/m", "transmission damping", "b"),
-    Output("K_N_per_m", "N/m", "rendered virtual stiffness (the MR pair's K_max = "
-           "F_max / workspace, Eq. 5)", "K rendered"),
+    Output("K_N_per_m", "N/m", "rendered virtual stiffness (by the design's [render] rule: "
+           "by default the MR pair's K_max; mrclutch.verdict)", "K rendered"),
+    Output("K_max_N_per_m", "N/m", "the MR pair's K_max = F_max / workspace (Eq. 4-5), "
+           "whatever K is rendered", "K_max"),
     Output("delay_s", "s", "actuator delay in the loop", "delay", "ms", 1e3),
     Output("bandwidth_lumped_hz", "Hz", "rendering bandwidth √(K/(m1+m2))/2π (Eq. 1)",
            "bandwidth, lumped √(K/m)"),

@@ -49,7 +49,7 @@ from magnetics.torque import (
 )
 from mrclutch.design import ClutchDesign, current_limit
 from mrclutch.duty import DUTY_COLUMNS, DUTY_INFS, DUTY_NULLS, duty_batch, evaluation_duty
-from mrclutch.feel import feel_figures
+from mrclutch.feel import FEEL_COLUMNS, feel_batch, feel_figures
 from mrclutch.haptics.actuator import (
     EM_170,
     TABLE2_MR,
@@ -251,9 +251,13 @@ def thermal_figures(design: ClutchDesign, rg: regions.Regions, path: Any, off_to
         op.wire_temperature_limit,
         limit,
     )
+    # the steady temperatures with no current, slipping unenergised (why a rating is 0)
+    idle = np.ravel(thermal.steady(net, 0.0, off_torque * op.input_speed))
     return {
         "continuous_current_A": float(np.ravel(i_c)[0]),
         "continuous_torque_N_m": float(np.ravel(t_c)[0]),
+        "idle_coil_temperature_C": float(idle[0]),
+        "idle_fluid_temperature_C": float(idle[1]),
         "time_to_wire_limit_s": t_wire,
         "time_to_fluid_limit_s": t_fluid,
         "thermal_time_constant_s": float(thermal.time_constants(net)[0]),
@@ -261,12 +265,25 @@ def thermal_figures(design: ClutchDesign, rg: regions.Regions, path: Any, off_to
 
 
 def _thermal_notes(design: ClutchDesign, th: Mapping[str, float]) -> tuple[str, ...]:
+    """Say when the peak cannot be held for its duration, and why a continuous rating is
+    0 (which limit the unenergised clutch already reaches by its slip heat alone)."""
     op = design.operating
+    out = []
     if th["time_to_wire_limit_s"] < op.peak_duration:
-        return (f"the coil reaches {op.wire_temperature_limit:g} °C after "
-                f"{th['time_to_wire_limit_s']:.2g} s at the peak current, before the "
-                f"{op.peak_duration:g} s peak duration",)  # fmt: skip
-    return ()
+        out.append(f"the coil reaches {op.wire_temperature_limit:g} °C after "
+                   f"{th['time_to_wire_limit_s']:.2g} s at the peak current, before the "
+                   f"{op.peak_duration:g} s peak duration")  # fmt: skip
+    if th["continuous_current_A"] <= 0.0:
+        limit = fluid_limit(design.materials)
+        fluid, coil = th["idle_fluid_temperature_C"], th["idle_coil_temperature_C"]
+        which = (f"the fluid would settle at {fluid:.4g} °C, above its {limit:g} °C limit"
+                 if fluid > limit else f"the coil would settle at {coil:.4g} °C, above its "
+                 f"{op.wire_temperature_limit:g} °C limit")  # fmt: skip
+        out.append(f"continuous rating 0: slipping unenergised at {op.input_speed_rpm:g} rpm, "
+                   f"the drag's heat alone (off-state torque × speed) exceeds a thermal limit "
+                   f"({which}, ambient {op.ambient_temperature:g} °C); no current can be held "
+                   "continuously — slower input speed, wider gaps or more cooling")  # fmt: skip
+    return tuple(out)
 
 
 def _density_notes(design: ClutchDesign) -> tuple[str, ...]:
@@ -295,6 +312,13 @@ def _supply_notes(design: ClutchDesign) -> tuple[str, ...]:
             f"coil ({volts / supply:.3g} Ω at {op.coil_temperature:g} °C): the current "
             f"limit is {supply:.3g} A, below max_current_A = {op.max_current:g}; raise "
             "[amplifier] supply_voltage_V to reach it",)  # fmt: skip
+
+
+def current_notes(design: ClutchDesign) -> tuple[str, ...]:
+    """Why the design's current limit is below its typed max_current_A (the current
+    density in the wire, the amplifier's supply), as ``evaluate`` prints it; () if it is
+    not."""
+    return _density_notes(design) + _supply_notes(design)
 
 
 def dynamic_range_db(max_torque: Any, off_torque: Any) -> Any:
@@ -350,15 +374,14 @@ class Evaluation:
     unavailable: Mapping[str, str] = field(default_factory=dict)
     source: str = "fast model"  # where the pair's figures at the hand come from
     model_mr: HapticParams | None = None  # the model's pair where measured values replace it
+    #: ``mrclutch.feel.feel_figures``: the residual torque and its loop, the runout ripple
+    feel: Mapping[str, Any] = field(default_factory=dict)
 
     @functools.cached_property
     def duty(self) -> dict[str, Any]:
         """Issue 41: the hot peak and duty holds, the fluid's volume and life and the b1
         budget's new terms (``mrclutch.duty.evaluation_duty``), computed when first read."""
         return evaluation_duty(self)
-
-    #: ``mrclutch.feel.feel_figures``: the residual torque and its loop, the runout ripple
-    feel: Mapping[str, Any] = field(default_factory=dict)
 
     def as_json(self) -> dict[str, Any]:
         mr_m, em_m = dict(self.haptic), dict(self.motor_metrics)
@@ -386,8 +409,8 @@ class Evaluation:
             "response": dict(self.response),
             "unavailable": dict(self.unavailable),
             "source": self.source,
-            "duty": self.duty,
             "feel": {k: dict(v) for k, v in self.feel.items()},
+            "duty": self.duty,
         }
         out["nulls"] = null_notes(out)
         return out
@@ -409,6 +432,8 @@ NAN_MEANS: dict[str, str] = {
     "bandwidth_gain_lumped": "one side has no bandwidth (the motor unavailable)",
 }
 NAN_MEANS["K_min_N_per_m"] = NAN_MEANS["K_max_N_per_m"]
+NAN_MEANS["robust"] = ("not asked: the verdict is at nominal values only (--no-uncertainty, "
+                       "or the design's [render] verdict = 'nominal')")
 NAN_MEANS["K_max_at_B0_N_per_m"] = (
     "no passive K >= 0 even with no virtual damping (the Z-width is empty at B = 0)"
 )
@@ -476,11 +501,14 @@ def _gain(a: float | None, b: float | None) -> float | None:
 
 
 def evaluate(
-    design: ClutchDesign, fidelity: str = "fast", accuracy: float | None = None
+    design: ClutchDesign, fidelity: str = "fast", accuracy: float | None = None,
+    K: float | None = None,
 ) -> Evaluation:
-    """The clutch figures and their haptic consequences, beside the equal-force motor.
-    ``accuracy`` (relative): pick per quantity the cheapest method that meets it
-    (mrclutch.trust.choose); the Evaluation's fidelity then reads "accuracy=…"."""
+    """The clutch figures and their haptic consequences, beside the equal-force motor, at
+    the virtual stiffness ``K`` (N/m; None: the MR pair's K_max, Eq. 4). ``accuracy``
+    (relative): pick per quantity the cheapest method that meets it (mrclutch.trust.choose);
+    the Evaluation's fidelity then reads "accuracy=…". The design's own ``[render]`` rule
+    is applied by ``mrclutch.verdict.judge``, which calls this."""  # fmt: skip
     fig = clutch_figures(design, fidelity, accuracy)
     if accuracy is not None:
         fidelity = f"accuracy={accuracy:g}"
@@ -504,24 +532,40 @@ def evaluate(
         em_tr = em = None
         unavailable["motor"] = (f"the equal-force {MOTOR} is left out: matching the MR pair's "
                                 f"{float(mr.f_max):.4g} N would need {exc}")  # fmt: skip
-    k = float(mr.k_max)
-    table2 = replace(mr, b1=TABLE2_MR.b1)  # the same pair with the paper's identified b1
     sides = [mr] if em is None else [mr, em]
-    *side_m, t2_m = metrics_of([*sides, table2], [k] * (len(sides) + 1))  # at the MR K_max
-    mr_m, em_m = side_m[0], (side_m[1] if em is not None else {})
-    budget = hand_budget(design, fig, mr, t2_m)
     zw = zwidth_of(HapticParams.stack(sides))
     names = ZWIDTH_SIDES[: len(sides)]
     zws = {side: {key: zw[key][i] if np.ndim(zw[key]) > 1 else float(zw[key][i])
                   for key in ZWIDTH_KEYS} for i, side in enumerate(names)}  # fmt: skip
-    hand = {side: _hand_or_why(p, k, unavailable, side)
-            for side, p in zip(names, sides, strict=True)}  # fmt: skip
     gearing = em_tr.gearing if em_tr is not None else None
-    return Evaluation(design, fidelity, fig, mr, em, gearing, mr_m, em_m, budget, zws, hand,
-                      response_figures(design, resp, mr, unavailable), resp,
-                      MappingProxyType(unavailable), source, model_mr,
+    ev = Evaluation(design, fidelity, fig, mr, em, gearing, {}, {}, {}, zws, {},
+                    response_figures(design, resp, mr, unavailable), resp,
+                    MappingProxyType(unavailable), source, model_mr,
                     feel_figures(design, fig.max_torque, fig.yield_torque, fig.off_state_torque,
                                  float(backdrive_force(mr))))  # fmt: skip
+    return rendered(ev, float(mr.k_max) if K is None else K)
+
+
+def rendered(ev: Evaluation, K: float) -> Evaluation:
+    """``ev`` with the MR pair and the equal-force motor rendering the virtual spring ``K``
+    (N/m): the metrics at the hand, the b1 budget's Table 2 check and the hand figures are
+    taken at K; the clutch, the pair's parameters, K_max and the Z-width do not depend on
+    it. ``haptic["K_max_N_per_m"]`` is the pair's F_max/d (Eq. 4) whatever K is."""
+    mr, em = ev.mr, ev.motor
+    unavailable = {k: v for k, v in ev.unavailable.items() if not k.startswith("hand_")}
+    table2 = replace(mr, b1=TABLE2_MR.b1)  # the same pair with the paper's identified b1
+    sides = [mr] if em is None else [mr, em]
+    *side_m, t2_m = metrics_of([*sides, table2], [K] * (len(sides) + 1))
+    mr_m, em_m = side_m[0], (side_m[1] if em is not None else {})
+    mr_m = {**mr_m, "K_max_N_per_m": float(mr.k_max)}
+    if em is not None:
+        em_m = {**em_m, "K_max_N_per_m": float(em.k_max)}
+    budget = hand_budget(ev.design, ev.clutch, mr, t2_m)
+    names = ZWIDTH_SIDES[: len(sides)]
+    hand = {side: _hand_or_why(p, K, unavailable, side)
+            for side, p in zip(names, sides, strict=True)}  # fmt: skip
+    return replace(ev, haptic=mr_m, motor_metrics=em_m, budget=budget, hand=hand,
+                   unavailable=MappingProxyType(unavailable))  # fmt: skip
 
 
 #: The label beside a figure at the hand: where its torque, mass and damping come from.
@@ -756,14 +800,17 @@ class BatchEvaluator:
 
     def __call__(self, fields: Mapping[str, ArrayLike]) -> dict[str, np.ndarray]:
         on = set(self.optional)
+        feel = tuple(k for k in self.optional if k in FEEL_COLUMNS)  # mrclutch.feel
         robust = on - {"max_passive_K_N_per_m", "max_stable_K_N_per_m", "zwidth_area_N2_s_per_m2",
-                       *DUTY_COLUMNS}  # fmt: skip
+                       *FEEL_COLUMNS, *DUTY_COLUMNS}  # fmt: skip
         if robust:  # over the uncertain inputs: the application's robust layer computes them
             raise ParameterError(f"{sorted(robust)[0]}: a robust column; "
                                  "use mrclutch.robust.RobustBatchEvaluator")  # fmt: skip
         out = evaluate_batch(fields, self.base, passivity="max_passive_K_N_per_m" in on,
                              stability="max_stable_K_N_per_m" in on,
                              zwidth="zwidth_area_N2_s_per_m2" in on)  # fmt: skip
+        if feel:
+            out.update(feel_batch(fields, self.base, feel))
         if on & set(DUTY_COLUMNS):  # the fluid's volume and life (mrclutch.duty)
             out.update(duty_batch(fields, self.base, out))
         return {k: out[k] for k in self.columns}

@@ -7,10 +7,10 @@ design, not of the command that reads it, so every command (``evaluate``, ``repo
 
     [render]
     rule = "worst_case"   # "K_max" (default): F_max/d (Eq. 4 of the paper)
-                          # "worst_case": the largest K stable and passive over [uncertainty]
+                          # "worst_case": the largest K stable and passive over `[uncertainty]`
                           # "typed": K_N_per_m below
     K_N_per_m = 110.7     # with rule = "typed" (alone, it implies rule = "typed")
-    verdict = "robust"    # "robust" (default): over the [uncertainty] ranges;
+    verdict = "robust"    # "robust" (default): over the uncertainty ranges;
                           # "nominal": at the nominal values only
 
 The delay the verdict uses is ``[operating] delay_source`` ("fixed": ``delay_ms``;

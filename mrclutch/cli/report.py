@@ -43,6 +43,7 @@ from geometry.section import build_section
 from geometry.validation import ParameterError
 from magnetics.torque import torque_curve
 from mrclutch.cli.duty_format import duty_html
+from mrclutch.cli.feel_format import feel_html
 from mrclutch.cli.jsonio import to_jsonable
 from mrclutch.cli.plots.design import section_figure
 from mrclutch.cli.plots.dynamics import plot_torque_step
@@ -149,7 +150,7 @@ def _build_in(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[st
               tmp: Path) -> Report:  # fmt: skip
     tick("evaluating the design")
     ev = evaluate(design, fidelity)
-    data = judge_evaluation(ev)  # the design's [render] rule, its one verdict
+    data = judge_evaluation(ev)  # the design's `[render]` rule, its one verdict
     tick("CAD: STEP and STL")
     cad = _cad(design, tmp)
     tick("3D view")
@@ -160,7 +161,7 @@ def _build_in(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[st
     curve = _torque(design, tmp / "torque.png")
     tick("haptic plots")
 
-    k = float(data["haptic"]["K_N_per_m"])  # the K rendered (the design's [render] rule)
+    k = float(data["haptic"]["K_N_per_m"])  # the K rendered (the design's `[render]` rule)
     sides = {"MR pair": ev.mr, "Maxon 136206 (equal force)": ev.motor}
     compare_figure({n: p for n, p in sides.items() if p is not None}, k, tmp / "haptic.png")
     zw = {"MR pair": ev.zwidth["mr"]}
@@ -405,6 +406,7 @@ def render_html(m: dict[str, Any]) -> str:
     budget = budget_html(m["budget"]) if "budget" in m else ""
     budget = measured_html(m.get("measured") or []) + budget
     duty = duty_html(m["duty"]) if m.get("duty") else ""  # issue 41 (docs/hot.md)
+    duty += feel_html(m.get("feel") or {})  # issue 41 (docs/hysteresis.md)
     stl = ", ".join(f'<a href="{e_(p)}">{e_(p)}</a>' for p in m["cad"]["stl"].values())
     methods = ", ".join(f"{k}: {v}" for k, v in c["methods"].items())
     side = m["cad"].get("materials") or ""

@@ -1,4 +1,4 @@
-"""Issue 39: one design, one answer. A design file holds how it renders ([render]) and every
+"""Issue 39: one design, one answer. A design file holds how it renders (`[render]`) and every
 command that judges it — evaluate, report, compare, haptic, optimize — gives the same K,
 K_max and verdict at one fidelity, leading with one verdict line."""
 
@@ -37,7 +37,7 @@ def _triple(data):
     return v["status"], v["K_N_per_m"], v["K_max_N_per_m"]
 
 
-# ---- [render] in the design file ---------------------------------------------------------
+# ---- `[render]` in the design file ---------------------------------------------------------
 
 
 @pytest.mark.parametrize("render", [Render(), Render("worst_case"), Render("typed", 123.4),
@@ -69,7 +69,7 @@ def test_bad_render_tables_are_refused_naming_the_key(table, phrase, tmp_path, c
 
 
 def test_a_typed_K_is_rendered_and_judged_there():
-    """K typed in [render] is the K every figure at the hand is taken at; K_max is still
+    """K typed in `[render]` is the K every figure at the hand is taken at; K_max is still
     F_max/d; the verdict's K is the typed one."""
     d = replace(design_preset("paper"), render=Render("typed", 100.0))
     data = judge(d, robust=False)

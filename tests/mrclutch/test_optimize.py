@@ -389,7 +389,8 @@ def test_summary_lists_every_varied_field(capsys, monkeypatch):
     code = main(argv)
     text = capsys.readouterr().out
     assert code == 0, text
-    head = text.splitlines()[0]
+    verdict, head = text.splitlines()[:2]  # the written design's one verdict leads
+    assert verdict.startswith("VERDICT: ")
     assert "n_drums 2" in head and "band_length_mm " in head and "gap_mm " in head
     assert main([*argv, "--json"]) == 0
     data = json.loads(capsys.readouterr().out)

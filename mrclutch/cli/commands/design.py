@@ -26,6 +26,7 @@ from mrclutch.cli.commands._common import (
 from mrclutch.cli.duty_format import duty_lines
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.executors import sweep_executor
+from mrclutch.cli.feel_format import feel_lines
 from mrclutch.cli.longjobs import announce
 from mrclutch.cli.plots.design import PLOT_STEPS, pareto_plot, pareto_set_plot
 from mrclutch.cli.progress import bar as progress_bar
@@ -297,6 +298,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="a duty cycle: hold NM N·m (yield + drag, slipping) for S seconds before the "
         "wire or fluid limit (default: none)",
     )
+    p.add_argument("--max-residual-torque-mNm", type=float, default=None, metavar="MNM",
+                   help="the largest residual torque at 0 A after the peak current (the "
+                   "steel's remanence, docs/hysteresis.md; default: none)")  # fmt: skip
+    p.add_argument("--max-ripple-force-mN", type=float, default=None, metavar="MN",
+                   help="the largest runout ripple force at the hand ([process] runout, "
+                   "docs/hysteresis.md; default: none)")  # fmt: skip
     p.add_argument(
         "--min-life-h",
         type=float,
@@ -406,6 +413,7 @@ def _evaluate(args: argparse.Namespace) -> int:
         return 0
     print(format_evaluation(data))
     print("\n".join(duty_lines(data["duty"])))
+    print("\n".join(feel_lines(data.get("feel") or {})))
     for note in data["clutch"]["notes"]:
         print(f"note: {note}")
     seen = set()
@@ -888,6 +896,11 @@ def _optimize_inputs(args: argparse.Namespace) -> tuple[ClutchDesign, tuple[int,
         if not (duty[0] > 0 and duty[1] > 0):
             raise CLIError(f"--duty {args.duty!r}: torque and seconds must be > 0")
         base = replace(base, duty=replace(base.duty, torque=duty[0], time=duty[1]))  # issue 41
+    for opt, v in (("--max-residual-torque-mNm", args.max_residual_torque_mNm),
+                   ("--max-ripple-force-mN", args.max_ripple_force_mN),
+                   ("--min-life-h", args.min_life_h)):  # fmt: skip
+        if v is not None and not (math.isfinite(v) and v > 0):
+            raise CLIError(f"{opt} = {v:g}: must be finite and > 0")
     cons = Constraints(
         min_torque=args.min_torque,
         max_mass=args.max_mass_g * 1e-3,
@@ -901,6 +914,10 @@ def _optimize_inputs(args: argparse.Namespace) -> tuple[ClutchDesign, tuple[int,
         duty_torque=duty[0],
         duty_time=duty[1],
         min_life=args.min_life_h,
+        max_residual_torque=None if args.max_residual_torque_mNm is None
+        else args.max_residual_torque_mNm * 1e-3,
+        max_ripple_force=None if args.max_ripple_force_mN is None
+        else args.max_ripple_force_mN * 1e-3,
     ).resolved(base)
     if args.verify_top is not None and args.verify_top < 1:
         raise CLIError(f"--verify-top = {args.verify_top}: must be >= 1")
@@ -1028,6 +1045,10 @@ def _limits_line(base: ClutchDesign, cons: Constraints, wc: WorstCase | None) ->
     ]
     if cons.duty_time > 0:
         parts.append(f"{cons.duty_torque:g} N·m held ≥ {cons.duty_time:g} s")
+    if cons.max_residual_torque is not None:
+        parts.append(f"residual torque at 0 A ≤ {cons.max_residual_torque * 1e3:g} mN·m")
+    if cons.max_ripple_force is not None:
+        parts.append(f"runout ripple at the hand ≤ {cons.max_ripple_force * 1e3:g} mN")
     parts.append(f"gap ≥ {pr.min_gap * 1e3:.3g} mm (runout {pr.runout * 1e3:g} + tolerance "
                  f"{pr.tolerance * 1e3:g} mm, eccentricity ≤ {MAX_ECCENTRICITY:g})")  # fmt: skip
     parts.append(f"drum wall ≥ {pr.min_wall * 1e3:g} mm")
@@ -1114,7 +1135,7 @@ def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...]
                        "declare narrower ranges ([uncertainty]) or give --nominal")  # fmt: skip
     if not ps.members:
         raise CLIError("no design meets the constraints in the search box; relax a limit")
-    # each member as its file says (its [render] rule, its ranges, no bench), judged by the
+    # each member as its file says (its `[render]` rule, its ranges, no bench), judged by the
     # one verdict every command uses, at reference fidelity (or the fast path: --no-verify)
     shipped = [for_workshop(m.design, _ranges(wc)) for m in ps.members]
     t1 = time.perf_counter()
@@ -1375,7 +1396,9 @@ def _check_candidate(args: argparse.Namespace, design: ClutchDesign, cons: Const
         data["bandwidth_change_reference_vs_fast"] = b_ref / b_fast - 1
         checked = ref
     violations = requirement_violations(checked, cons, design)
-    data["verdict"] = verdict_of(checked)
+    for ev in (fast, checked):  # the verdict from each evaluation's own data (the same
+        ev["verdict"] = verdict_of(ev)  # as judge's; a seam's data gets one too)
+    data["verdict"] = checked["verdict"]
     data["requirements_met"] = not violations
     data["violations"] = violations
     return data
@@ -1403,6 +1426,12 @@ def reference_row(ev: dict, design: ClutchDesign, cons: Constraints) -> dict[str
          "clutch_mass_kg": c["clutch_mass_kg"], "diameter_m": d, "length_m": length,
          "K_N_per_m": h["K_N_per_m"], "max_passive_K_N_per_m": h["max_passive_K_N_per_m"],
          "max_stable_K_N_per_m": h["max_stable_K_N_per_m"]}  # fmt: skip
+    feel, duty = ev.get("feel") or {}, ev.get("duty") or {}
+    if feel:  # issue 41: the steel's memory and the runout ripple (mrclutch.feel)
+        r["residual_torque_N_m"] = feel["hysteresis"]["residual_torque_N_m"]
+        r["ripple_force_N"] = feel["ripple"]["ripple_force_N"]
+    if duty and duty.get("fluid", {}).get("life_h") is not None:  # mrclutch.duty
+        r["fluid_life_h"] = duty["fluid"]["life_h"]
     row = {k: np.array([float(v)]) for k, v in r.items()}
     fields = {k: np.array([getattr(design.clutch, k)]) for k in ("gap", "n_drums")}
     row.update(limit_columns(fields, design, row, cons.duty_torque))
@@ -1416,6 +1445,11 @@ _LIMIT_PHRASES = {
     "power": ("coil power", "coil_power_W", "W", 1.0, "max_power", "above"),
     "time at peak": ("time at peak", "time_at_peak_s", "s", 1.0, "peak_time", "below"),
     "duty cycle": ("time at the duty torque", "time_at_duty_s", "s", 1.0, "duty_time", "below"),
+    "residual torque": ("residual torque at 0 A", "residual_torque_N_m", "mN·m", 1e3,
+                        "max_residual_torque", "above"),
+    "ripple": ("runout ripple at the hand", "ripple_force_N", "mN", 1e3, "max_ripple_force",
+               "above"),
+    "fluid life": ("fluid life", "fluid_life_h", "h", 1.0, "min_life", "below"),
 }  # fmt: skip
 
 
