@@ -255,7 +255,7 @@ def test_torque_for_finds_the_current_of_a_torque(capsys):
     far = _json(capsys, ["torque", "--preset", "paper", "--for", "5"])["methods"][0]
     assert far["current_A"] is None and far["torque_at_limit_N_m"] < 5
     code, cap = _run(capsys, ["torque", "--preset", "paper", "--for", "5"])
-    assert "out of reach: the most is" in cap.out and "at 7 A" in cap.out
+    assert code == 0 and "out of reach: the most is" in cap.out and "at 7 A" in cap.out
     low = _json(capsys, ["torque", "--preset", "paper", "--for", "1e-6"])["methods"][0]
     assert low["current_A"] == 0.0
 
