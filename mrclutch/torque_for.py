@@ -3,11 +3,11 @@
 The clutch torque T(I) (yield + viscous drag at the slip speed, magnetics.torque) rises
 monotonically with the coil current from the off-state torque T(0) (the yield stress
 τy(H) rises with H, and H with the ampere-turns, through saturation), so the current for
-a torque T* is the one root of T(I) − T* on [0, I_limit] — found by Brent's method
-(scipy.optimize.brentq; Brent, *Algorithms for Minimization without Derivatives*, 1973) on the method's own T(I): the reluctance network (the
-fast path), the single-loop circuit or the FEM (the reference). Out of reach (T* above
-T(I_limit)) the answer is the most the clutch gives, at the limit; below the off-state
-torque it is 0 A.
+a torque T* is the one root of T(I) − T* on [0, I_limit], found by Brent's method
+(scipy.optimize.brentq; R. P. Brent, Algorithms for Minimization without Derivatives,
+1973) on the method's own T(I): the reluctance network (the fast path), the single-loop
+circuit or the FEM (the reference). Out of reach (T* above T(I_limit)) the answer is the
+most the clutch gives, at the limit; below the off-state torque it is 0 A.
 """
 
 from __future__ import annotations
