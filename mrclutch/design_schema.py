@@ -15,6 +15,7 @@ import math
 import re
 import sys
 from collections.abc import Callable, Mapping
+from pathlib import Path
 from typing import Any
 
 from geometry.materials import SLOTS, MaterialChoice
@@ -26,6 +27,13 @@ from mrclutch import design as design_mod
 from mrclutch.haptics.actuator import MR_170
 from mrclutch.process import PROCESS_KEYS, Process
 from mrclutch.render import RENDER_KEYS
+from mrclutch.uncertainty import (
+    _MEASURED_KEYS,
+    _UNCERTAINTY_KEYS,
+    Measured,
+    default_uncertainty,
+    uncertainty_from_mapping,
+)
 
 #: A key's unit, from the end of its name (longest suffix first).
 UNITS: tuple[tuple[str, str], ...] = (
@@ -165,13 +173,6 @@ def sections() -> list[tuple[str, str, list[tuple[str, str, str, str]]]]:
 
 
 def _uncertainty_sections() -> list[tuple[str, str, list[tuple[str, str, str, str]]]]:
-    from mrclutch.uncertainty import (
-        _MEASURED_KEYS,
-        _UNCERTAINTY_KEYS,
-        Measured,
-        default_uncertainty,
-        uncertainty_from_mapping,
-    )
 
     base = default_uncertainty(design_mod.design_preset("paper"))
     rows = []
@@ -226,8 +227,6 @@ def reference_markdown() -> str:
 
 
 def main() -> int:
-    from pathlib import Path
-
     path = Path(__file__).resolve().parents[1] / "docs" / "design-file.md"
     if "--check" in sys.argv:
         return 0 if path.read_text() == reference_markdown() else 1

@@ -29,6 +29,8 @@ from typing import Any
 
 import numpy as np
 
+from geometry import regions
+from geometry.params import valid
 from geometry.regions import Regions
 from geometry.section import build_section
 from geometry.validation import ParameterError, check_range
@@ -38,7 +40,10 @@ from magnetics.dynamics import Amplifier, supply_current
 from magnetics.hot import Load, march, tau_y_coefficient, tau_y_factor
 from magnetics.life import fluid_volume, life_hours, mean_power
 from magnetics.materials import FLUIDS
+from magnetics.torque import torque_curve
+from mrclutch.batch import batch_fields
 from mrclutch.haptics.actuator import TABLE2_MR, HapticParams
+from mrclutch.haptics.model import metrics_of
 
 #: The paper's duty rule for rated torque, 25 % [lebel] (docs/haptic.md): the default share
 #: of the fluid's life at the duty torque.
@@ -183,8 +188,6 @@ def hold(ctx: Context, load: Any, seconds: float, mr: HapticParams, reduction: f
     """The state after ``seconds`` of ``load``: current, temperatures, torque, η, the τy
     factor, b1 at the hand (the cold pair's b1 + the films' change of damping, both
     clutches: 2 r² Δc, Eq. 3) and the verdict at ``k`` with that b1."""
-    from mrclutch.haptics.model import metrics_of  # lazy: design.py imports this module
-
     m = march(ctx.net, load, seconds, STEPS)
     temps = m.final
     i = float(load(temps).current)
@@ -272,8 +275,6 @@ def evaluation_duty(ev: Any) -> dict[str, Any]:
     """``duty_figures`` of an evaluation (``mrclutch.pipeline.Evaluation``: its design,
     clutch figures and MR pair, at its rendered K), as JSON (``duty_json``), with the
     duty it was computed for."""
-    from magnetics.torque import torque_curve  # lazy: design.py imports this module
-
     design, fig, mr = ev.design, ev.clutch, ev.mr
     op = design.operating
     duty = design_duty(design)
@@ -356,10 +357,6 @@ def duty_batch(fields: Mapping[str, Any], base: Any, r: Mapping[str, np.ndarray]
     beside ``evaluate_batch``'s ``r`` (its off-state and peak torques): the fluid's volume
     and its life at ``base``'s duty (``duty_figures``' figures on arrays). Rows that fail
     validation are NaN."""
-    from geometry import regions
-    from geometry.params import valid
-    from mrclutch.pipeline import batch_fields  # the application's batch reader
-
     p, mats = batch_fields(fields, base)
     ok = valid(p) & (np.asarray(r["valid"]) == 1)
     duty = design_duty(base)

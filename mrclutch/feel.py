@@ -30,6 +30,7 @@ from magnetics.hysteresis import coercive_current, pulse_train, torque_loop
 from magnetics.network import network_from_regions
 from magnetics.ripple import GAP_STEP, gap_derivatives, ripple_amplitude
 from magnetics.torque import network_torque_and_flux, torque_curve
+from mrclutch.batch import batch_fields
 from mrclutch.design import ClutchDesign, current_limit
 
 #: % of the reference force: the hand's force JND ([pang1991], about 7 %).
@@ -112,8 +113,6 @@ def feel_batch(fields: Mapping[str, Any], base: ClutchDesign,
     as ``feel_figures`` on arrays, by drum count. The loop's width is read at 8 currents
     (0 … the limit), the ripple's T'' by central differences at ±``GAP_STEP``. Rows that
     fail validation are NaN."""
-    from mrclutch.pipeline import batch_fields  # the application's batch reader
-
     p, mats = batch_fields(fields, base)
     ok = valid(p)
     op = base.operating

@@ -28,8 +28,8 @@ from numpy.typing import ArrayLike
 
 from geometry import regions
 from geometry.mass import MassReport, analytic_mass, brep_mass, region_mass
-from geometry.materials import MRF, SLOTS, MaterialChoice
-from geometry.params import broadcast_fields, preset, valid
+from geometry.materials import MRF, MaterialChoice
+from geometry.params import preset, valid
 from geometry.section import build_section
 from geometry.validation import ParameterError, check_choice
 from magnetics import thermal
@@ -47,6 +47,7 @@ from magnetics.torque import (
     network_yield_at,
     torque_curve,
 )
+from mrclutch.batch import batch_fields
 from mrclutch.design import ClutchDesign, current_limit
 from mrclutch.duty import DUTY_COLUMNS, DUTY_INFS, DUTY_NULLS, duty_batch, evaluation_duty
 from mrclutch.feel import FEEL_COLUMNS, feel_batch, feel_figures
@@ -733,47 +734,6 @@ def _material_bounds(
         feats = {k: np.asarray(v)[rows] for k, v in features.items()}
         out[rows] = error_bound(sub, "network", np.asarray(current)[rows], key, feats)[1]
     return out
-
-
-def batch_fields(
-    fields: Mapping[str, Any], base: ClutchDesign
-) -> tuple[dict[str, np.ndarray], MaterialChoice | np.ndarray]:
-    """A batch's dimensions as 1-D arrays of S (``broadcast_fields``) and its materials: one
-    MaterialChoice for all rows or S of them (``material_rows``: the material columns)."""
-    fields, mats = material_rows(fields, base.materials)
-    if not isinstance(mats, MaterialChoice):  # the material columns set the batch's shape too
-        drums = np.asarray(fields.get("n_drums", base.clutch.n_drums))
-        fields = {**fields, "n_drums": np.broadcast_to(drums, np.broadcast_shapes(
-            drums.shape, mats.shape))}  # fmt: skip
-    p = broadcast_fields(fields, base.clutch)
-    if not isinstance(mats, MaterialChoice):
-        mats = np.broadcast_to(mats, np.shape(p["n_drums"])).ravel()
-    return p, mats
-
-
-def material_rows(
-    fields: Mapping[str, Any], base: MaterialChoice
-) -> tuple[dict[str, Any], MaterialChoice | np.ndarray]:
-    """Split a batch's material columns (``SLOTS`` names: ``fluid``, ``core`` …, each a
-    name or an array of names) from its dimensions: (the dimensions, one MaterialChoice
-    for every row or an object array of them, one per row). Names are checked here
-    (unknown ones refused with the known list)."""
-    cols = {k: v for k, v in fields.items() if k in SLOTS}
-    rest = {k: v for k, v in fields.items() if k not in SLOTS}
-    if not cols:
-        return rest, base
-    arrs = {k: np.asarray(v, dtype=object) for k, v in cols.items()}
-    shape = np.broadcast_shapes(*(a.shape for a in arrs.values()))
-    flat = {k: np.broadcast_to(a, shape).ravel() for k, a in arrs.items()}
-    cache: dict[tuple[Any, ...], MaterialChoice] = {}
-    out = np.empty(int(np.prod(shape)), dtype=object)
-    keys = tuple(flat)
-    for i in range(out.size):
-        combo = tuple(flat[k][i] for k in keys)
-        if combo not in cache:
-            cache[combo] = replace(base, **dict(zip(keys, combo, strict=True)))
-        out[i] = cache[combo]
-    return rest, out.reshape(shape)
 
 
 @dataclass(frozen=True)

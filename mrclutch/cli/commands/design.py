@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+import tempfile
 import time
 from dataclasses import replace
 from pathlib import Path
@@ -12,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from geometry.atomic import write_bytes
 from geometry.section import build_section
 from geometry.validation import ParameterError, check_choice, check_int
 from magnetics.error_map import load as load_error_map
@@ -706,10 +708,6 @@ def _chunk_write_s(out: str | None) -> float:
     layer, timed once; 0 without ``out``)."""
     if out is None:
         return 0.0
-    import tempfile
-
-    from geometry.atomic import write_bytes
-
     folder = Path(out).resolve().parent
     while not folder.is_dir() and folder != folder.parent:
         folder = folder.parent

@@ -29,6 +29,8 @@ from mrclutch.haptics.actuator import (
 )
 from mrclutch.haptics.model import bandwidth, is_stable, metrics
 from mrclutch.outputs import format_kmax
+from mrclutch.pipeline import evaluate
+from mrclutch.verdict import judge_evaluation, verdict_lines
 
 ACTUATOR_NAMES = ("mr-paper", "maxon-118890", "maxon-136206", "maxon-136209")
 
@@ -88,9 +90,6 @@ def _judged(args: argparse.Namespace, command: str) -> tuple[Any, dict[str, Any]
         if given:
             raise CLIError(f"{command} {opt}: not with a design (its [render], [operating] and "
                            "[transmission] tables set it)")  # fmt: skip
-    from mrclutch.pipeline import evaluate
-    from mrclutch.verdict import judge_evaluation
-
     check_choice("--fidelity", args.fidelity, ("fast", "reference"))
 
     ev = evaluate(load_design_args(args), args.fidelity)
@@ -134,8 +133,6 @@ def run_haptic(args: argparse.Namespace) -> int:
             print_json({**h, "source": data["source"], "verdict": data["verdict"],
                         "render": data["render"]})  # fmt: skip
             return 0
-        from mrclutch.verdict import verdict_lines
-
         print("\n".join(verdict_lines(data)))
         print(f"MR pair of design {data['design']} ({data['source']})")
         _print_metrics(h, f"MR pair, {data['source']}", rule=data["render"]["describe"])
@@ -244,16 +241,21 @@ def _compare_design(args: argparse.Namespace, ev: Any, data: dict[str, Any]) -> 
     """``compare`` of a design: its MR pair at the K its ``[render]`` rule picks beside the
     Maxon 136206 geared to the pair's force at the same fidelity (what ``evaluate`` puts
     side by side), led by the design's one verdict."""
-    from mrclutch.verdict import verdict_lines
-
     h, m = data["haptic"], data["motor"]
     K = float(h["K_N_per_m"])
     src = f"MR pair, {data['source']}"
-    res = {"design": data["design"], "fidelity": data["fidelity"], "verdict": data["verdict"],
-           "render": data["render"], "mr": h, "em": m, "K_N_per_m": K,
-           "bandwidth_gain": data["bandwidth_gain"],
-           "bandwidth_gain_lumped": data["bandwidth_gain_lumped"],
-           "sources": {"mr": src, "em": f"Maxon 136206 geared to the pair's force ({src})"}}
+    res = {
+        "design": data["design"],
+        "fidelity": data["fidelity"],
+        "verdict": data["verdict"],
+        "render": data["render"],
+        "mr": h,
+        "em": m,
+        "K_N_per_m": K,
+        "bandwidth_gain": data["bandwidth_gain"],
+        "bandwidth_gain_lumped": data["bandwidth_gain_lumped"],
+        "sources": {"mr": src, "em": f"Maxon 136206 geared to the pair's force ({src})"},
+    }
     if args.plot:
         sides = {"MR pair": ev.mr, "Maxon 136206 (equal force)": ev.motor}
         compare_figure({n: p for n, p in sides.items() if p is not None}, K, args.plot)

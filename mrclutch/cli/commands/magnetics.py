@@ -30,6 +30,8 @@ from mrclutch.cli.commands.handoff import add_map_args, write_torque_map
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.longjobs import announce
 from mrclutch.cli.plots.magnetics import plot_field, plot_torque
+from mrclutch.pipeline import current_notes
+from mrclutch.torque_for import current_for
 
 
 def _parse_currents(text: str):  # type: ignore[no-untyped-def]
@@ -56,7 +58,16 @@ def _parse_currents(text: str):  # type: ignore[no-untyped-def]
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p = sub.add_parser("torque", help="torque against coil current (network, circuit or FEM)")
     add_design_args(p)
-    p.add_argument("--current", default="0:7:0.5", help="A, A,B,C or START:STOP:STEP (A)")
+    p.add_argument("--current", default=None,
+                   help="A, A,B,C or START:STOP:STEP (A); default 0 to the design's current "
+                   "limit in 0.5 A steps")  # fmt: skip
+    p.add_argument("--ignore-limit", action="store_true",
+                   help="allow currents below 0 A or above the design's current limit (its "
+                   "max_current_A capped by the current density and the supply)")  # fmt: skip
+    p.add_argument("--for", dest="for_torque", type=float, default=None, metavar="NM",
+                   help="the current that gives NM N·m (yield + drag at the slip speed), by "
+                   "each --method (both: network and FEM); or what the most is, if out of "
+                   "reach")  # fmt: skip
     p.add_argument(
         "--method",
         default="network",
@@ -90,13 +101,37 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     f.set_defaults(func=_field)
 
 
+def _currents(args: argparse.Namespace, design: Any) -> Any:
+    """The currents asked for (default 0 to the current limit), each within
+    [0, the design's current limit] unless ``--ignore-limit``."""
+    limit = design.current_limit
+    if args.current is None:
+        steps = np.arange(0.0, limit, 0.5)
+        return np.append(steps, limit) if limit - steps[-1] > 1e-9 else steps
+    currents = _parse_currents(args.current)
+    if args.ignore_limit:
+        return currents
+    if np.any(currents < 0):
+        raise CLIError(f"--current {args.current}: {currents.min():g} A is negative; the "
+                       "yield torque does not depend on the current's sign (give "
+                       "--ignore-limit to compute it anyway)")  # fmt: skip
+    if np.any(currents > limit * (1 + 1e-9)):
+        why = "; ".join(current_notes(design)) or f"max_current_A = {limit:g}"
+        raise CLIError(f"--current {args.current}: {currents.max():g} A is above the design's "
+                       f"current limit {limit:.4g} A ({why}); give --ignore-limit to compute "
+                       "it anyway")  # fmt: skip
+    return currents
+
+
 def _torque(args: argparse.Namespace) -> int:
-    if args.map is not None:
-        return write_torque_map(args, _parse_currents(args.current))
     check_choice("--method", args.method, ("circuit", "network", "fem", "both"))
     check_range("--speed-rpm", args.speed_rpm, 0.0, 1e5, " rpm")
-    currents = _parse_currents(args.current)
     design = load_design_args(args)
+    if args.for_torque is not None:
+        return _torque_for(args, design)
+    currents = _currents(args, design)
+    if args.map is not None:
+        return write_torque_map(args, currents)
     clutch = build_section(design.clutch, design.materials)
     methods = ("network", "fem") if args.method == "both" else (args.method,)
     if "fem" in methods and currents.size > 1:  # long FEM work says how long first
@@ -123,6 +158,7 @@ def _torque(args: argparse.Namespace) -> int:
         err = float(np.max(np.abs(c[keep] / f[keep] - 1))) if keep.any() else 0.0
     model = "circuit" if args.method == "circuit" else "network"
     lam, ind = _inductance(clutch, curves[0].currents, model)
+    notes = [*current_notes(design)] if not args.ignore_limit else []
     if args.json:
         data = {**_curve_json(curves[0])}
         if err is not None:
@@ -130,8 +166,11 @@ def _torque(args: argparse.Namespace) -> int:
                     "max_torque_error_rel": err}  # fmt: skip
         data["flux_linkage_Wb"], data["inductance_H"] = lam, ind
         data["flux_linkage_method"] = model
+        data["current_limit_A"], data["notes"] = design.current_limit, notes
         print_json(data)
         return 0
+    for note in notes:
+        print(f"note: {note}")
     for tc in curves:
         print(
             f"method {tc.method}, {tc.speed_rpm:g} rpm, fluid at {tc.drag.temperature:g} °C: "
@@ -144,6 +183,31 @@ def _torque(args: argparse.Namespace) -> int:
               + f"  {lam[k] * 1e3:.4g}  {ind[k] * 1e3:.4g}")  # fmt: skip
     if err is not None:
         print(f"largest network-vs-FEM difference: {err * 100:.2f} %")
+    return 0
+
+
+def _torque_for(args: argparse.Namespace, design: Any) -> int:
+    """``torque --for NM``: the current each method needs for NM N·m, or the most it gives
+    at the design's current limit (``--ignore-limit``: up to 10× that limit)."""
+    target = check_range("--for", args.for_torque, 0.0, 1e6, " N·m", lo_open=True)
+    if args.current is not None or args.map is not None or args.plot:
+        raise CLIError("--for: not with --current, --map or --plot (it finds the current)")
+    methods = ("network", "fem") if args.method == "both" else (args.method,)
+    limit = design.current_limit * (10.0 if args.ignore_limit else 1.0)
+    try:
+        rows = [current_for(design, target, m, limit, speed_rpm=args.speed_rpm,
+                            temperature=args.fluid_temperature_C) for m in methods]  # fmt: skip
+    except FEMConvergenceError as exc:
+        raise CLIError(str(exc)) from None
+    notes = [*current_notes(design)] if not args.ignore_limit else []
+    if args.json:
+        print_json({"torque_N_m": target, "current_limit_A": limit, "methods": rows,
+                    "notes": notes})  # fmt: skip
+        return 0
+    for r in rows:
+        print(r["text"])
+    for note in notes:
+        print(f"note: {note}")
     return 0
 
 
