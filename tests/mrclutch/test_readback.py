@@ -307,3 +307,85 @@ def test_haptic_text_reads_back_to_its_json(capsys, argv):
     text, js = _run(capsys, *argv)
     lines = text.splitlines()
     check_metrics("\n".join(lines[1:4]), js, " ".join(argv))
+
+
+# ---- optimize: the printed optimum against the data its --json prints ---------------------
+
+
+@pytest.fixture(scope="module")
+def optimized():
+    """``optimize --objective bandwidth --drums 1``, text, and the dict the same run hands
+    to both the printer and ``--json`` (caught on its way to the printer, then printed
+    as ``--json`` prints it: one optimisation, not two)."""
+    from mrclutch.cli.commands import _common
+    from mrclutch.cli.commands import design as cmd
+
+    seen: list[dict] = []
+    original = cmd._print_optimum
+
+    def spy(*args, **kwargs):
+        seen.extend(a for a in (*args, *kwargs.values())
+                    if isinstance(a, dict) and "objective_column" in a)  # fmt: skip
+        return original(*args, **kwargs)
+
+    mp = pytest.MonkeyPatch()
+    mp.setattr(cmd, "_print_optimum", spy)
+    try:
+        buf = io.StringIO()
+        with contextlib.redirect_stdout(buf):
+            assert main(["optimize", "--objective", "bandwidth", "--drums", "1"]) == 0
+    finally:
+        mp.undo()
+    assert len(seen) == 1
+    js = io.StringIO()
+    with contextlib.redirect_stdout(js):
+        _common.print_json(seen[0])
+    return buf.getvalue(), json.loads(js.getvalue())
+
+
+def _between(text: str, start: str, stop: str) -> str:
+    """The lines after the line ``start`` up to the first line starting with ``stop``."""
+    lines = text.splitlines()
+    i = lines.index(start)
+    j = next((k for k in range(i + 1, len(lines)) if lines[k].startswith(stop)), len(lines))
+    return "\n".join(lines[i + 1 : j])
+
+
+def test_optimize_objective_and_per_drum_count_read_back(optimized):
+    text, js = optimized
+    key = js["objective_column"]
+    m = re.search(r"^objective \S+ \(" + re.escape(key) + r", \w+\): (\S+) on the fast path",
+                  text, re.M)  # fmt: skip
+    assert m and agrees(m.group(1), "", js["objective_value"])
+    for k, v in js["best_per_drum_count"].items():
+        m = re.search(rf"best with {k} drum\(s\): {re.escape(key)} (\S+)$", text, re.M)
+        assert m and agrees(m.group(1), "", v), k
+
+
+def test_optimize_evaluations_read_back(optimized):
+    """The fast path's and the reference fidelity's clutch and hand rows, as evaluate's."""
+    text, js = optimized
+    for header, side in (("fast path:", "fast"), ("reference fidelity:", "reference")):
+        block = _between(text, header, "reference fidelity:" if side == "fast" else "bandwidth,")
+        ev = js[side]
+        for key in CLUTCH_ROWS:
+            cells = row(block, output(key).label)
+            check_cells(cells, cells[1], [ev["clutch"][key]], f"{side} {key}")
+        hand = section(block, "at the hand")
+        for key in HAND_ROWS:
+            label = row_label(key)
+            check_cells(row(hand, label), label_unit(label) or "",
+                        [ev["haptic"][key], ev["motor"][key]], f"{side} {key}")  # fmt: skip
+
+
+def test_optimize_verdict_reads_back(optimized):
+    text, js = optimized
+    v = js["verdict"]
+    m = re.search(r"haptic verdict \((\w+) fidelity\) at K = (\S+) N/m", text)
+    assert m and m.group(1) == v["fidelity"] and agrees(m.group(2), "N/m", v["K_N_per_m"])
+    h = (js.get("reference") or js["fast"])["haptic"]  # the limits printed beside it
+    for word, key in (("stable", "max_stable_K_N_per_m"), ("passive", "max_passive_K_N_per_m")):
+        m = re.search(rf"largest {word} K (\S+) N/m", text.split("haptic verdict", 1)[1])
+        assert m and agrees(m.group(1), "N/m", h[key]), word
+    m = re.search(r"bandwidth, reference vs fast: (\S+) %", text)
+    assert m and agrees(m.group(1), "%", js["bandwidth_change_reference_vs_fast"])
