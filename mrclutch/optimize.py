@@ -664,9 +664,10 @@ def pareto(
     for slot, choices in cats.items():
         one[slot] = np.array(choices[:1], dtype=object)
     _probe = rows(one)
-    tick = None if progress is None else (lambda alg: progress(alg.n_gen, generations))
+    # pymoo calls its callback unchecked: none is passed without a progress report
+    tick = {} if progress is None else {"callback": lambda alg: progress(alg.n_gen, generations)}
     minimize(Clutches(), NSGA2(pop_size=pop_size), ("n_gen", generations), seed=seed,
-             verbose=False, callback=tick)  # fmt: skip
+             verbose=False, **tick)  # fmt: skip
     x_all = np.concatenate([x for x, _ in seen])
     r_all = {k: np.concatenate([r[k] for _, r in seen]) for k in seen[0][1]}
     evaluations = len(x_all)
