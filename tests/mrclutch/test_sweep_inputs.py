@@ -62,6 +62,22 @@ h = [1e4, 8e4, 2.5e5]
 """
 
 
+@pytest.fixture(autouse=True)
+def _registry():
+    """The materials registry left as found: the fluids these tests load are theirs alone
+    (another file's test lists the known fluids; the registry has no removal)."""
+    import geometry.materials as geo
+    import magnetics.materials as mag
+
+    tables = (geo._RECORDS, geo._DENSITY, geo._LABEL, geo._COLOUR, geo._KIND, mag._MATERIALS,
+              mag._FLUIDS, sweep_mod._LOADED)  # fmt: skip
+    saved = [dict(t) for t in tables]
+    yield
+    for t, copy in zip(tables, saved, strict=True):
+        t.clear()
+        t.update(copy)
+
+
 def write_spec(folder, sections, extra=""):
     text = "\n".join(f"[{k}]\n{v}\n" for k, v in sections.items()) + extra
     (folder / "spec.toml").write_text(text)
