@@ -37,9 +37,11 @@ def _run(args: list[str], env: dict[str, str], cwd: Path) -> subprocess.Complete
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(not os.environ.get("CI") and not os.environ.get("MRCLUTCH_INSTALL_TEST"),
-                    reason="builds and installs the package three times and compiles twice "
-                    "(minutes): run in .ci/run (CI set) or with MRCLUTCH_INSTALL_TEST=1")  # fmt: skip
+@pytest.mark.skipif(
+    not os.environ.get("CI") and not os.environ.get("MRCLUTCH_INSTALL_TEST"),
+    reason="builds the package three times and compiles twice (minutes): run in .ci/run "
+    "(CI set) or with MRCLUTCH_INSTALL_TEST=1",
+)
 def test_quick_start_lines_in_either_order_in_one_venv(tmp_path):
     """In a fresh venv (``--system-site-packages``: the dependencies of this environment,
     so only the build backend is fetched, as pip does; the project installed with
