@@ -262,8 +262,14 @@ def evaluate_rows(
     r = evaluate_batch(fields, base, passivity=cons.passive, stability=stability,
                        zwidth=zwidth)  # fmt: skip
     out = {**r, **limit_columns(fields, base, r, cons.duty_torque)}
-    feel = tuple(k for k, on in (("residual_torque_N_m", cons.max_residual_torque),
-                                 ("ripple_force_N", cons.max_ripple_force)) if on is not None)
+    feel = tuple(
+        k
+        for k, on in (
+            ("residual_torque_N_m", cons.max_residual_torque),
+            ("ripple_force_N", cons.max_ripple_force),
+        )
+        if on is not None
+    )
     if feel:  # the steel's memory and the runout ripple (mrclutch.feel)
         out.update(feel_batch(fields, base, feel))
     if cons.min_life is not None:  # the fluid's life at the base's [duty] (mrclutch.duty)

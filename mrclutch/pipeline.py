@@ -433,8 +433,10 @@ NAN_MEANS: dict[str, str] = {
     "bandwidth_gain_lumped": "one side has no bandwidth (the motor unavailable)",
 }
 NAN_MEANS["K_min_N_per_m"] = NAN_MEANS["K_max_N_per_m"]
-NAN_MEANS["robust"] = ("not asked: the verdict is at nominal values only (--no-uncertainty, "
-                       "or the design's [render] verdict = 'nominal')")
+NAN_MEANS["robust"] = (
+    "not asked: the verdict is at nominal values only (--no-uncertainty, "
+    "or the design's [render] verdict = 'nominal')"
+)
 NAN_MEANS["K_max_at_B0_N_per_m"] = (
     "no passive K >= 0 even with no virtual damping (the Z-width is empty at B = 0)"
 )
@@ -502,7 +504,9 @@ def _gain(a: float | None, b: float | None) -> float | None:
 
 
 def evaluate(
-    design: ClutchDesign, fidelity: str = "fast", accuracy: float | None = None,
+    design: ClutchDesign,
+    fidelity: str = "fast",
+    accuracy: float | None = None,
     K: float | None = None,
 ) -> Evaluation:
     """The clutch figures and their haptic consequences, beside the equal-force motor, at

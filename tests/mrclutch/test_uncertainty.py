@@ -132,8 +132,9 @@ def test_no_uncertainty_prints_the_nominal_verdict(capsys):
     assert main(["evaluate", "--preset", "paper", "--no-uncertainty"]) == 0
     out = capsys.readouterr().out
     first = out.splitlines()[0]  # the one verdict, at nominal values
-    assert first.startswith("VERDICT: FAIL — unstable at nominal values; not passive at "
-                            "nominal values")
+    assert first.startswith(
+        "VERDICT: FAIL — unstable at nominal values; not passive at nominal values"
+    )
 
 
 def test_bench_printed_model_against_measurement(paper_robust, capsys):

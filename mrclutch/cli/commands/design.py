@@ -912,9 +912,11 @@ def _optimize_inputs(args: argparse.Namespace) -> tuple[ClutchDesign, tuple[int,
         duty_torque=duty[0],
         duty_time=duty[1],
         min_life=args.min_life_h,
-        max_residual_torque=None if args.max_residual_torque_mNm is None
+        max_residual_torque=None
+        if args.max_residual_torque_mNm is None
         else args.max_residual_torque_mNm * 1e-3,
-        max_ripple_force=None if args.max_ripple_force_mN is None
+        max_ripple_force=None
+        if args.max_ripple_force_mN is None
         else args.max_ripple_force_mN * 1e-3,
     ).resolved(base)
     if args.verify_top is not None and args.verify_top < 1:
@@ -1085,8 +1087,10 @@ def _old_members(args: argparse.Namespace) -> set[Path]:
         return set()
     old = set(Path(args.designs).glob("member_*.toml"))
     if old and not args.overwrite:
-        raise CLIError(f"--designs {args.designs}: holds {len(old)} member file(s) of an "
-                       "earlier run; give --overwrite to replace them, or another folder")
+        raise CLIError(
+            f"--designs {args.designs}: holds {len(old)} member file(s) of an "
+            "earlier run; give --overwrite to replace them, or another folder"
+        )
     return old
 
 
@@ -1209,8 +1213,10 @@ def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...]
                                   load_error_map().reference_fem_size, max(args.workers, 1),
                                   t_verify).replace("rows", "members"))  # fmt: skip
         if written:
-            print(f"\n{len(written)} design files in {args.designs} (each renders by its "
-                  "[render] rule: evaluate, report and compare give the verdict above)")
+            print(
+                f"\n{len(written)} design files in {args.designs} (each renders by its "
+                "[render] rule: evaluate, report and compare give the verdict above)"
+            )
         for note in notes:
             print(f"note: {note}")
         if args.plot:
@@ -1490,7 +1496,11 @@ def requirement_violations(ev: dict, cons: Constraints, design: ClutchDesign | N
 
 
 def _print_optimum(
-    args: argparse.Namespace, opt: Optimum, cand: Candidate, t_fast: float, data: dict,
+    args: argparse.Namespace,
+    opt: Optimum,
+    cand: Candidate,
+    t_fast: float,
+    data: dict,
     wc: WorstCase | None,
 ) -> None:
     c = cand.design.clutch
