@@ -288,7 +288,9 @@ def _pytest(tree: Path, targets: list[str], timeout: float) -> tuple[str, str]:
     failed = [ln.split(" ")[1] for ln in r.stdout.splitlines() if ln.startswith("FAILED ")]
     if r.returncode in (1, 2) and (failed or "Error" in r.stdout):
         return "killed", failed[0] if failed else "collection error"
-    return "killed", f"exit {r.returncode}"
+    # pytest itself did not run (exit 3–5: internal error, usage, no tests): no verdict,
+    # not a kill; the output's tail says why
+    return "error", f"exit {r.returncode}: " + " | ".join((r.stdout + r.stderr).splitlines()[-6:])
 
 
 #: "work": copy the working tree; "head": the committed tree of HEAD (``git archive``), so a
@@ -353,7 +355,7 @@ def verdicts() -> dict[str, dict[str, str]]:
 def summary(mutants: list[Mutant]) -> dict[str, float]:
     """Counts of a run, with the survivors' verdicts: survival of the non-equivalent
     mutants in the run (before their tests were written) and after."""
-    done = [m for m in mutants if m.status != "pending"]
+    done = [m for m in mutants if m.status in ("killed", "survived")]  # errors: no verdict
     ver = verdicts()
     surv = [m for m in done if m.status == "survived"]
 
@@ -378,7 +380,7 @@ def summary(mutants: list[Mutant]) -> dict[str, float]:
 
 
 def report(mutants: list[Mutant]) -> str:
-    done = [m for m in mutants if m.status != "pending"]
+    done = [m for m in mutants if m.status in ("killed", "survived")]
     lines = ["| package | mutants | killed | survived |", "|---|---:|---:|---:|"]
     groups = PHYSICS if _RUN["modules"] is None else sorted({m.module for m in done})
     for pkg in groups:
