@@ -186,10 +186,19 @@ def modules() -> list[Path]:
     return mods
 
 
+def _source(module: str) -> str:
+    """The module's text in the tree the run mutates: the working tree, or HEAD's commit
+    with ``--tree head`` (the working tree's own edits would not fit the committed tree)."""
+    if _SOURCE["tree"] == "head":
+        return subprocess.run(["git", "show", f"{_SOURCE['commit']}:{module}"], cwd=ROOT,
+                              check=True, capture_output=True, text=True).stdout  # fmt: skip
+    return (ROOT / module).read_text()
+
+
 def enumerate_mutants() -> list[Mutant]:
     out: list[Mutant] = []
     for path in modules():
-        src = path.read_text()
+        src = _source(str(path.relative_to(ROOT)))
         tree = ast.parse(src)
         for i, (node, kind) in enumerate(_candidates(tree)):
             before = ast.get_source_segment(src, node) or ast.unparse(node)
@@ -202,7 +211,7 @@ def enumerate_mutants() -> list[Mutant]:
 
 
 def mutated_source(m: Mutant) -> str:
-    src = (ROOT / m.module).read_text()
+    src = _source(m.module)
     tree = ast.parse(src)
     node, kind = _candidates(tree)[m.index]
     new = _Replace(node, _mutate(node, kind)).visit(tree)
@@ -444,6 +453,9 @@ def main(argv: list[str] | None = None) -> int:
         got = [Mutant(**d) for d in json.loads(args.out.read_text())["mutants"]]
         print(json.dumps(summary(got)) if args.summary else report(got))
         return 0
+    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, text=True,
+                            capture_output=True, check=False).stdout.strip()  # fmt: skip
+    _SOURCE.update(tree=args.tree, commit=commit or "HEAD")
     everything = enumerate_mutants()
     sample = random.Random(args.seed).sample(everything, min(args.sample, len(everything)))
     if args.only:
@@ -455,9 +467,6 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{len(sample)} of {len(everything)} candidate mutants")
         return 0
     t0 = time.perf_counter()
-    commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, text=True,
-                            capture_output=True, check=False).stdout.strip()  # fmt: skip
-    _SOURCE.update(tree=args.tree, commit=commit or "HEAD")
     if args.tree == "work":
         commit += " + working tree"
     if not args.coverage.exists():  # the unmutated suite once: the baseline and the map
