@@ -324,7 +324,8 @@ def make_material(rng: random.Random, folder: Path, k: int) -> list[str]:
     if kind == 0:
         mat.write_bytes(bytes(rng.randrange(256) for _ in range(rng.randint(1, 400))))
     elif kind == 1:
-        mat.write_bytes(base.encode(rng.choice(["utf-16", "utf-16-le", "utf-32", "latin-1"])))
+        enc = rng.choice(["utf-16", "utf-16-le", "utf-32", "latin-1"])
+        mat.write_bytes(base.encode(enc, errors="replace"))  # latin-1 has no τ
     elif kind == 2:
         depth = rng.choice([9, 50, 5000, 100000])
         mat.write_text(base + "deep = " + "[" * depth + "1" + "]" * depth + "\n")

@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from geometry.params import DrumClutch
+from geometry.params import MIN_GAP, DrumClutch
 from geometry.section import build_section
 from geometry.validation import ParameterError, check_positive
 from magnetics.materials import Magnetic
@@ -106,7 +106,10 @@ def gap_derivatives(
     moved by ±step, ±2·step (module docstring). ``materials``: the design's
     MaterialChoice (None: the defaults)."""
     check_positive("step", step, " m")
-    gaps = clutch.gap + step * np.array([-2.0, -1.0, 0.0, 1.0, 2.0])
+    # within 2·step of the geometry's smallest gap the stencil moves up so that every point
+    # is a valid design: the derivatives are then taken at most 2·step above the gap
+    centre = max(clutch.gap, MIN_GAP + 2 * step)
+    gaps = centre + step * np.array([-2.0, -1.0, 0.0, 1.0, 2.0])
     if gaps[0] <= 0:
         raise ParameterError(f"step = {step:g} m: larger than half the gap ({clutch.gap:g} m)")
     t = []

@@ -129,6 +129,9 @@ class Context:
     rest_torque: float  # N·m: bearings and seal (no fluid viscosity in them)
     rest_damping: float  # N·m·s: the bearings' rolling slope
     wire_limit: float  # °C, the magnet wire's
+    #: °C: the operating fluid temperature, at which the pair's b1 (``hold``'s ``mr``) was
+    #: taken; a hold's b1 moves by the films' damping from there to its own temperature
+    fluid_temperature: float = 20.0
 
 
 def drag_at(ctx: Context, temperature: float) -> tuple[float, float, float]:
@@ -193,7 +196,7 @@ def hold(ctx: Context, load: Any, seconds: float, mr: HapticParams, reduction: f
     i = float(load(temps).current)
     fl = FLUIDS[ctx.fluid_name]
     lo, hi = fl.temperature_range
-    _, damp_cold, _ = drag_at(ctx, 20.0)
+    _, damp_cold, _ = drag_at(ctx, ctx.fluid_temperature)  # where mr.b1 was taken
     off, damp, eta = drag_at(ctx, temps[1])
     b1 = float(mr.b1) + 2 * reduction**2 * (damp - damp_cold)
     verdict = metrics_of([replace(mr, b1=b1)], [k])[0]
@@ -217,7 +220,8 @@ def hold(ctx: Context, load: Any, seconds: float, mr: HapticParams, reduction: f
 
 def context(rg: Regions, currents: np.ndarray, yield_cold: np.ndarray, current_limit: float,
             slip_speed: float, support: Support, amplifier: Amplifier, ambient: float,
-            fluid_limit: float, wire_limit: float) -> Context:  # fmt: skip
+            fluid_limit: float, wire_limit: float, fluid_temperature: float = 20.0
+            ) -> Context:  # fmt: skip
     """A hold's context for one design (``rg`` on floats)."""
     fl = FLUIDS[rg.materials.fluid]
     terms = drag_terms(rg, slip_speed, fl.viscosity_temperature, support, fl)
@@ -229,7 +233,7 @@ def context(rg: Regions, currents: np.ndarray, yield_cold: np.ndarray, current_l
                    np.asarray(currents, float),
                    np.maximum.accumulate(np.asarray(yield_cold, float)), current_limit,
                    slip_speed, amplifier, per_eta, float(rest_torque),
-                   float(rest_damping), wire_limit)  # fmt: skip
+                   float(rest_damping), wire_limit, fluid_temperature)  # fmt: skip
 
 
 def duty_figures(ctx: Context, duty: Duty, mr: HapticParams, reduction: float, k: float,
@@ -285,7 +289,7 @@ def evaluation_duty(ev: Any) -> dict[str, Any]:
     limit = FLUIDS[design.materials.fluid].temperature_range[1]  # as pipeline.fluid_limit
     ctx = context(section.table, currents, curve.yield_torque, fig.max_current,
                   op.input_speed, design.support, design.amplifier, op.ambient_temperature,
-                  limit, op.wire_temperature_limit)  # fmt: skip
+                  limit, op.wire_temperature_limit, op.fluid_temperature)  # fmt: skip
     k = float(ev.haptic["K_N_per_m"])
     out = duty_json(duty_figures(ctx, duty, mr, design.transmission.reduction, k,
                                  fig.max_torque))  # fmt: skip

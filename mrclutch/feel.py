@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from geometry import regions
-from geometry.params import valid
+from geometry.params import MIN_GAP, valid
 from geometry.section import build_section
 from magnetics.circuit import path_from_regions, path_from_section
 from magnetics.hysteresis import coercive_current, pulse_train, torque_loop
@@ -133,8 +133,11 @@ def feel_batch(fields: Mapping[str, Any], base: ClutchDesign,
         width = (t[:, n : 2 * n] - t[:, :n]).max(axis=1)
         return {"residual": t[:, n], "width_pct": 100.0 * width / t[:, -1]}
 
+    # as gap_derivatives: near the smallest gap the stencil moves up (every point valid)
+    centre = np.maximum(p["gap"], MIN_GAP + GAP_STEP)
+
     def at_gap(step: float) -> np.ndarray:
-        q = {**p, "gap": p["gap"] + step}
+        q = {**p, "gap": centre + step}
         return regions.per_topology(q, ok, lambda rg, rows: {
             "t": yield_at(rg, current[rows][:, None])[:, 0]}, mats)["t"]  # fmt: skip
 

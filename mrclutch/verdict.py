@@ -26,6 +26,7 @@ from dataclasses import replace
 from typing import Any
 
 from mrclutch.design import ClutchDesign
+from mrclutch.outputs import format_kmax
 from mrclutch.pipeline import Evaluation, evaluate, rendered
 from mrclutch.render import Render
 from mrclutch.robust import THRESHOLD_INPUTS, measured_comparison, robust_verdicts
@@ -179,9 +180,11 @@ def verdict_of(data: dict[str, Any]) -> dict[str, Any]:
     render = data.get("render") or {}
     rule = render.get("describe", "K_max = F_max/d")
     delay_src = data["response"].get("delay_source", "fixed") if data.get("response") else "fixed"
-    at = (f"K = {h['K_N_per_m']:.4g} N/m ({rule}; K_max {h['K_max_N_per_m']:.4g} N/m), "
+    source = data.get("source", data["fidelity"])
+    kmax = format_kmax(h["K_max_N_per_m"], f"MR pair, {source}")
+    at = (f"K = {h['K_N_per_m']:.4g} N/m ({rule}; {kmax}), "
           f"delay {h['delay_s'] * 1e3:.3g} ms ({'typed' if delay_src == 'fixed' else delay_src}), "
-          f"{data.get('source', data['fidelity'])}")  # fmt: skip
+          f"{source}")  # fmt: skip
     line = f"VERDICT: {status.upper()} — " + "; ".join(parts) + f" — at {at}."
     return {
         "status": status,

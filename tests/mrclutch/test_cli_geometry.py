@@ -114,7 +114,8 @@ def test_sidecar_of_another_file_or_broken_is_refused(exported, tmp_path, capsys
     (tmp_path / "clutch.materials.json").write_bytes(b"\xff{")
     assert main(["inertia", str(step)]) == 2
     err = capsys.readouterr().err.strip()
-    assert "not a materials sidecar" in err and "\n" not in err
+    # the bounded reader names the file and why (geometry.reading): one line
+    assert "materials sidecar" in err and "not UTF-8 text" in err and "\n" not in err
 
 
 def test_part_density_errors(exported, tmp_path, capsys):

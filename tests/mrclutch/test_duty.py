@@ -205,3 +205,21 @@ def test_hot_corner_says_when_the_duty_leaves_the_uncertainty_range(ev) -> None:
     wide = replace(ev.design.ranges, fluid_temperature=(20.0, 90.0))
     assert D.hot_corner(replace(ev.design, uncertainty=wide), ev.duty["duty"])["covered"]
     assert D.hot_corner(ev.design, None)["covered"] is None
+
+
+def test_a_hold_moves_b1_from_the_operating_fluid_temperature() -> None:
+    """b1 of the evaluation is taken at the operating fluid temperature; a hold changes it
+    by the films' damping from there to the hold's own temperature (it was taken from
+    20 °C: a design run hot, fluid_temperature_C = 130, got b1 = -0.22 N·s/m and was
+    refused). With the films' damping falling as the fluid warms, b1 stays positive and no
+    hold's b1 lies on the wrong side of the evaluation's for its temperature."""
+    table = {"clutch": {"base": "paper"}, "operating": {"fluid_temperature_C": 130}}
+    d = design_from_mapping(table, "hot.toml")
+    ev = evaluate(d)
+    duty = ev.duty
+    b1 = float(ev.mr.b1)
+    peak = duty["peak"]
+    assert 0 < peak["b1_N_s_per_m"]
+    ctx_t = peak["fluid_temperature_C"]
+    # the hold's fluid is cooler than 130 °C (it starts from ambient): thicker films, more b1
+    assert (peak["b1_N_s_per_m"] >= b1) == (ctx_t <= 130.0)

@@ -267,7 +267,7 @@ def test_process_raises_the_search_boxs_lower_gap_edge(paper):
 
 
 def test_process_moves_the_worst_cases_runout_and_gap_tolerance(paper):
-    """The optimiser's worst case without a declared [uncertainty]: the defaults with the
+    """The optimiser's worst case without a declared `[uncertainty]`: the defaults with the
     process's runout as the drums' eccentricity and its tolerance as the gap's."""
     base = replace(paper, process=Process(runout=0.05e-3, tolerance=0.01e-3), uncertainty=None)
     u = process_uncertainty(base)

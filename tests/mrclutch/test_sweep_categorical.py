@@ -21,7 +21,7 @@ from mrclutch.robust import RobustBatchEvaluator
 from mrclutch.sweep import load_spec, read_results, run_sweep
 from mrclutch.verify import design_of
 
-#: axis kind → (its [parameters] line, the DrumClutch field or part it sets, the values a
+#: axis kind → (its `[parameters]` line, the DrumClutch field or part it sets, the values a
 #: two-design grid takes, in the file's unit: mm, count, or registry name)
 KINDS = {
     "length": ("gap_mm = {min = 0.3, max = 0.5, count = 2}", "gap", [0.3, 0.5]),

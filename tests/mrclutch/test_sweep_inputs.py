@@ -219,7 +219,7 @@ def test_top_level_keys_are_in_the_record(tmp_path):
      ("process", "runout_mm = 0.03")],
 )  # fmt: skip
 def test_a_section_the_sweep_cannot_use_is_refused(tmp_path, table, body):
-    """[measured] (a bench's figures, of one built device) and [process] (the optimiser's
+    """`[measured]` (a bench's figures, of one built device) and `[process]` (the optimiser's
     limits) would be silently ignored by a sweep: refused, naming the table."""
     path = write_spec(tmp_path, {k: SECTIONS[k] for k in ("sweep", "parameters")},
                       f"[{table}]\n{body}\n")  # fmt: skip
@@ -239,7 +239,7 @@ def test_cli_refuses_measured_in_a_spec_in_one_line(tmp_path, capsys):
 
 
 def test_a_clutch_table_is_applied_over_the_base_preset(tmp_path):
-    """[clutch] in a spec: fixed dimensions over [sweep] base (it was dropped before)."""
+    """`[clutch]` in a spec: fixed dimensions over `[sweep]` base (it was dropped before)."""
     spec, rest = load_spec(write_spec(tmp_path, {k: SECTIONS[k] for k in
                                                  ("sweep", "parameters", "clutch")}))  # fmt: skip
     assert spec.base.drum_thickness == pytest.approx(0.3e-3)

@@ -13,7 +13,8 @@ import pytest
 from mrclutch.cli.main import main
 
 ENOSPC = os.strerror(errno.ENOSPC)
-SPEC = """[sweep]
+SPEC = """\
+[sweep]
 mode = "random"
 samples = 6
 seed = 2
