@@ -52,6 +52,7 @@ from geometry.materials import SLOTS, MaterialChoice
 from geometry.params import INT_RANGES, INTEGER_FIELDS, LENGTH_FIELDS, DrumClutch, preset
 from geometry.validation import ParameterError, check_int
 from magnetics.materials import load_fluid
+from magnetics.network import use_compiled
 from mrclutch.inputs import read_toml
 from mrclutch.outputs import OUTPUTS, describe
 
@@ -1178,6 +1179,7 @@ def chunk_rows(
     """Chunk k evaluated and encoded, as CSV rows or a Parquet file, with its SHA-256 (runs
     in a worker: only the encoded chunk and its checksum return)."""
     spec.ensure_materials()  # a worker that never read the user's material files
+    use_compiled()  # every chunk on the same kernels, whatever ran before it in the process
     ids, fields = spec.design_fields(k)
     res = evaluate(fields)
     cols = [fields[p.name] if p.integer else _display(p.name, fields[p.name])

@@ -9,7 +9,12 @@
 """
 
 from magnetics.network.build import Network, network_from_regions
-from magnetics.network.solve import NetworkConvergenceError, flux_linkage, solve_network
+from magnetics.network.solve import (
+    NetworkConvergenceError,
+    flux_linkage,
+    solve_network,
+    use_compiled,
+)
 
 __all__ = [
     "Network",
@@ -17,4 +22,5 @@ __all__ = [
     "flux_linkage",
     "network_from_regions",
     "solve_network",
+    "use_compiled",
 ]

@@ -524,6 +524,14 @@ _used: dict[str, int] = {}  # rows run uncompiled so far, per budget
 _loaded: set[str] = set()  # compiled entries loaded in this process
 
 
+def use_compiled() -> None:
+    """Run every later solve and torque reading of this process compiled, whatever its
+    size. A sweep's chunks call it first: the uncompiled and compiled paths agree to
+    rounding (1e-16), not bit for bit, so which path a chunk takes must not depend on what
+    the process ran before it (a resumed sweep rewrites byte-identical chunks)."""
+    _loaded.update(("network", "reader"))
+
+
 def uncompiled(budget: str, rows: int, limit: int) -> bool:
     """Whether ``rows`` more rows of ``budget``'s kernel run as plain Python: while this
     process has loaded none of its compiled entry and its rows so far stay within

@@ -18,6 +18,7 @@ from geometry.section import build_section
 from geometry.validation import ParameterError, check_choice, check_int
 from magnetics.error_map import load as load_error_map
 from magnetics.fem.grid import check_memory, time_estimate
+from magnetics.network import use_compiled
 from mrclutch.cli.commands._common import (
     add_design_args,
     atomic_path,
@@ -688,7 +689,8 @@ def _say_estimate(spec: Any, evaluator: BatchEvaluator, workers: int, yes: bool 
         return None
     per_chunk = _chunk_write_s(out)
     _, fields = spec.design_fields(0)  # as the chunks are evaluated: a material as its name
-    evaluator({k: v[:8] for k, v in fields.items()})  # warm: imports, first compiles
+    use_compiled()  # the kernels the chunks run (mrclutch.sweep.chunk_rows), not the
+    evaluator({k: v[:8] for k, v in fields.items()})  # small-call path; warm: imports, loads
     step = max(1, min(spec.chunk_size, 1024))
     done, t0 = 0, time.perf_counter()
     while done < min(1024, n) and time.perf_counter() - t0 < 0.3:
