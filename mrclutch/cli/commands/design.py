@@ -673,8 +673,6 @@ def _report(args: argparse.Namespace) -> int:
 MAX_DESIGNS_UNASKED = 10**7
 #: --verify-top beyond this many FEM solves runs only with --yes.
 MAX_FEM_UNASKED = 10**4
-#: Work estimated longer than this (s) is announced before it starts.
-ANNOUNCE_AFTER_S = 60.0
 
 
 def _say_estimate(spec: Any, evaluator: BatchEvaluator, workers: int, yes: bool = True,
@@ -720,14 +718,6 @@ def _chunk_write_s(out: str | None) -> float:
             return time.perf_counter() - t0
     except OSError:
         return 0.0
-
-
-def _duration(seconds: float) -> str:
-    if seconds < 120:
-        return f"{seconds:.0f} s"
-    if seconds < 7200:
-        return f"{seconds / 60:.0f} min"
-    return f"{seconds / 3600:.1f} h"
 
 
 def _verify_options(args: argparse.Namespace, columns: tuple[str, ...],
