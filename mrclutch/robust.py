@@ -510,17 +510,26 @@ def _rescaled(box: HandBox, p: HapticParams, K: float, bench: tuple[float, float
                    delay=scale(box.delay, float(p.delay)), K=scale(box.K, K))  # fmt: skip
 
 
-def robust_verdicts(ev: Any, uncertainty: Uncertainty | None = None) -> dict[str, Any]:
-    """The robust read-out of an ``Evaluation`` (docs/verdicts.md): per verdict nominal,
-    worst and best over ``uncertainty`` (None: the design's ``ranges``), whether each
-    verdict at K holds always / never / depending on the inputs, the thresholds of b1 and
-    the delay that decide it (one at a time, the others nominal), the box and a one-
-    sentence headline. Quantities a bench measured and the model uses are not varied."""
+@dataclass(frozen=True)
+class RobustBox:
+    """What ``robust_verdicts`` reads of an evaluation before it looks at K (the costly
+    fast-path corners): the hand box over the ranges, the fields a bench fixed, the
+    limits over the box (``robust_limits``) and the ranges. It does not depend on the K
+    rendered, so a K chosen from its limits (``verdict.rendered_K``) reuses it."""
+
+    box: HandBox
+    fixed: tuple[str, ...]
+    limits: dict[str, np.ndarray]
+    uncertainty: Uncertainty
+
+
+def robust_box(ev: Any, uncertainty: Uncertainty | None = None) -> RobustBox:
+    """The :class:`RobustBox` of an ``Evaluation`` over ``uncertainty`` (None: the
+    design's ``ranges``). Quantities a bench measured and the model uses are not varied."""
     design = ev.design
     unc = uncertainty if uncertainty is not None else design.ranges
     fields = {f: np.array([v]) for f, v in vars(design.clutch).items()}
     box = hand_box_batch(fields, design, unc)
-    K = float(ev.haptic["K_N_per_m"])
     mr = ev.mr
     box = _rescaled(box, mr, float(mr.k_max), unc.bench_damping)
     meas = design.measured
@@ -530,7 +539,20 @@ def robust_verdicts(ev: Any, uncertainty: Uncertainty | None = None) -> dict[str
         fixed = tuple(f for f, v in fix.items() if v is not None)
         box = replace(box, **{f: tuple(np.array([float(getattr(mr, f))]) for _ in range(3))
                               for f in fixed})  # fmt: skip
-    lim = robust_limits(box)
+    return RobustBox(box, fixed, robust_limits(box), unc)
+
+
+def robust_verdicts(ev: Any, uncertainty: Uncertainty | None = None,
+                    prepared: RobustBox | None = None) -> dict[str, Any]:  # fmt: skip
+    """The robust read-out of an ``Evaluation`` (docs/verdicts.md): per verdict nominal,
+    worst and best over ``uncertainty`` (None: the design's ``ranges``), whether each
+    verdict at K holds always / never / depending on the inputs, the thresholds of b1 and
+    the delay that decide it (one at a time, the others nominal), the box and a one-
+    sentence headline. ``prepared``: its ``robust_box`` if already made (same pair)."""
+    rb = prepared if prepared is not None else robust_box(ev, uncertainty)
+    box, fixed, lim, unc = rb.box, rb.fixed, rb.limits, rb.uncertainty
+    K = float(ev.haptic["K_N_per_m"])
+    mr = ev.mr
     out: dict[str, Any] = {"K_N_per_m": K}
     pairs = (("max_stable_K", "max_stable_K_N_per_m"), ("max_passive_K", "max_passive_K_N_per_m"),
              ("bandwidth", "bandwidth_hz"))  # fmt: skip

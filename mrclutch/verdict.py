@@ -29,7 +29,13 @@ from mrclutch.design import ClutchDesign
 from mrclutch.outputs import format_kmax
 from mrclutch.pipeline import Evaluation, evaluate, rendered
 from mrclutch.render import Render
-from mrclutch.robust import THRESHOLD_INPUTS, measured_comparison, robust_verdicts
+from mrclutch.robust import (
+    THRESHOLD_INPUTS,
+    RobustBox,
+    measured_comparison,
+    robust_box,
+    robust_verdicts,
+)
 from mrclutch.uncertainty import Uncertainty
 
 #: The verdict's status: stable and passive for every value of the ranges (or at nominal
@@ -41,10 +47,10 @@ STATUS = ("pass", "fail", "depends")
 WORST_CASE_MARGIN = 1e-6
 
 
-def rendered_K(ev: Evaluation, robust: dict[str, Any] | None = None) -> tuple[float, str]:
+def rendered_K(ev: Evaluation, prepared: RobustBox | None = None) -> tuple[float, str]:
     """The K (N/m) ``ev.design`` renders by its ``[render]`` rule, and a note where the rule
-    could not be followed (empty otherwise). ``robust``: ``robust_verdicts(ev)`` if already
-    computed (the worst case reads its limits, which do not depend on K)."""
+    could not be followed (empty otherwise). ``prepared``: ``robust.robust_box(ev)`` if
+    already made (the worst case reads its limits, which do not depend on K)."""
     rule = ev.design.render
     k_max = float(ev.mr.k_max)
     if rule.rule == "typed":
@@ -52,8 +58,8 @@ def rendered_K(ev: Evaluation, robust: dict[str, Any] | None = None) -> tuple[fl
         return float(rule.K), ""
     if rule.rule == "K_max":
         return k_max, ""
-    r = robust if robust is not None else robust_verdicts(ev)
-    ks, kp = r["max_stable_K_N_per_m"]["worst"], r["max_passive_K_N_per_m"]["worst"]
+    lim = (prepared if prepared is not None else robust_box(ev)).limits
+    ks, kp = float(lim["max_stable_K_worst"][0]), float(lim["max_passive_K_worst"][0])
     cap = min(ks, kp) * (1 - WORST_CASE_MARGIN)
     if not (math.isfinite(cap) and cap > 0):
         return k_max, ("render.rule = 'worst_case': no K > 0 is stable and passive over the "
@@ -72,16 +78,16 @@ def judge(design: ClutchDesign, fidelity: str = "fast", accuracy: float | None =
 
 
 def judge_evaluation(ev: Evaluation, robust: bool | None = None) -> dict[str, Any]:
-    """:func:`judge` of an evaluation already made (at any K: the rule sets it again)."""
+    """:func:`judge` of an evaluation already made (at any K: the rule sets it again). The
+    box over the ranges is built once, for the worst-case K and the verdict alike."""
     over_ranges = ev.design.render.verdict == "robust" if robust is None else robust
-    first = None
-    if ev.design.render.rule == "worst_case":
-        first = robust_verdicts(ev)
-    K, note = rendered_K(ev, first)
+    needs_box = over_ranges or ev.design.render.rule == "worst_case"
+    prepared = robust_box(ev) if needs_box else None
+    K, note = rendered_K(ev, prepared)
     if K != float(ev.haptic["K_N_per_m"]):
         ev = rendered(ev, K)
     data = ev.as_json()
-    data["robust"] = robust_verdicts(ev) if over_ranges else None
+    data["robust"] = robust_verdicts(ev, prepared=prepared) if over_ranges else None
     data["measured"] = measured_comparison(ev)
     data["render"] = {"rule": ev.design.render.rule, "describe": ev.design.render.describe(),
                       "verdict": "robust" if over_ranges else "nominal",
