@@ -14,6 +14,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from test_sweep_inputs import FLUID as FLUID_TEMPLATE
 
 from mrclutch.design import design_from_mapping, design_preset
 from mrclutch.pipeline import BatchEvaluator, evaluate
@@ -126,21 +127,7 @@ def test_a_worst_case_with_column(tmp_path, kind):
 
 # ---- paths run once, on a spec holding all four kinds -------------------------------------
 
-FLUID = """name = "{name}"
-label = "test fluid"
-density = 3000.0
-specific_heat = 800.0
-thermal_conductivity = 0.6
-phi = 0.3
-carrier_c = 1.0
-viscosity = 0.1
-viscosity_temperature = 40.0
-carrier_points = [[40.0, 19e-6], [100.0, 4.1e-6]]
-temperature_range = [-40.0, 130.0]
-[bh]
-b = [0.1, 0.5, 0.9]
-h = [1e4, 8e4, 2.5e5]
-"""
+FLUID = FLUID_TEMPLATE.replace("{viscosity}", "0.1")  # a user's fluid file
 
 #: every kind at once; the material axis: the three LORD fluids
 ALL = "\n".join([RANDOM["length"], RANDOM["integer"], RANDOM["values"],
