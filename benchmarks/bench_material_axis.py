@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import filecmp
 import shutil
 import sys
 import tempfile
@@ -27,6 +26,8 @@ from collections.abc import Iterator
 from concurrent.futures import Executor, ProcessPoolExecutor
 from contextlib import contextmanager
 from pathlib import Path
+
+from bench_scaleout import _same  # the same files, byte for byte (folders part by part)
 
 from mrclutch.cli.executors import local_cluster
 from mrclutch.design import design_from_mapping
@@ -86,15 +87,6 @@ def _executor(where: str, n: int) -> Iterator[Executor]:
     finally:
         client.close()
         cluster.close()
-
-
-def _same(a: Path, b: Path) -> bool:
-    if a.is_dir():
-        names = sorted(p.name for p in a.iterdir())
-        return names == sorted(p.name for p in b.iterdir()) and all(
-            filecmp.cmp(a / n, b / n, shallow=False) for n in names
-        )
-    return filecmp.cmp(a, b, shallow=False)
 
 
 def main(argv: list[str] | None = None) -> int:
