@@ -120,6 +120,12 @@ def register(rec: Mapping[str, Any], where: str, builtin: bool = False) -> str:
     return name
 
 
+def is_builtin(name: str) -> bool:
+    """Whether ``name`` is one of the library's own materials (geometry/data/materials),
+    not a user's file registered at run time."""
+    return name in _BUILTIN
+
+
 def _load_builtin() -> None:
     for path in sorted(DATA.glob("*.toml")):
         rec = read_toml(path, "material file")

@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from geometry.atomic import write_text
-from geometry.materials import RECORDS
+from geometry.materials import RECORDS, is_builtin
 from magnetics.hot import tau_y_coefficient
 from magnetics.materials import FLUIDS
 
@@ -45,10 +45,13 @@ def _cell(value: str, field: str, rec: Mapping[str, Any]) -> str:
 
 
 def rows() -> list[list[str]]:
-    """One row per steel and fluid of the registry: name, kind, Hc, Br, τy(T) coefficient,
-    LDE, sources."""
+    """One row per steel and fluid of the library: name, kind, Hc, Br, τy(T) coefficient,
+    LDE, sources. A user's material file loaded in the same process is not the library's,
+    so it has no row (the doc must not depend on what ran before)."""
     out = []
     for name, rec in RECORDS.items():
+        if not is_builtin(name):
+            continue
         kind = rec["kind"]
         if kind not in ("steel", "fluid"):
             continue

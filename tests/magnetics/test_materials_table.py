@@ -36,3 +36,24 @@ def test_every_steel_and_fluid_has_a_row_and_others_none() -> None:
     names = {r[0].split("`")[1] for r in mt.rows()}
     assert {"steel_1018", "hiperco_50", "mrf_132dg", "mrf_140cg"} <= names
     assert "stainless_304" not in names and "pla" not in names
+
+
+def test_a_users_material_loaded_earlier_has_no_row(tmp_path) -> None:
+    """The doc lists the library only: a fluid file a user (or another test in the same
+    worker) loaded must not change it (CI failed on exactly this ordering)."""
+    from geometry.materials import DATA, RECORDS, is_builtin
+    from magnetics.materials import load_fluid
+
+    before = mt.block()
+    text = (DATA / "mrf_132dg.toml").read_text()
+    path = tmp_path / "table_probe_fluid.toml"
+    path.write_text(
+        text.replace('name = "mrf_132dg"', 'name = "table_probe_fluid"').replace(
+            'label = "MRF-132DG"', 'label = "table probe fluid"'
+        )
+    )
+    name = load_fluid(path)
+    assert name == "table_probe_fluid" and name in RECORDS and not is_builtin(name)
+    assert is_builtin("mrf_132dg")
+    assert "table_probe_fluid" not in mt.block()
+    assert mt.block() == before
