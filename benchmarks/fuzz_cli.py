@@ -1,6 +1,14 @@
 """Fuzz the command line in process: ``mrclutch.cli.main.main([...])`` on random inputs.
 
     python benchmarks/fuzz_cli.py [--n 10000] [--seed 0] [--workers 2] [--mem-gb 4]
+                                  [--records FILE]
+
+``--records`` appends each input's record as it ends (a run that is stopped early still
+says how many inputs it ran and what they found); the summary prints the seconds per input
+of each class. Evaluations of the ``valid`` and ``extremes`` classes run with
+``--no-uncertainty`` except in a fraction ``UNCERTAIN_FRACTION`` (1/4) of draws: the
+uncertain path costs about twice the nominal one and its own inputs are the ``sections``
+class, which always runs it.
 
 Input classes (``CLASSES``, drawn with their weights; each input's class is in its record):
 
@@ -58,6 +66,7 @@ import signal
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -128,6 +137,8 @@ def make_input(rng: random.Random, keys: dict[str, list[str]], folder: Path, k: 
     for flag in rng.sample(valued, rng.randint(0, len(valued))):
         argv += [flag, rng.choice(ARG_EXTREMES)]
     argv += [s for s in switches if rng.random() < 0.5]
+    if cmd == "evaluate" and rng.random() >= UNCERTAIN_FRACTION:
+        argv.append("--no-uncertainty")
     if rng.random() < 0.03:
         argv.append(rng.choice(["--bogus", "-x", "--json=1", "extra"]))
     return argv
@@ -260,6 +271,12 @@ VALID_KEYS = {
 }  # fmt: skip
 
 
+#: The fraction of ``valid`` (and accepted ``extremes``) evaluations that run the uncertain
+#: path (the verdict over the ranges, ~2x the cost of the nominal one); the rest run with
+#: ``--no-uncertainty``. The ranges' own inputs are the ``sections`` class, always uncertain.
+UNCERTAIN_FRACTION = 0.25
+
+
 def make_valid(rng: random.Random, folder: Path, k: int) -> list[str]:
     """A design file of valid values (a few keys), through evaluate --json."""
     lines: dict[str, list[str]] = {"clutch": ['base = "paper"']}
@@ -271,7 +288,8 @@ def make_valid(rng: random.Random, folder: Path, k: int) -> list[str]:
     text = "".join(f"[{s}]\n" + "\n".join(v) + "\n" for s, v in lines.items())
     path = folder / f"v{k}.toml"
     path.write_text(text)
-    return ["evaluate", str(path), "--json"]
+    argv = ["evaluate", str(path), "--json"]
+    return argv if rng.random() < UNCERTAIN_FRACTION else [*argv, "--no-uncertainty"]
 
 
 def make_spec(rng: random.Random, folder: Path, k: int) -> list[str]:
@@ -306,6 +324,24 @@ NEW_SECTIONS = {
                     "bench_damping_N_s_per_m", "yield_stress_spread_pct", "bh_spread_pct"],
     "process": ["runout_mm", "tolerance_mm", "min_wall_mm"],
 }  # fmt: skip
+
+
+#: Values of those keys that a design accepts (a ``sections`` draw uses them in a fraction
+#: ``PLAUSIBLE_FRACTION`` of inputs, so the accepted paths, not only the refusals, are run).
+PLAUSIBLE = {
+    "m1_g": ["0.01", "1", "40", "1e4"], "b1_N_s_per_m": ["1e-3", "0.5", "30"],
+    "step_delay_ms": ["0", "1", "20"], "off_state_torque_mN_m": ["0", "4", "100"],
+    "torque": ["[{current_A = 7.0, torque_N_m = 1.2}]",
+               "[{current_A = 1, torque_N_m = 0.1}, {current_A = 7, torque_N_m = 1.5}]"],
+    "use_in_model": ["true", "false"], "source": ['"bench"'],
+    "viscosity_spread_pct": ["0", "10", "60"], "fluid_temperature_C": ["[20, 60]", "[-20, 80]"],
+    "gap_tolerance_mm": ["0", "0.02", "0.1"], "runout_mm": ["0", "0.01", "0.05"],
+    "drum_thickness_tolerance_mm": ["0", "0.01"], "delay_ms": ["[0.5, 2]", "[1, 1]"],
+    "bench_damping_N_s_per_m": ["[0, 0.73]", "[0, 5]"],
+    "yield_stress_spread_pct": ["0", "10", "50"], "bh_spread_pct": ["0", "5", "30"],
+    "tolerance_mm": ["0", "0.01", "0.05"], "min_wall_mm": ["0.1", "0.3"],
+}  # fmt: skip
+PLAUSIBLE_FRACTION = 0.3
 
 
 def _fuzz_number(rng: random.Random) -> str:
@@ -357,14 +393,18 @@ def make_material(rng: random.Random, folder: Path, k: int) -> list[str]:
 def make_sections(rng: random.Random, folder: Path, k: int) -> list[str]:
     """A design with fuzzed ``[measured]`` (used in the model or not), ``[uncertainty]`` and
     ``[process]`` tables: extremes, reversed and nominal-free ranges, runout beyond the gap,
-    duplicate and non-finite bench points."""
+    duplicate and non-finite bench points; in a fraction ``PLAUSIBLE_FRACTION`` of draws,
+    values a design accepts (the uncertain path runs: seconds)."""
     lines = ['[clutch]\nbase = "paper"']
     if rng.random() < 0.3:
         lines.append(f"gap_mm = {rng.choice(['0.1', '0.3', '0.7', '2'])}")
+    plausible = rng.random() < PLAUSIBLE_FRACTION
     for sec in rng.sample(list(NEW_SECTIONS), rng.randint(1, 3)):
         lines.append(f"[{sec}]")
         for key in rng.sample(NEW_SECTIONS[sec], rng.randint(1, 3)):
-            if key == "torque":
+            if plausible:
+                value = rng.choice(PLAUSIBLE[key])
+            elif key == "torque":
                 pts = [
                     f"{{current_A = {rng.choice(['7', '7.0', '1', _fuzz_number(rng)])}, "
                     f"torque_N_m = {_fuzz_number(rng)}}}"
@@ -577,6 +617,9 @@ def worker(args: argparse.Namespace, start: int, stop: int) -> subprocess.Popen:
                             env=env)  # fmt: skip
 
 
+_RECORDS_LOCK = threading.Lock()
+
+
 def run_range(args: argparse.Namespace, start: int, stop: int) -> list[dict]:
     """Records of inputs start..stop from workers; a worker that dies (memory limit,
     segfault) is recorded as a memory failure at its input and restarted after it."""
@@ -588,12 +631,25 @@ def run_range(args: argparse.Namespace, start: int, stop: int) -> list[dict]:
             rec = json.loads(line)
             last = rec["k"]
             records.append(rec)
+            if args.records:  # one line per input as it ends: a long run's progress
+                with _RECORDS_LOCK, open(args.records, "a") as f:
+                    f.write(line if line.endswith("\n") else line + "\n")
         proc.wait()
         if last + 1 < stop:
             records.append({"k": last + 1, "class": "memory", "argv": None,
                             "detail": f"worker died (exit {proc.returncode})"})  # fmt: skip
         start = last + 2
     return records
+
+
+def cost_by_class(records: list[dict]) -> str:
+    """Seconds per input, mean and total, per input class: what each class costs a run."""
+    cost: dict[str, list[float]] = {}
+    for r in records:
+        cost.setdefault(r.get("kind", "?"), []).append(r.get("s", 0.0))
+    return "seconds per input by class (mean, total): " + ", ".join(
+        f"{k} {sum(v) / len(v):.2f} ({sum(v):.0f})" for k, v in sorted(cost.items())
+    )
 
 
 def parent(args: argparse.Namespace) -> int:
@@ -619,6 +675,7 @@ def parent(args: argparse.Namespace) -> int:
     print(f"{total} fuzzed inputs in {dt:.0f} s ({total / dt:.0f}/s), seed {args.seed}, "
           f"RLIMIT_AS {args.mem_gb:g} GiB")  # fmt: skip
     print("  inputs by class: " + ", ".join(f"{k} {v}" for k, v in sorted(kinds.items())))
+    print("  " + cost_by_class([r for part in parts for r in part]))
     for c, n in counts.items():
         print(f"  {c:<10} {n}")
     for c, exs in examples.items():
@@ -641,6 +698,7 @@ def main() -> int:
     ap.add_argument("--mem-gb", type=float, default=4.0, help="RLIMIT_AS per worker, GiB")
     ap.add_argument("--timeout", type=float, default=30.0, help="seconds per input")
     ap.add_argument("--show", type=int, default=5, help="examples per class")
+    ap.add_argument("--records", help="append each input's record (a JSON line) to this file")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--start", type=int, default=0, help=argparse.SUPPRESS)
     ap.add_argument("--stop", type=int, default=0, help=argparse.SUPPRESS)
