@@ -263,14 +263,20 @@ def choose(design: ClutchDesign, accuracy: float) -> Choice:
         ei = 0.0
         notes.append("inertia: the analytic method misses the hub holes; B-rep used")
     t_target = min(accuracy, 2 * accuracy - ei)
-    circ = circuit_error(design.clutch)
     i_max = design.current_limit
+    measured = design.materials.magnetic == DEFAULT_CHOICE.magnetic
+    mset = material_set(design.materials)
+    # the circuit's map holds 1018 / MRF-132DG only (torque_error_bound): elsewhere unmeasured
+    circ = circuit_error(design.clutch) if measured else None
     unmeasured = material_trust(design.materials)
     bounds = [(n, s, torque_error_bound(design.clutch, n, s, i_max, design.materials), t)
               for n, s, t in TORQUE_METHODS]  # fmt: skip
     name, size, et, t = next(b for b in bounds if b[2] <= t_target)  # the reference: 0
 
     def said(model: str, err: Any) -> str:
+        if err is None or (not math.isfinite(err.bound) and not measured):
+            return (f"the {model}'s error was never measured with the materials {mset} "
+                    "(its bound is unmeasured, not small)")  # fmt: skip
         est = "unknown" if not math.isfinite(err.estimate) else f"{err.estimate:+.1%}"
         return (f"the {model}'s error on this design is {est} by its measured map "
                 f"(bound {err.bound:.1%})")  # fmt: skip
@@ -281,11 +287,17 @@ def choose(design: ClutchDesign, accuracy: float) -> Choice:
             f"{said('saturating circuit', circ)}; the network's bound is {et:.1%}"
         )
     if name == "fem":
-        net = circuit_error(design.clutch, "network", i_max)
+        net = circuit_error(design.clutch, "network", i_max, mset)
+        why = (
+            f"so this target cannot be had at their speed ({bounds[1][3] * 1e3:.0f} ms)"
+            if measured
+            else "so no bound says their speed meets it; the FEM's mesh-error bound "
+            "was itself measured on steel 1018 and MRF-132DG (unverified for this set)"
+        )
         notes.append(
             f"torque within {accuracy:.3g} needs the FEM at {size * 1e3:g} mm (~{t:.2g} s): "
-            f"{said('saturating circuit', circ)} and {said('reluctance network', net)}, so "
-            f"this target cannot be had at their speed ({bounds[1][3] * 1e3:.0f} ms)"
+            f"{said('saturating circuit', circ)} and {said('reluctance network', net)}, "
+            f"{why}"
         )
     if accuracy < REFERENCE_MESH_ERROR:
         notes.append(
@@ -300,5 +312,5 @@ def choose(design: ClutchDesign, accuracy: float) -> Choice:
         name,
         size,
         {"inertia": ei, "torque": et, "bandwidth": 0.5 * (et + ei)},
-        tuple(notes) + circ.notes + unmeasured,
+        tuple(notes) + (circ.notes if circ else ()) + unmeasured,
     )
