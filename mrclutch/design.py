@@ -96,6 +96,7 @@ from magnetics.materials import FLUIDS, load_fluid
 from magnetics.thermal import adiabatic_current_density
 from mrclutch.duty import DUTY_KEYS, Duty
 from mrclutch.haptics.actuator import MR_170, MR_DELAY, Transmission
+from mrclutch.hot_range import resolved_ranges
 from mrclutch.inputs import read_toml
 from mrclutch.inputs import toml_value as _toml
 from mrclutch.process import PROCESS_KEYS, Process
@@ -201,8 +202,10 @@ class ClutchDesign:
 
     @property
     def ranges(self) -> Uncertainty:
-        """The declared uncertainty, or the documented defaults for this design."""
-        return self.uncertainty if self.uncertainty is not None else default_uncertainty(self)
+        """The declared uncertainty, or the documented defaults for this design; a fluid
+        temperature range declared ``"duty"`` resolved from the thermal model
+        (``mrclutch.hot_range``)."""
+        return resolved_ranges(self)
 
     @property
     def current_limit(self) -> float:

@@ -44,6 +44,7 @@ from magnetics.torque import torque_curve
 from mrclutch.batch import batch_fields
 from mrclutch.haptics.actuator import TABLE2_MR, HapticParams
 from mrclutch.haptics.model import metrics_of
+from mrclutch.uncertainty import range_from
 
 #: The paper's duty rule for rated torque, 25 % [lebel] (docs/haptic.md): the default share
 #: of the fluid's life at the duty torque.
@@ -312,12 +313,17 @@ def hot_corner(design: Any, at_duty: Mapping[str, Any] | None) -> dict[str, Any]
     """The ``[uncertainty]`` fluid-temperature range beside what the thermal model gives at
     the end of the duty hold: ``covered`` False where the duty warms the fluid past the
     range's hot end (the range's verdicts then miss the duty's; widen it to the duty's
-    temperature). None where no duty torque was asked."""
+    temperature, or declare it ``"duty"``). None where no duty torque was asked.
+    ``range_from``: "default", "typed" or "duty" (``mrclutch.uncertainty.range_from``)."""
     lo, hi = design.ranges.fluid_temperature
+    src = range_from(design)
     if at_duty is None:
-        return {"range_C": [lo, hi], "duty_fluid_temperature_C": None, "covered": None}
+        return {"range_C": [lo, hi], "range_from": src, "duty_fluid_temperature_C": None,
+                "covered": None}  # fmt: skip
     t = float(at_duty["fluid_temperature_C"])
-    return {"range_C": [lo, hi], "duty_fluid_temperature_C": t, "covered": bool(t <= hi)}
+    covered = bool(t <= hi + 1e-9)  # a "duty" range ends at this very temperature
+    return {"range_C": [lo, hi], "range_from": src, "duty_fluid_temperature_C": t,
+            "covered": covered}  # fmt: skip
 
 
 def b1_budget(films: float, seal: float, seal_torque: float, warm: float | None) -> dict[str, Any]:

@@ -789,7 +789,7 @@ def process_uncertainty(base: ClutchDesign) -> Uncertainty:
     manufacturing ranges of its ``[process]``: the runout as the drums' eccentricity and
     the tolerance as the gap's."""
     if base.uncertainty is not None:
-        return base.uncertainty
+        return base.ranges  # the declared ranges ("duty" resolved: mrclutch.hot_range)
     pr = base.process
     return replace(default_uncertainty(base), runout=pr.runout, gap_tolerance=pr.tolerance)
 

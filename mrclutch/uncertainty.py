@@ -7,7 +7,8 @@ file's keys carry their unit. Defaults and their sources (docs/verdicts.md)::
 
     [uncertainty]
     viscosity_spread_pct = 18          # ± on the carrier's η: the datasheet's spread at 40 °C
-    fluid_temperature_C = [20, 40]     # default: the operating value to 20 K above it
+    fluid_temperature_C = [20, 40]     # default: the operating value to 20 K above it;
+                                       # "duty": to the thermal model's end of the duty
     gap_tolerance_mm = 0.02            # ± on every gap: ISO 286 IT7 at 18–30 mm (21 µm)
     runout_mm = 0.02                   # drum eccentricity: the films' mean 1/gap rises
     drum_thickness_tolerance_mm = 0.02 # ± on the output drums' wall, IT7 as the gap
@@ -59,6 +60,8 @@ SOURCES: dict[str, str] = {
     "model's b1 of the paper clutch (lever, cables and what the model misses) [lebel]",
     "yield_stress_spread": "±10 %: lot-to-lot spread of the fluid's yield stress (our choice)",
     "bh_spread": "±5 %: lot-to-lot spread of the steel's saturation, read as torque (our choice)",
+    "fluid_temperature_from": 'the fluid temperature range as typed (or the default), or "duty": '
+    "to the fluid's temperature at the end of the duty hold (mrclutch.hot_range, docs/hot.md)",
 }
 
 
@@ -83,7 +86,9 @@ class Uncertainty:
     ``fluid_temperature`` [°C], ``delay`` [s] and ``bench_damping`` [N·s/m at the hand]
     are (low, high); ``fluid_temperature`` and ``delay`` None: the defaults of
     :func:`default_uncertainty` (the operating value to 20 K above it; the typed delay to
-    the geometry's equivalent delay, one range per design)."""
+    the geometry's equivalent delay, one range per design). ``fluid_temperature_from``
+    "duty": the range is the operating temperature to the fluid's at the end of the
+    design's duty hold (``mrclutch.hot_range``; None here until resolved there)."""
 
     viscosity_spread: float = 0.18
     fluid_temperature: tuple[float, float] | None = None
@@ -94,8 +99,12 @@ class Uncertainty:
     bench_damping: tuple[float, float] = (0.0, 0.0)
     yield_stress_spread: float = 0.10
     bh_spread: float = 0.05
+    fluid_temperature_from: str = "range"  # "range": as given (or default); "duty"
 
     def __post_init__(self) -> None:
+        if self.fluid_temperature_from not in TEMPERATURE_FROM:
+            raise ParameterError(f"fluid_temperature_from = {self.fluid_temperature_from!r}: "
+                                 f"must be one of {', '.join(TEMPERATURE_FROM)}")  # fmt: skip
         _check_spread("viscosity_spread", self.viscosity_spread, 1.0)
         _check_spread("yield_stress_spread", self.yield_stress_spread, 1.0)
         _check_spread("bh_spread", self.bh_spread, 1.0)
@@ -123,6 +132,8 @@ class Uncertainty:
         )
 
 
+#: Where the fluid temperature range comes from: typed (or the default), or the duty's end.
+TEMPERATURE_FROM = ("range", "duty")
 #: Most torque points a bench table may hold.
 MAX_TORQUE_POINTS = 1000
 #: What a bench value may be (SI): (low, high] and the unit. Our plausibility bounds, each
@@ -238,9 +249,15 @@ def uncertainty_from_mapping(table: Mapping[str, Any], where: str = "uncertainty
         if key not in _UNCERTAINTY_KEYS:
             raise _unknown(where, key, _UNCERTAINTY_KEYS)
         name, factor, kind = _UNCERTAINTY_KEYS[key]
+        if key == "fluid_temperature_C" and value == "duty":  # resolved by hot_range
+            kw.update(fluid_temperature=None, fluid_temperature_from="duty")
+            continue
+        if key == "fluid_temperature_C":
+            kw["fluid_temperature_from"] = "range"
         if kind == "range":
             if not isinstance(value, list) or len(value) != 2:
-                raise ParameterError(f"{where}.{key} = {value!r}: must be [low, high]")
+                duty = ' or "duty"' if key == "fluid_temperature_C" else ""
+                raise ParameterError(f"{where}.{key} = {value!r}: must be [low, high]{duty}")
             lo, hi = (_number(f"{where}.{key}", v) for v in value)
             if lo > hi:
                 raise ParameterError(f"{where}.{key} = [{lo:g}, {hi:g}]: low > high")
@@ -401,6 +418,25 @@ def default_uncertainty(design: Any = None) -> Uncertainty:
     return Uncertainty(fluid_temperature=(t, t_hi), bench_damping=(0.0, paper_unexplained_b1()))
 
 
+#: What ``range_from`` says of each source of the fluid temperature range.
+RANGE_FROM: dict[str, str] = {
+    "default": "the operating temperature to 20 K above it (the default)",
+    "typed": "typed in [uncertainty]",
+    "duty": "the operating temperature to the fluid's at the end of the duty hold (thermal model)",
+}
+
+
+def range_from(design: Any) -> str:
+    """Which fluid temperature range ``design``'s verdicts take: "duty", "typed" or
+    "default" (``RANGE_FROM``; a declared range equal to the default's reads "default")."""
+    unc = design.uncertainty
+    if unc is not None and unc.fluid_temperature_from == "duty":
+        return "duty"
+    if unc is None or unc.fluid_temperature == default_uncertainty(design).fluid_temperature:
+        return "default"
+    return "typed"
+
+
 def no_uncertainty(design: Any = None) -> Uncertainty:
     """No spread at all: every range shrunk to the nominal value (``--no-uncertainty``)."""
     t = 20.0 if design is None else float(design.operating.fluid_temperature)
@@ -430,6 +466,9 @@ def uncertainty_to_toml(u: Uncertainty) -> list[str]:
     lines = []
     for key, (name, factor, kind) in _UNCERTAINTY_KEYS.items():
         v = getattr(u, name)
+        if name == "fluid_temperature" and u.fluid_temperature_from == "duty":
+            lines.append(f'{key} = "duty"')
+            continue
         if v is None:
             continue
         if kind == "range":

@@ -32,7 +32,9 @@ from magnetics.materials import (
     magnetic,
 )
 from magnetics.network.build import Network, network_from_regions
-from magnetics.network.solve import _loaded, _tables, load, numba_module, solve_network, uncompiled
+from magnetics.network.compiled import _loaded, load, numba_module, uncompiled
+from magnetics.network.kernels import _tables
+from magnetics.network.solve import solve_network
 
 FloatArray = NDArray[np.float64]
 #: How a gap's torque reads its field across the gap's thickness (``network_film_torque``,
@@ -182,7 +184,7 @@ def _read_rows(phi, bz, r, length, w_end, scale, band_end, gt, gw, tab, inv, nse
     """``network_film_torque``'s kernel (compiled by ``_reader``): out (S, C, K) = r²·(L·Σ_j
     w_j·τy(H_r(B_r, t_j·B_z)) + Σ_ends (g/cπ)·``tau_y_decay``(H_r at the end, W)) for the
     films with an overlap (L > 0), B_r = Φ/(2πr); H_r = B_r·H(|B|)/|B| on the fluid's
-    table (``solve._tables``, row 1); τy Carlson's, τ_max·tanh(k·|H|), and its decay's closed
+    table (``kernels._tables``, row 1); τy Carlson's, τ_max·tanh(k·|H|), and its decay's closed
     form ``MRFluid.tau_y_decay`` with S(v) from ``materials._carlson_s``'s table."""
     top = nseg[1] - 1
     for s in range(phi.shape[0]):
@@ -227,14 +229,14 @@ def _read_rows(phi, bz, r, length, w_end, scale, band_end, gt, gw, tab, inv, nse
 
 
 #: Cells (design × current × film) a process reads with ``_read_rows``'s own Python before
-#: it loads the compiled reader (``solve.uncompiled``; a cell ≈ 20 µs in Python).
+#: it loads the compiled reader (``compiled.uncompiled``; a cell ≈ 20 µs in Python).
 _PY_CELLS = 20_000
 
 
 def _reader(cells: int = _PY_CELLS + 1):  # type: ignore[no-untyped-def]
     """``_read_rows`` to read ``cells`` cells with: its own Python while
-    ``solve.uncompiled`` allows, else compiled (numba, cached on disk as the solve's
-    kernels, ``solve.load``: compiled or loaded once a process by a call on no design)."""
+    ``compiled.uncompiled`` allows, else compiled (numba, cached on disk as the solve's
+    kernels, ``compiled.load``: compiled or loaded once a process by a call on no design)."""
     if uncompiled("reader", cells, _PY_CELLS):
         return _read_rows
     read = _compiled_reader()

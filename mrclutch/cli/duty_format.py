@@ -7,6 +7,8 @@ from collections.abc import Mapping
 from html import escape
 from typing import Any
 
+from mrclutch.uncertainty import RANGE_FROM
+
 
 def _hold(label: str, h: Mapping[str, Any]) -> list[str]:
     flags = []
@@ -45,11 +47,14 @@ def duty_lines(d: Mapping[str, Any]) -> list[str]:
         f"{lde * 1e-12:.3g} MJ/mL, unverified")  # fmt: skip
     lines.append(f"fluid: {f['volume_mL']:.3g} mL; life {life_text}")
     hc = d["hot_corner"]
+    lo, hi = hc["range_C"]
+    lines.append(f"fluid temperature range of the verdicts: {lo:.3g}–{hi:.3g} °C, "
+                 f"{RANGE_FROM[hc['range_from']]}")  # fmt: skip
     if hc["covered"] is False:
         hi = hc["range_C"][1]
         lines.append(f"note: the duty warms the fluid to {hc['duty_fluid_temperature_C']:.0f} °C, "
                      f"past the [uncertainty] range's {hi:g} °C: widen fluid_temperature_C to "
-                     "cover it")  # fmt: skip
+                     'cover it (or declare it "duty")')  # fmt: skip
     b = d["b1_budget"]
     parts = ", ".join(f"{t['name']} {t['value']:.3g} ({t['share_of_table2']:.0%})"
                       for t in b["terms"])  # fmt: skip

@@ -111,7 +111,7 @@ _LINEAR_CASES = given(
 @settings(max_examples=20, deadline=None)
 @_LINEAR_CASES
 # ill-conditioned by the nearly open paths: the residual's rounding floor (2.8e-10) sits
-# above rtol and no step lowers it (the Newton's line-search floor, network._FLOOR)
+# above rtol and no step lowers it (the Newton's line-search floor, kernels._FLOOR)
 @example(n=4, gap_mm=0.5, mu_s=200.0, mu_f=7.484375, i=1.0)
 def test_linear_series_loop_closed_form(n, gap_mm, mu_s, mu_f, i):
     """Linear materials, no leakage: every film carries Φ = N·I/ΣR, R of each element from
@@ -321,7 +321,8 @@ def test_band_element_shares_its_mmf_between_steel_free_paths(y, perm, area):
     its MMF F carries perm·F + A·B_fluid(F/l) = |y| to 1e-10 on the fluid's own B–H, F is
     odd in y, dF/dy matches a central difference, and a warm start from any B (the last
     Newton iterate's) finds the same F; no fluid: F = y/perm; neither: 0."""
-    from magnetics.network.solve import _kernels, _tables
+    from magnetics.network.compiled import _kernels
+    from magnetics.network.kernels import _tables
 
     fl = magnetic("mrf_132dg")
     length = 8e-3
@@ -409,10 +410,10 @@ import numpy as np
 from dataclasses import replace
 from geometry.params import broadcast_fields, preset
 from geometry.regions import evaluate
-import magnetics.network.solve as network
+import magnetics.network.compiled as compiled
 from magnetics.network import network_from_regions, solve_network
 
-kernels = network._kernels()  # NUMBA_DISABLE_JIT=1: the kernels are the Python functions
+kernels = compiled._kernels()  # NUMBA_DISABLE_JIT=1: the kernels are the Python functions
 newton, cold = kernels["_newton"], []
 
 def warm_fails(p, off, m, npole, tab, inv, nseg, ni, start, warm, *rest):

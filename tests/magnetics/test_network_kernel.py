@@ -1,4 +1,4 @@
-"""The network's compiled kernel (issue 31, magnetics.network.solve): the torques of the
+"""The network's compiled kernel (issue 31, magnetics.network.compiled): the torques of the
 NumPy Newton it replaced, numba loaded only by what solves the network, and compiled once
 per machine."""
 
@@ -84,7 +84,7 @@ def test_commands_that_do_not_solve_the_network_never_import_numba():
     assert run.stdout.split()[-1] == "True", run.stdout
 
 
-#: 300 designs at two currents (600 rows, past ``solve._PY_ROWS``): the compiled kernels.
+#: 300 designs at two currents (600 rows, past ``compiled._PY_ROWS``): the compiled kernels.
 _MANY = """
 import numpy as np
 from geometry.params import preset
@@ -101,18 +101,18 @@ from pathlib import Path
 import numpy as np
 from geometry.params import preset
 from magnetics.torque import torque_curve
-import magnetics.network.solve as solve
+import magnetics.network.compiled as compiled
 import magnetics.network.torque as nt
 
-solve._PY_ROWS = nt._PY_CELLS = 0  # the compiled kernels for every solve
+compiled._PY_ROWS = nt._PY_CELLS = 0  # the compiled kernels for every solve
 t = torque_curve(preset("paper"), [2.0, 7.0]).yield_torque
-k = solve._kernels()
+k = compiled._kernels()
 kernels = [k["_solve_rows"], nt._reader()]
 misses = sum(len(d.stats.cache_misses) for d in kernels)
 hits = sum(len(d.stats.cache_hits) for d in kernels)
-package = Path(solve.__file__).parent
+package = Path(compiled.__file__).parent
 print(json.dumps({"misses": misses, "hits": hits, "t": list(t),
-                  "cache": str(solve.cache_dir()),
+                  "cache": str(compiled.cache_dir()),
                   "paths": [d.stats.cache_path for d in kernels],
                   "in_package": [Path(d.stats.cache_path).is_relative_to(package)
                                  for d in kernels]}))
@@ -142,39 +142,39 @@ def test_a_later_process_compiles_nothing(tmp_path):
 def test_cache_folder_is_the_users_and_numba_cache_dir_wins(monkeypatch, tmp_path):
     """``cache_dir``: NUMBA_CACHE_DIR if set, else $XDG_CACHE_HOME/mrclutch/numba, else
     ~/.cache/mrclutch/numba."""
-    from magnetics.network import solve
+    from magnetics.network import compiled
 
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "nb"))
-    assert solve.cache_dir() == tmp_path / "nb"
+    assert compiled.cache_dir() == tmp_path / "nb"
     monkeypatch.delenv("NUMBA_CACHE_DIR")
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
-    assert solve.cache_dir() == tmp_path / "xdg" / "mrclutch" / "numba"
+    assert compiled.cache_dir() == tmp_path / "xdg" / "mrclutch" / "numba"
     monkeypatch.delenv("XDG_CACHE_HOME")
     monkeypatch.setenv("HOME", str(tmp_path / "home"))
-    assert solve.cache_dir() == tmp_path / "home" / ".cache" / "mrclutch" / "numba"
+    assert compiled.cache_dir() == tmp_path / "home" / ".cache" / "mrclutch" / "numba"
 
 
 def test_uncompiled_small_batches_give_the_compiled_answer(monkeypatch):
-    """A few rows run the kernels' own Python (``solve.uncompiled``), many rows the compiled
+    """A few rows run the kernels' own Python (``compiled.uncompiled``), many rows the compiled
     kernels: the same functions, so the same loop fluxes and torques (to 1e-12 relative;
     both are IEEE double arithmetic in the same order) on 3 designs at 3 currents; once the
     compiled kernel is loaded, or the process's budget is spent, every solve is compiled."""
-    from magnetics.network import solve
+    from magnetics.network import compiled
     from magnetics.network import torque as nt
     from magnetics.torque import network_torque_batch
 
     f = {k: np.full(3, float(v)) for k, v in vars(preset("paper")).items()}
     f["gap"] = np.array([0.3e-3, 0.4e-3, 0.5e-3])
     cur = [1.0, 3.0, 7.0]
-    monkeypatch.setattr(solve, "_loaded", set())
-    monkeypatch.setattr(nt, "_loaded", solve._loaded)
-    monkeypatch.setattr(solve, "_used", {})
+    monkeypatch.setattr(compiled, "_loaded", set())
+    monkeypatch.setattr(nt, "_loaded", compiled._loaded)
+    monkeypatch.setattr(compiled, "_used", {})
     py = network_torque_batch(f, cur)
-    assert solve._used == {"network": 9, "reader": 9 * 8} and not solve._loaded
-    monkeypatch.setattr(solve, "_PY_ROWS", 0)
+    assert compiled._used == {"network": 9, "reader": 9 * 8} and not compiled._loaded
+    monkeypatch.setattr(compiled, "_PY_ROWS", 0)
     monkeypatch.setattr(nt, "_PY_CELLS", 0)
     jit = network_torque_batch(f, cur)
-    assert {"network", "reader"} <= solve._loaded
+    assert {"network", "reader"} <= compiled._loaded
     assert np.all(py > 0)
     np.testing.assert_allclose(py, jit, rtol=1e-12, atol=0.0)
-    assert not solve.uncompiled("network", 1, 10**9)  # loaded: compiled from now on
+    assert not compiled.uncompiled("network", 1, 10**9)  # loaded: compiled from now on
