@@ -53,11 +53,14 @@ def newton(
     psi0: FloatArray | None = None,
     max_iter: int = 40,
     tol: float = 1e-8,
+    source: FloatArray | None = None,
 ) -> tuple[FloatArray, int, float]:
-    """(ψ, iterations, relative residual) of the field driven by ``j_element`` [A/m²]."""
+    """(ψ, iterations, relative residual) of the field driven by ``j_element`` [A/m²] and,
+    where given, a further load ``source`` on every dof (a remanent magnetisation's,
+    ``magnetics.fem.remanence``: it drives the field at 0 A)."""
     asm = grid.assembly
     free = asm.free
-    f = asm.load(j_element)
+    f = asm.load(j_element) if source is None else asm.load(j_element) + source
     fnorm = max(np.linalg.norm(f[free]), 1e-300)
 
     def residual(psi: FloatArray):  # type: ignore[no-untyped-def]
@@ -68,7 +71,7 @@ def newton(
     psi = np.zeros(asm.n) if psi0 is None else np.array(psi0, dtype=float)
     rv, rn, terms = residual(psi)
     it = 0
-    while rn > tol * fnorm and current != 0:
+    while rn > tol * fnorm and (current != 0 or source is not None):
         if it >= max_iter:
             raise FEMConvergenceError(
                 f"FEM at {current:.6g} A: Newton did not converge in {max_iter} iterations "
