@@ -14,6 +14,7 @@ from geometry.materials import SLOTS
 from geometry.params import preset
 from mrclutch import sweep as sweep_mod
 from mrclutch.sweep import load_spec, read_results, run_sweep
+from mrclutch.sweep import spec as sweep_spec
 
 OUTPUTS = ("outer_radius", "pole_radius")
 
@@ -70,7 +71,7 @@ def _registry():
     import magnetics.materials as mag
 
     tables = (geo._RECORDS, geo._DENSITY, geo._LABEL, geo._COLOUR, geo._KIND, mag._MATERIALS,
-              mag._FLUIDS, sweep_mod._LOADED)  # fmt: skip
+              mag._FLUIDS, sweep_spec._LOADED)  # fmt: skip
     saved = [dict(t) for t in tables]
     yield
     for t, copy in zip(tables, saved, strict=True):
