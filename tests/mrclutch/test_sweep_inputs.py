@@ -12,8 +12,8 @@ from test_sweep_engine import InterruptAfter, geometric_outputs
 from geometry import ParameterError
 from geometry.materials import SLOTS
 from geometry.params import preset
-from mrclutch import sweep as sweep_mod
 from mrclutch.sweep import load_spec, read_results, run_sweep
+from mrclutch.sweep import record as sweep_record
 from mrclutch.sweep import spec as sweep_spec
 
 OUTPUTS = ("outer_radius", "pole_radius")
@@ -180,9 +180,9 @@ def test_the_model_version_is_in_the_record(tmp_path, monkeypatch):
     """Rows of another model (mrclutch version or its data files) are not continued."""
     spec = interrupted(tmp_path, {k: SECTIONS[k] for k in ("sweep", "parameters")})
     meta = json.loads((tmp_path / "r.csv.meta.json").read_text())
-    assert meta["model"] == sweep_mod.model_version()
+    assert meta["model"] == sweep_record.model_version()
     assert meta["model"].startswith("mrclutch ") and ", model data " in meta["model"]
-    monkeypatch.setattr(sweep_mod, "model_version", lambda: "mrclutch 9.9, model data x")
+    monkeypatch.setattr(sweep_record, "model_version", lambda: "mrclutch 9.9, model data x")
     with pytest.raises(ParameterError, match=r"the model changed \(was mrclutch .*, now "
                        r"mrclutch 9.9, model data x\)"):  # fmt: skip
         run_sweep(spec, tmp_path / "r.csv", geometric_outputs, OUTPUTS, resume=True,
