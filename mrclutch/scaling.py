@@ -9,8 +9,11 @@ the torque is raised by changing the geometry, each route on the fast path:
 * ``larger diameter`` — the drum inner diameter that gives exactly the target torque.
 
 For each: the torque ratio reached and the changes in rotor inertia, total moving mass at
-the hand (m1 + m2), reflected damping b1, clutch mass and rendering bandwidth at the
-paper's K_max of the base design.
+the hand (m1 + m2), reflected damping b1, clutch mass and the lumped rendering bandwidth
+√(K/(m1+m2)) (Eq. 1) two ways: at the base design's K_max (``bandwidth_lumped_same_K``:
+the same K on a heavier pair, so it falls — negative whenever the route adds moving mass,
+whatever the materials) and at the route's own K_max (``bandwidth_lumped_own_K``: K_max ∝
+the torque, so it rises with it). Each route's ``note`` says so when the first is negative.
 """
 
 from __future__ import annotations
@@ -35,6 +38,7 @@ class Route:
     value: float  # SI, or a count
     torque_ratio: float
     changes: dict[str, float]  # relative changes against the base design
+    note: str | None = None  # why a change is negative (bandwidth_note)
 
 
 def _figures(design: ClutchDesign, fields: dict[str, Any]) -> dict[str, float]:
@@ -97,11 +101,35 @@ def scaling_study(
             "damping_b1": f["b1_N_s_per_m"] / base["b1_N_s_per_m"] - 1,
             "clutch_mass": f["clutch_mass_kg"] / base["clutch_mass_kg"] - 1,
             "bandwidth_lumped_same_K": float(np.sqrt(m_tot0 / m_tot)) - 1,  # Eq. 1 at fixed K
+            # Eq. 1 at the route's own K_max = F_max/d (evaluate_batch's K and bandwidth)
+            "bandwidth_lumped_own_K": f["bandwidth_lumped_hz"] / base["bandwidth_lumped_hz"] - 1,
         }
         out.append(
-            Route(route, name, float(value), f["max_torque_N_m"] / base["max_torque_N_m"], changes)
+            Route(
+                route,
+                name,
+                float(value),
+                f["max_torque_N_m"] / base["max_torque_N_m"],
+                changes,
+                bandwidth_note(changes, base["K_N_per_m"], f["K_N_per_m"]),
+            )
         )
     return base, out, notes
+
+
+def bandwidth_note(changes: dict[str, float], k_base: float, k_own: float) -> str | None:
+    """Why a route's bandwidth change at the base design's K is negative (None when it is
+    not): the same K [N/m] on more moving mass, √(K/(m1+m2)) (Eq. 1); beside it, the change
+    at the route's own K_max."""
+    same, own = changes["bandwidth_lumped_same_K"], changes["bandwidth_lumped_own_K"]
+    if not same < 0:
+        return None
+    return (
+        f"bandwidth_lumped_same_K {same:+.1%}: at the base design's K_max "
+        f"({k_base:.4g} N/m) the route's added moving mass (m1+m2 "
+        f"{changes['total_moving_mass']:+.1%}) lowers √(K/(m1+m2)) (Eq. 1) — a cost, not an "
+        f"error; at its own K_max ({k_own:.4g} N/m, ∝ its torque) it changes by {own:+.1%}"
+    )
 
 
 def _moving(f: Any) -> float:
@@ -119,6 +147,8 @@ def as_json(
             "m1_kg": base["m1_kg"],
             "m2_kg": design.transmission.m2,
             "b1_N_s_per_m": base["b1_N_s_per_m"],
+            "K_N_per_m": base["K_N_per_m"],
+            "bandwidth_lumped_hz": base["bandwidth_lumped_hz"],
         },
         "paper_total_inertia_increase_2x": PAPER_TOTAL_INERTIA_INCREASE_2X,
         "notes": notes,
@@ -129,6 +159,7 @@ def as_json(
                 "value": r.value,
                 "torque_ratio": r.torque_ratio,
                 "changes": r.changes,
+                **({"note": r.note} if r.note else {}),
             }
             for r in routes
         ],

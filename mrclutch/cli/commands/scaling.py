@@ -39,6 +39,13 @@ def _scale(args: argparse.Namespace) -> int:
         keys = ("rotor_inertia", "total_moving_mass", "damping_b1", "clutch_mass")
         cells = "".join(f"{r.changes[k] * 100:>+8.0f}%" for k in keys)
         print(f"{r.name:<17}{v:>12}{r.torque_ratio:>8.2f}×{cells}")
+    print(f"lumped bandwidth √(K/(m1+m2)) (Eq. 1), base {base['bandwidth_lumped_hz']:.3g} Hz: "
+          f"the base K_max ({base['K_N_per_m']:.4g} N/m) on the added mass lowers it; "
+          "a route's own K_max (∝ torque) raises it")  # fmt: skip
+    for r in routes:
+        same, own = (r.changes[k] * 100 for k in ("bandwidth_lumped_same_K",
+                                                 "bandwidth_lumped_own_K"))  # fmt: skip
+        print(f"  {r.name:<17}{same:>+7.0f}% at the base K_max{own:>+8.0f}% at its own K_max")
     print(f"paper (abstract 2× scaling): total reflected inertia "
           f"+{PAPER_TOTAL_INERTIA_INCREASE_2X * 100:.0f} %")  # fmt: skip
     for n in notes:
