@@ -188,6 +188,8 @@ def _uncertainty_sections() -> list[tuple[str, str, list[tuple[str, str, str, st
             return uncertainty_from_mapping({key: value}, "uncertainty")
 
         what = "[low, high]" if kind == "range" else "a spread (±)"
+        if key == "fluid_temperature_C":  # or derived from the duty (mrclutch.hot_range)
+            what = '[low, high] or "duty" (to the duty hold\'s end, docs/hot.md)'
         rows.append((key, unit_of(key), "from the design" if shown is None else
                      _fmt(shown) + " (paper)",
                      f"{what}: {in_file_unit(probe_range(make), key, factor)}"))  # fmt: skip
