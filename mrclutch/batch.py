@@ -1,7 +1,7 @@
 """A batch of designs as arrays: the dimensions broadcast to S rows and the material of
 each row (the sweep's, the optimiser's and the batch models' one reader of a batch). A leaf
 of the application layer: it imports geometry only, so every batch model (mrclutch.feel,
-mrclutch.duty, mrclutch.robust, mrclutch.pipeline) can read its batches here."""
+mrclutch.duty, mrclutch.hand_box, mrclutch.fast_batch) can read its batches here."""
 
 from __future__ import annotations
 
