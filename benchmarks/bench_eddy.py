@@ -16,7 +16,7 @@ import numpy as np
 
 from geometry.params import preset
 from geometry.section import build_section
-from magnetics.dynamics import Laminations
+from magnetics.eddy_lag import Laminations
 from magnetics.fem.eddy import (
     FREQUENCIES,
     WITH_STAINLESS,

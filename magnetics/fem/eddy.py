@@ -20,13 +20,13 @@ eddy term jωσA·(v/r) integrated like the source):
   T = λᵀMψ₀/Φ₀, λ = K⁻¹Pᵀ (K symmetric; P the gap-flux functional): the group delay
   −dφ/dω at ω → 0, which the 1-D model's Σ weight·mean delay approximates. The integrand
   σψ₀λ/r splits T exactly into each part's share (``EddyFEM.parts``).
-* **Laminations** (``magnetics.dynamics.Laminations``): a laminated or slotted part carries
+* **Laminations** (``magnetics.eddy_lag.Laminations``): a laminated or slotted part carries
   no azimuthal current (σ_φ = 0: the sheets cut the path); the currents inside each sheet
   of thickness d are homogenised as a complex reluctivity ν·x/tanh(x), x = (d/2)√(jωμσ)
   (the slab's tanh(x)/x flux ratio, [stoll1974] ch. 2; a stack homogenised as in the
   paper [gyselinck1999]), whose first order jωσd²/12 is the 1-D model's mean delay μσd²/12.
 
-Conductivities: AISI 1018 from ``magnetics.dynamics.STEEL_CONDUCTIVITY`` (one source of
+Conductivities: AISI 1018 from ``magnetics.eddy_lag.STEEL_CONDUCTIVITY`` (one source of
 truth); stainless 304 (hub, caps, sleeve, drum bands) is left out by default, like the 1-D
 model, and ``STAINLESS_CONDUCTIVITY`` measures what it adds. scikit-fem is imported only
 when a solve runs.
@@ -48,13 +48,8 @@ from geometry.materials import conductivity as material_conductivity
 from geometry.section import Section
 from geometry.validation import ParameterError, check_choice, check_range
 from magnetics.circuit import _kernels, _mmf, path_from_section, solve_flux
-from magnetics.dynamics import (
-    BIAS,
-    STEEL_CONDUCTIVITY,
-    Laminations,
-    eddy_parts,
-    eddy_transfer,
-)
+from magnetics.dynamics import BIAS
+from magnetics.eddy_lag import STEEL_CONDUCTIVITY, Laminations, eddy_parts, eddy_transfer
 from magnetics.fem import DEFAULT_SIZE, build_grid, solve_fem
 from magnetics.fem.grid import Grid
 from magnetics.materials import MATERIALS, Magnetic
@@ -255,7 +250,7 @@ def solid_cylinder(
     module's solver: ``elements`` bilinear quadrilaterals across the radius, one along z
     (∂ψ/∂z = 0 on both ends: the infinite cylinder), ψ = 0 on the axis, the surface field H₀
     as the natural boundary term ∫H₀ v dz at r = a. Closed forms: ``cylinder_flux_ratio``,
-    T = μσa²/8 (``magnetics.dynamics.diffusion_mean_delay``)."""
+    T = μσa²/8 (``magnetics.eddy_lag.diffusion_mean_delay``)."""
     import skfem
 
     check_range("radius", radius, 0.0, 10.0, " m", lo_open=True)
@@ -449,7 +444,7 @@ def _gap_probe(grid: Grid) -> FloatArray:
 class DiffusionEddy:
     """The 1-D diffusion model at one operating point (SI): τ_eddy, each part's
     contribution, and at ``frequencies`` [Hz] its first-order lag 1/(1 + jωτ_eddy) (what the
-    torque response uses) and its full diffusion response (``dynamics.eddy_transfer``)."""
+    torque response uses) and its full diffusion response (``eddy_lag.eddy_transfer``)."""
 
     delay: float
     parts: Mapping[str, float]
@@ -465,7 +460,7 @@ def diffusion_eddy(
     laminations: Laminations | None = None,
     materials: Mapping[str, Magnetic] | None = None,
 ) -> DiffusionEddy:
-    """The 1-D diffusion model (``magnetics.dynamics.eddy_parts``) at the same operating
+    """The 1-D diffusion model (``magnetics.eddy_lag.eddy_parts``) at the same operating
     ``current`` [A] as ``eddy_response``, for the like-for-like comparison."""
     mats = MATERIALS if materials is None else materials
     path = path_from_section(section, mats)

@@ -12,16 +12,18 @@ from geometry.validation import ParameterError
 from magnetics.circuit import path_from_section
 from magnetics.dynamics import (
     Amplifier,
-    Laminations,
     current_rise,
-    diffusion_mean_delay,
-    diffusion_response,
-    diffusion_step,
-    diffusion_time_constant,
     flux_linkage,
     lag_bandwidth,
     lag_step,
     torque_response,
+)
+from magnetics.eddy_lag import (
+    Laminations,
+    diffusion_mean_delay,
+    diffusion_response,
+    diffusion_step,
+    diffusion_time_constant,
 )
 from magnetics.materials import MU0, linear_materials
 

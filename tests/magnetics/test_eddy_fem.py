@@ -1,5 +1,5 @@
 """The time-harmonic eddy FEM (magnetics/fem/eddy.py): closed forms first, then the clutch
-against the 1-D diffusion model of magnetics/dynamics.py."""
+against the 1-D diffusion model of magnetics/eddy_lag.py."""
 
 import itertools
 
@@ -9,7 +9,7 @@ import pytest
 from geometry.params import preset
 from geometry.section import build_section
 from geometry.validation import ParameterError
-from magnetics.dynamics import Laminations, diffusion_mean_delay, diffusion_time_constant
+from magnetics.eddy_lag import Laminations, diffusion_mean_delay, diffusion_time_constant
 from magnetics.fem.eddy import (
     WITH_STAINLESS,
     bias_current,

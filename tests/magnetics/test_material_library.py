@@ -192,7 +192,7 @@ def test_a_430_shell_saturates_before_1018() -> None:
 
 def test_eddy_delay_reads_each_parts_conductivity() -> None:
     """σ enters τ₁ = μσd²/c linearly: Hiperco's (2.5 MS/m) core against 1018's (5.8)."""
-    from magnetics.dynamics import eddy_parts
+    from magnetics.eddy_lag import eddy_parts
 
     a = eddy_parts(path_from_section(build_section(PAPER)), [3.0])
     hip = MaterialChoice(core="hiperco_50")
