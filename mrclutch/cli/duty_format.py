@@ -48,7 +48,7 @@ def duty_lines(d: Mapping[str, Any]) -> list[str]:
     lines.append(f"fluid: {f['volume_mL']:.3g} mL; life {life_text}")
     hc = d["hot_corner"]
     lo, hi = hc["range_C"]
-    lines.append(f"fluid temperature range of the verdicts: {lo:.3g}–{hi:.3g} °C, "
+    lines.append(f"[uncertainty] fluid temperature range: {lo:.3g}–{hi:.3g} °C, "
                  f"{RANGE_FROM[hc['range_from']]}")  # fmt: skip
     if hc["covered"] is False:
         hi = hc["range_C"][1]
