@@ -14,7 +14,6 @@ from __future__ import annotations
 import functools
 import math
 import statistics
-import sys
 import time
 import warnings
 from collections.abc import Callable, Iterable
@@ -252,16 +251,19 @@ def measure(
     repeats: int | None = None,
     methods: Iterable[Method] | None = None,
     progress: Callable[[str], None] | None = None,
+    finished: Callable[[int, int], None] | None = None,
 ) -> tuple[Row, ...]:
     """Time every method (median of its repeats, capped by ``repeats``) and its relative
-    error against its quantity's reference. FidelityWarnings are recorded on the rows."""
+    error against its quantity's reference. FidelityWarnings are recorded on the rows.
+    ``progress(what)`` is told each method as it starts and each one skipped;
+    ``finished(n, total)`` the count of methods done (run or skipped) after each."""
     qs = tuple(quantities)
     for q in qs:
         if q not in QUANTITIES:
             raise ParameterError(f"quantity = {q!r}: known: {', '.join(QUANTITIES)}")
     ms = [m for m in (registry() if methods is None else methods) if m.quantity in qs]
     raw = []
-    for m in ms:
+    for k, m in enumerate(ms, 1):
         if progress is not None:
             progress(f"{m.quantity}: {m.name} ({m.setting})")
         try:
@@ -273,12 +275,10 @@ def measure(
             # the method is left out of the table, and the progress says why
             if progress is not None:
                 progress(f"{m.quantity}: {m.name} ({m.setting}) skipped: {e}")
+        if finished is not None:
+            finished(k, len(ms))
     ref = {m.quantity: v for m, _, v, _ in raw if m.reference}
     return tuple(
         Row(m.quantity, m.name, m.setting, t, v, abs(v / ref[m.quantity] - 1.0), m.reference, w)
         for m, t, v, w in raw
     )
-
-
-def stderr_progress(msg: str) -> None:
-    print(f"fidelity: {msg}", file=sys.stderr, flush=True)

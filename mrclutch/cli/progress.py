@@ -8,22 +8,30 @@ costs nothing and prints nothing.
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
 
+def _nothing(_n: int, note: str | None = None) -> None:
+    pass
+
+
 @contextmanager
-def bar(total: int, desc: str, unit: str, enabled: bool = True) -> Iterator[Callable[[int], None]]:
+def bar(total: int, desc: str, unit: str, enabled: bool = True) -> Iterator[Callable[..., None]]:
     """A progress bar of ``total`` ``unit`` on stderr, with its estimate; yields
-    ``done(n)``, which sets the count to ``n`` (monotone: a smaller n is ignored)."""
+    ``done(n, note=None)``, which sets the count to ``n`` (monotone: a smaller n is
+    ignored) and writes ``note``, when given, on its own line above the bar."""
     if not enabled or total <= 0:
-        yield lambda _n: None
+        yield _nothing
         return
     from tqdm import tqdm
 
     with tqdm(total=total, desc=desc, unit=unit) as b:  # left on stderr: how long it took
 
-        def done(n: int) -> None:
+        def done(n: int, note: str | None = None) -> None:
+            if note is not None:
+                b.write(note, file=sys.stderr)
             n = min(int(n), total)
             if n > b.n:
                 b.update(n - b.n)

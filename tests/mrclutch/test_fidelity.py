@@ -176,3 +176,27 @@ def test_a_setting_the_design_refuses_is_skipped_and_said(paper):
     with pytest.raises(ParameterError, match="must be >="):
         measure(big, ("inertia",), repeats=1,
                 methods=[Method("inertia", "mesh", "0.003", fine.fn, 1, True)])  # fmt: skip
+
+
+def test_cli_fidelity_progress_on_stderr_json_alone_on_stdout(tmp_path, capsys, monkeypatch):
+    """``mrclutch fidelity --json`` (issue 40: a job over ~2 s says how long): each method
+    is named on stderr as it starts, under a bar of the methods done (3/3 at the end, with
+    tqdm's rate and estimate); stdout is the JSON document alone, the rows of the three
+    methods (two bandwidths and the stand-in reference, exact: error 0)."""
+    import mrclutch.cli.commands.fidelity as cmd
+    from mrclutch.cli.main import main
+    from mrclutch.fidelity import Method, registry
+
+    ms = tuple(m for m in registry() if m.quantity == "bandwidth")
+    ms += (Method("stability", "stand-in", "1", lambda d: 1.0, 1, True),)
+    monkeypatch.setattr(cmd, "registry", lambda: ms)
+    assert main(["fidelity", "--preset", "paper", "--out", str(tmp_path), "--repeats", "1",
+                 "--json"]) == 0  # fmt: skip
+    out, err = capsys.readouterr()
+    doc = json.loads(out)  # nothing else on stdout
+    assert [r["method"] for r in doc["rows"]] == ["lumped", "full response", "stand-in"]
+    assert doc["rows"][2]["error_rel"] == 0.0
+    assert "fidelity: bandwidth: lumped (√(K/(m1+m2)))" in err
+    assert "fidelity: stability: stand-in (1)" in err
+    assert "3/3" in err and ("method/s" in err or "s/method" in err)
+    assert json.loads((tmp_path / "fidelity.json").read_text()) == doc
