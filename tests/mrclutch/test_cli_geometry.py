@@ -37,8 +37,24 @@ def test_inertia_json_three_methods(capsys):
     assert out["clutch_mass_kg"] == pytest.approx(out["analytic"]["clutch_mass_kg"], rel=1e-6)
 
 
+def test_inertia_one_method_is_that_method_alone(capsys):
+    """``--method analytic`` (issue 40: the interactive inertia, no CAD solids built) prints
+    the analytic rows alone, the same numbers as the analytic row of all three; its clutch
+    mass is the analytic one (exact for the preset's axisymmetric section)."""
+    from geometry.mass import analytic_mass
+    from geometry.params import preset
+    from geometry.section import build_section
+
+    assert main(["inertia", "--preset", "paper", "--json", "--method", "analytic"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert {"mesh", "brep"}.isdisjoint(out) and "analytic" in out
+    ref = analytic_mass(build_section(preset("paper")))
+    assert out["analytic"]["rotor_inertia_kg_m2"] == ref.rotor_inertia
+    assert out["clutch_mass_kg"] == ref.clutch_mass
+
+
 def test_inertia_of_step_and_stl_files(exported, capsys):
-    assert main(["inertia", "--preset", "paper", "--json"]) == 0
+    assert main(["inertia", "--preset", "paper", "--json", "--method", "brep"]) == 0
     ref = json.loads(capsys.readouterr().out)["brep"]["parts"]["shaft"]
     step = exported / "clutch.step"
     args = ["inertia", str(step), "--json", "--density", "1000", "--part-density", "shaft=8000"]
@@ -64,6 +80,7 @@ def test_inertia_of_step_and_stl_files(exported, capsys):
         (["inertia", "--preset", "nope"], "preset = 'nope': unknown"),
         (["inertia", "missing.step", "--density", "1"], "not found"),
         (["inertia", "--preset", "paper", "--density", "1"], "STEP/STL file only"),
+        (["inertia", "missing.step", "--method", "mesh"], "applies to a design"),
         (["export", "--preset", "paper", "--out", "{tmp}", "--tolerance-mm", "-1"], "> 0"),
     ],
 )

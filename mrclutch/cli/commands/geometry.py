@@ -79,6 +79,13 @@ def register(sub: Any) -> None:
     add_design_args(p)
     p.add_argument("--json", action="store_true", help="print JSON")
     _tol(p)
+    p.add_argument(
+        "--method",
+        choices=INERTIA_METHODS,
+        default="all",
+        help="a design: one method (analytic answers at once; mesh and brep build the CAD "
+        "solids) or all three compared (default)",
+    )
     p.add_argument("--axis", choices=("x", "y", "z"), default="z", help="CAD file: axis")
     p.add_argument("--density", type=float, metavar="KG_M3", help="CAD file: one density")
     p.add_argument(
@@ -118,6 +125,7 @@ def _tolerance(args: argparse.Namespace, clutch: DrumClutch) -> float:
 
 
 EXPORT_FORMATS = ("step", "femm", "onelab", "dxf", "drawing")
+INERTIA_METHODS = ("all", "analytic", "mesh", "brep")
 
 
 def cmd_export(args: argparse.Namespace) -> int:
@@ -150,6 +158,8 @@ def _method(rep: Any) -> dict[str, Any]:
 
 def cmd_inertia(args: argparse.Namespace) -> int:
     if args.design is not None and Path(args.design).suffix.lower() in CAD_SUFFIXES:
+        if args.method != "all":
+            raise CLIError(f"--method {args.method}: applies to a design, not a CAD file")
         return _weigh_file(args)
     if args.density is not None or args.part_density:
         raise CLIError("--density/--part-density apply to a STEP/STL file only")
@@ -157,14 +167,20 @@ def cmd_inertia(args: argparse.Namespace) -> int:
     clutch = design.clutch
     tol = _tolerance(args, clutch)
     s = build_section(clutch, design.materials)
-    solids = material_solids(clutch, s)
-    reps = {
-        "analytic": analytic_mass(s),
-        "mesh": mesh_mass(clutch, tol, solids=solids, materials=design.materials),
-        "brep": brep_mass(clutch, solids, materials=design.materials),
-    }
+    wanted = INERTIA_METHODS[1:] if args.method == "all" else (args.method,)
+    # the CAD solids (build123d, seconds) only for the methods that weigh them
+    solids = material_solids(clutch, s) if set(wanted) - {"analytic"} else None
+    reps = {}
+    for m in wanted:
+        if m == "analytic":
+            reps[m] = analytic_mass(s)
+        elif m == "mesh":
+            reps[m] = mesh_mass(clutch, tol, solids=solids, materials=design.materials)
+        else:
+            reps[m] = brep_mass(clutch, solids, materials=design.materials)
     out: dict[str, Any] = {k: _method(r) for k, r in reps.items()}
-    out["clutch_mass_kg"] = reps["brep"].clutch_mass
+    # the clutch's mass by the most exact method run (the B-rep, else the first)
+    out["clutch_mass_kg"] = reps.get("brep", reps[wanted[0]]).clutch_mass
     out["envelope_m"] = list(s.envelope)
     out["tolerance_mm"] = args.tolerance_mm
     if args.json:
