@@ -5,13 +5,18 @@ command a designer runs, against its goal.
 
 Runs each command in a fresh subprocess (this checkout first on ``PYTHONPATH``, the
 user's numba cache as it is: run it once before to measure the "after the first run"
-times) and prints the median of ``--rounds`` runs (one for the long jobs) and the goal:
+times; bytecode written to a temporary ``PYTHONPYCACHEPREFIX`` and
+``PYTHONDONTWRITEBYTECODE`` dropped, as an installed package has its ``.pyc`` files: without
+them every run compiles the project's sources, ≈ 0.3 s more) and prints the median of
+``--rounds`` runs (one for the long jobs), its CPU time (user + system of the child: what a
+loaded machine inflates least) and the goal:
 
 - interactive (≤ 0.5 s after the first run): ``evaluate --preset paper`` with and without
-  its uncertainty, ``haptic``, ``torque``, ``compare``;
+  its uncertainty, ``haptic``, ``torque``, ``compare``, ``inertia --method analytic``;
 - ``report`` (≤ 8 s), ``optimize`` (default Pareto set, ≤ 30 s with progress), ``scale``
-  (progress past 2 s), ``sweep examples/random_sweep.toml --pareto`` (its plot ≤ 2 s:
-  the time from the sweep's last row to the plot written, read from its stderr);
+  (progress past 2 s), ``fidelity`` (progress past 2 s), ``sweep
+  examples/random_sweep.toml --pareto`` (its plot ≤ 2 s: the plot step timed alone on the
+  sweep's CSV in a fresh process);
 - the first run after a fresh ``pip install .`` into a temporary venv
   (``--system-site-packages``: the dependencies of this environment; the project with
   ``--no-deps``; an empty numba cache), ``evaluate --preset paper --no-uncertainty`` and a
@@ -25,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import resource
 import shutil
 import statistics
 import subprocess
@@ -41,11 +47,16 @@ INTERACTIVE = {
     "haptic": "haptic",
     "torque --preset paper": "torque --preset paper",
     "compare": "compare",
+    "inertia --preset paper --method analytic": "inertia --preset paper --method analytic",
 }
 LONG = {
     "report --preset paper": ("report --preset paper --out {tmp}/report", 8.0),
     "optimize --preset paper": ("optimize --preset paper", 30.0),
     "scale --preset paper": ("scale --preset paper", None),
+    "fidelity --preset paper --repeats 1": (
+        "fidelity --preset paper --repeats 1 --out {tmp}/fidelity",
+        None,
+    ),
     "sweep random_sweep.toml --pareto": (
         "sweep examples/random_sweep.toml --out {tmp}/sweep.csv --pareto {tmp}/pareto.png "
         "--overwrite --yes",
@@ -64,13 +75,20 @@ print(float(network_torque_batch(f, [2.0, 7.0]).sum()))
 """
 
 
-def _run(argv: list[str], env: dict[str, str], cwd: Path) -> tuple[float, str]:
-    t = time.perf_counter()
+def _cpu() -> float:
+    """CPU seconds (user + system) of this process's finished children so far."""
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def _run(argv: list[str], env: dict[str, str], cwd: Path) -> tuple[float, str, float]:
+    """(wall s, stderr, CPU s) of ``argv`` run to its end."""
+    t, c = time.perf_counter(), _cpu()
     run = subprocess.run(argv, env=env, cwd=cwd, capture_output=True, text=True)
     took = time.perf_counter() - t
     if run.returncode != 0:
         raise SystemExit(f"{' '.join(argv)}: exit {run.returncode}\n{run.stderr[-2000:]}")
-    return took, run.stderr
+    return took, run.stderr, _cpu() - c
 
 
 def _mrclutch(cmd: str, tmp: Path) -> list[str]:
@@ -88,14 +106,14 @@ pareto_plot(sys.argv[1], sys.argv[2])
 
 def _plot_wait(tmp: Path, env: dict[str, str]) -> str:
     """The sweep's plot step timed alone on the sweep's CSV, in a fresh process."""
-    took, _ = _run([sys.executable, "-c", PLOT, str(tmp / "sweep.csv"), str(tmp / "p2.png")],
-                   env, ROOT)  # fmt: skip
+    took, _, _ = _run([sys.executable, "-c", PLOT, str(tmp / "sweep.csv"),
+                       str(tmp / "p2.png")], env, ROOT)  # fmt: skip
     return f"{took:.2f} s (≤ 2 s {'met' if took <= 2 else 'NOT met'})"
 
 
-def install_first_run(tmp: Path) -> list[tuple[str, float, float]]:
-    """(what, first run s, second run s) in a fresh venv with the project installed from a
-    copy of this working tree and an empty numba cache."""
+def install_first_run(tmp: Path) -> list[tuple[str, float, float, str]]:
+    """(what, first run s, second run s, the first run's compile notice) in a fresh venv
+    with the project installed from a copy of this working tree and an empty numba cache."""
     ls = ["git", "ls-files", "-z", "--cached", "--others", "--exclude-standard"]
     names = subprocess.run(ls, cwd=ROOT, capture_output=True, check=True).stdout.decode()
     src = tmp / "src"
@@ -107,7 +125,8 @@ def install_first_run(tmp: Path) -> list[tuple[str, float, float]]:
     subprocess.run([sys.executable, "-m", "venv", "--system-site-packages", str(venv)],
                    check=True)  # fmt: skip
     py = str(venv / "bin" / "python")
-    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "PYTHONPATH")}
+    drop = ("NUMBA_CACHE_DIR", "PYTHONPATH", "PYTHONDONTWRITEBYTECODE", "PYTHONPYCACHEPREFIX")
+    env = {k: v for k, v in os.environ.items() if k not in drop}
     env.update(XDG_CACHE_HOME=str(tmp / "cache"), PATH=f"{venv / 'bin'}:{env['PATH']}",
                PIP_DISABLE_PIP_VERSION_CHECK="1")  # fmt: skip
     subprocess.run([py, "-m", "pip", "install", "-q", "--no-deps", str(src)], env=env,
@@ -118,9 +137,10 @@ def install_first_run(tmp: Path) -> list[tuple[str, float, float]]:
          ["mrclutch", "evaluate", "--preset", "paper", "--no-uncertainty"]),
         ("a solve of 10^3 designs (compiles)", [py, "-c", SOLVE]),
     ):  # fmt: skip
-        first, _ = _run(argv, env, tmp)
-        second, _ = _run(argv, env, tmp)
-        out.append((what, first, second))
+        first, err, _ = _run(argv, env, tmp)
+        second, _, _ = _run(argv, env, tmp)
+        said = next((ln for ln in err.splitlines() if "compiling" in ln), "")
+        out.append((what, first, second, said))
     return out
 
 
@@ -130,30 +150,36 @@ def main() -> None:
     ap.add_argument("--skip-install", action="store_true", help="no fresh-venv first run")
     ap.add_argument("--skip-long", action="store_true", help="interactive commands only")
     a = ap.parse_args()
-    env = {**os.environ, "PYTHONPATH": str(ROOT), "OPENBLAS_NUM_THREADS": "1"}
     print(f"load average before: {os.getloadavg()[0]:.2f} ({os.cpu_count()} CPUs)")
     with tempfile.TemporaryDirectory(prefix="mrclutch-waits-") as t:
         tmp = Path(t)
-        _run(_mrclutch("evaluate --preset paper", tmp), env, ROOT)  # the first run, untimed
-        print(f"{'command':44s} {'median s':>9s}  goal")
+        env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+        env.update(PYTHONPATH=str(ROOT), OPENBLAS_NUM_THREADS="1",
+                   PYTHONPYCACHEPREFIX=str(tmp / "pyc"))  # fmt: skip
+        for cmd in ("evaluate --preset paper", *INTERACTIVE.values()):  # the first runs
+            _run(_mrclutch(cmd, tmp), env, ROOT)
+        print(f"{'command':44s} {'median s':>9s} {'CPU s':>6s}  goal")
         for name, cmd in INTERACTIVE.items():
-            ts = [_run(_mrclutch(cmd, tmp), env, ROOT)[0] for _ in range(a.rounds)]
-            med = statistics.median(ts)
-            print(f"{name:44s} {med:9.2f}  ≤ 0.5 s {'met' if med <= 0.5 else 'NOT met'}")
+            runs = [_run(_mrclutch(cmd, tmp), env, ROOT) for _ in range(a.rounds)]
+            med = statistics.median(r[0] for r in runs)
+            cpu = statistics.median(r[2] for r in runs)
+            print(f"{name:44s} {med:9.2f} {cpu:6.2f}  ≤ 0.5 s {'met' if med <= 0.5 else 'NOT met'}")
         if not a.skip_long:
             for name, (cmd, goal) in LONG.items():
-                took, err = _run(_mrclutch(cmd, tmp), env, ROOT)
+                took, err, cpu = _run(_mrclutch(cmd, tmp), env, ROOT)
                 said = "progress on stderr" if ("%|" in err or "eta" in err.lower()) else ""
                 verdict = "" if goal is None else (
                     f"≤ {goal:g} s {'met' if took <= goal else 'NOT met'}")  # fmt: skip
                 extra = f"  plot alone: {_plot_wait(tmp, env)}" if name.startswith("sweep") else ""
-                print(f"{name:44s} {took:9.2f}  {verdict} {said}{extra}")
+                print(f"{name:44s} {took:9.2f} {cpu:6.2f}  {verdict} {said}{extra}")
         if not a.skip_install:
-            for what, first, second in install_first_run(tmp):
+            for what, first, second, said in install_first_run(tmp):
                 excess = first - second
                 print(f"fresh install, {what:30s} first {first:6.2f} s  second "
                       f"{second:6.2f} s  excess {excess:+6.2f} s  ≤ 5 s "
                       f"{'met' if excess <= 5 else 'NOT met'}")  # fmt: skip
+                if said:
+                    print(f"    first run said on stderr: {said.strip()}")
     print(f"load average after: {os.getloadavg()[0]:.2f}")
 
 
