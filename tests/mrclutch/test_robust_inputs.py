@@ -160,17 +160,18 @@ def test_a_structural_mismatch_in_a_design_file_is_one_line_naming_the_key(
 
 
 def test_a_fifo_a_device_and_a_huge_file_are_refused_at_once(tmp_path, capsys):
+    """Refused by what the file is (its stat: a FIFO with no writer, a device, a size past
+    the cap), before any read: the reason names it. A read would hang on the FIFO and never
+    end on /dev/zero; no wall-clock bound is asserted (issue 40: none in the suite)."""
     import os
-    import time
 
     fifo = tmp_path / "fifo.toml"
     os.mkfifo(fifo)
     huge = tmp_path / "huge.toml"
     huge.write_bytes(b" " * (2 << 20))
     for path, why in ((fifo, "FIFO"), ("/dev/zero", "device"), (huge, "bytes")):
-        t = time.perf_counter()
         code, _, err = _cli(["evaluate", str(path)], capsys)
-        assert code == 2 and why in err and time.perf_counter() - t < 5
+        assert code == 2 and why in err
     spec = tmp_path / "spec.toml"
     os.mkfifo(spec)
     code, _, err = _cli(["sweep", str(spec), "--out", str(tmp_path / "r.csv")], capsys)
