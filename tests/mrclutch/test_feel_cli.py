@@ -7,11 +7,11 @@ import re
 
 import pytest
 
-from mrclutch.cli.commands.design import requirement_violations
 from mrclutch.cli.feel_format import feel_html, feel_lines
 from mrclutch.cli.main import main
 from mrclutch.design import design_preset
 from mrclutch.optimize import Constraints
+from mrclutch.requirements import requirement_violations
 from mrclutch.verdict import judge
 
 

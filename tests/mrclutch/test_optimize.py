@@ -10,13 +10,14 @@ import pytest
 
 import mrclutch.optimize as opt_mod
 from geometry import ParameterError
+from mrclutch import members
 from mrclutch.cli.commands import design as design_cmd
-from mrclutch.cli.commands.design import requirement_violations
 from mrclutch.cli.main import main
 from mrclutch.design import design_preset, load_design
 from mrclutch.optimize import Constraints, optimize, parse_bounds
 from mrclutch.pipeline import evaluate, evaluate_batch
 from mrclutch.process import Process
+from mrclutch.requirements import requirement_violations
 from mrclutch.verdict import verdict_of
 
 
@@ -224,7 +225,7 @@ def _violating_reference(key):
 def test_cli_exits_3_when_the_reference_check_violates_a_requirement(
     tmp_path, capsys, monkeypatch, key, allow, phrase
 ):
-    monkeypatch.setattr(design_cmd, "reference_check", _violating_reference(key))
+    monkeypatch.setattr(members, "reference_check", _violating_reference(key))
     out = tmp_path / "best.toml"
     argv = ["optimize", "--objective", "bandwidth", "--drums", "1", "--json", "--out", str(out)]
     assert main(argv) == design_cmd.EXIT_REQUIREMENT_VIOLATED == 3
@@ -340,7 +341,7 @@ def test_cli_tries_the_next_candidate_when_the_best_fails_at_reference(
         seen.append(design)
         return fail(design) if len(seen) == 1 else _as_reference(design)
 
-    monkeypatch.setattr(design_cmd, "reference_check", check)
+    monkeypatch.setattr(members, "reference_check", check)
     out = tmp_path / "best.toml"
     assert (
         main(
@@ -368,7 +369,7 @@ def test_cli_exits_3_naming_every_candidate_when_none_passes(tmp_path, capsys, m
         seen.append(design)
         return _violating_reference("stable")(design)
 
-    monkeypatch.setattr(design_cmd, "reference_check", check)
+    monkeypatch.setattr(members, "reference_check", check)
     assert main(["optimize", "--objective", "bandwidth", "--drums", "1,2", "--tries", "2"]) == 3
     cap = capsys.readouterr()
     assert len(seen) == 2

@@ -11,6 +11,7 @@ from scipy.integrate import quad
 
 from geometry import ParameterError
 from magnetics import thermal
+from mrclutch import members
 from mrclutch.cli.commands import design as design_cmd
 from mrclutch.cli.main import main
 from mrclutch.design import design_from_mapping, design_preset, design_to_toml, load_design
@@ -429,7 +430,7 @@ def test_cli_drops_members_failing_at_reference_and_says_how_many(monkeypatch, c
             ev["haptic"]["max_passive_K_N_per_m"] = 0.5 * ev["haptic"]["K_N_per_m"]
         return ev
 
-    monkeypatch.setattr(design_cmd, "reference_check", check)
+    monkeypatch.setattr(members, "reference_check", check)
     assert main(["optimize", "--drums", "2", "--nominal"]) == 0
     out = capsys.readouterr().out
     assert "Pareto set: 2 members meet every limit at reference fidelity; 1 of 3 dropped" in out

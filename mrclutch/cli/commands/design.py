@@ -5,20 +5,13 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-import tempfile
 import time
 from dataclasses import replace
 from pathlib import Path
+from statistics import median
 from typing import Any
 
-import numpy as np
-
-from geometry.atomic import write_bytes
-from geometry.section import build_section
 from geometry.validation import ParameterError, check_choice, check_int
-from magnetics.error_map import load as load_error_map
-from magnetics.fem.grid import check_memory, time_estimate
-from magnetics.network import use_compiled
 from mrclutch.cli.commands._common import (
     add_design_args,
     atomic_path,
@@ -34,8 +27,21 @@ from mrclutch.cli.longjobs import announce
 from mrclutch.cli.plots.design import PLOT_STEPS, pareto_plot, pareto_set_plot
 from mrclutch.cli.progress import bar as progress_bar
 from mrclutch.cli.report import write_report
-from mrclutch.design import ClutchDesign, design_from_mapping, design_preset, design_to_toml
+from mrclutch.design import ClutchDesign, design_from_mapping, design_to_toml
 from mrclutch.duty import parse_duty
+from mrclutch.estimates import check_fem_size, chunk_write_s, fem_solve_seconds, sweep_rate
+from mrclutch.members import (
+    first_meeting,
+    judge_members,
+    limits_record,
+    optimum_limits,
+    paper_beside,
+    ranges,
+    reference_fem_size,
+    shipped_members,
+    verify_candidates,
+    verify_members,
+)
 from mrclutch.optimize import (
     CONTINUOUS,
     DEFAULT_MEMBERS,
@@ -47,18 +53,13 @@ from mrclutch.optimize import (
     RENDERING,
     Candidate,
     Constraints,
-    Member,
     Optimum,
     ParetoSet,
     WorstCase,
-    active_limits,
-    evaluate_rows,
     optimize,
     pareto,
     parse_bounds,
-    range_edges,
     robust_verdict,
-    search_box,
 )
 from mrclutch.outputs import (
     CLUTCH_ROWS,
@@ -74,12 +75,10 @@ from mrclutch.pipeline import (
     BatchEvaluator,
     null_notes,
 )
-from mrclutch.requirements import requirement_violations
 from mrclutch.robust import ROBUST_COLUMNS, RobustBatchEvaluator
 from mrclutch.sweep import is_parquet, load_spec, run_sweep
-from mrclutch.uncertainty import Uncertainty
-from mrclutch.verdict import for_workshop, judge, verdict_lines, verdict_of
-from mrclutch.verify import TORQUE, verified_path, verify_designs, verify_top, write_verified
+from mrclutch.verdict import for_workshop, judge, verdict_lines
+from mrclutch.verify import TORQUE, verified_path, verify_top, write_verified
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -677,47 +676,22 @@ MAX_FEM_UNASKED = 10**4
 
 def _say_estimate(spec: Any, evaluator: BatchEvaluator, workers: int, yes: bool = True,
                   out: str | None = None) -> float | None:  # fmt: skip
-    """Time the first designs of the spec (after 8 to warm up; chunks of its chunk size, up
-    to 1024 designs or 0.3 s) and one chunk's synced write beside ``out``; the whole sweep
+    """Time the first designs of the spec (``estimates.sweep_rate``) and one chunk's synced
+    write beside ``out`` (``estimates.chunk_write_s``); the whole sweep
     (designs at the measured rate + chunks × the write) goes to ``longjobs.announce``:
     said on stderr above 30 s, refused without ``yes`` above 10 min. Returns the
     estimate (s), None when skipped."""
     n = spec.n_designs
     if n <= 1000 and spec.n_chunks <= 100:  # under 30 s at any rate the fast path has
         return None
-    per_chunk = _chunk_write_s(out)
-    _, fields = spec.design_fields(0)  # as the chunks are evaluated: a material as its name
-    use_compiled()  # the kernels the chunks run (mrclutch.sweep.chunk_rows), not the
-    evaluator({k: v[:8] for k, v in fields.items()})  # small-call path; warm: imports, loads
-    step = max(1, min(spec.chunk_size, 1024))
-    done, t0 = 0, time.perf_counter()
-    while done < min(1024, n) and time.perf_counter() - t0 < 0.3:
-        evaluator({k: v[done : done + step] for k, v in fields.items()})
-        done += step
-    rate = done / max(time.perf_counter() - t0, 1e-9) * max(1, workers)
+    per_chunk = chunk_write_s(out)
+    rate, done = sweep_rate(spec, evaluator, workers)
     seconds = n / rate + spec.n_chunks * per_chunk
     announce("sweep", f"{n:.3g} designs", seconds,
              f"{rate:.3g} designs/s measured on the first {done}, {max(1, workers)} worker(s); "
              f"{spec.n_chunks} chunks of {spec.chunk_size} at {per_chunk * 1e3:.2g} ms per "
              "chunk written", yes)  # fmt: skip
     return seconds
-
-
-def _chunk_write_s(out: str | None) -> float:
-    """s one chunk's synced write takes beside ``out`` (a 4 kB file through the output
-    layer, timed once; 0 without ``out``)."""
-    if out is None:
-        return 0.0
-    folder = Path(out).resolve().parent
-    while not folder.is_dir() and folder != folder.parent:
-        folder = folder.parent
-    try:
-        with tempfile.TemporaryDirectory(dir=folder, prefix=".mrclutch-probe-") as tmp:
-            t0 = time.perf_counter()
-            write_bytes(Path(tmp) / "chunk", bytes(4096))
-            return time.perf_counter() - t0
-    except OSError:
-        return 0.0
 
 
 def _verify_options(args: argparse.Namespace, columns: tuple[str, ...],
@@ -737,7 +711,7 @@ def _verify_options(args: argparse.Namespace, columns: tuple[str, ...],
     if key not in columns:
         raise CLIError(f"--objective {key}: not a column of this sweep ({', '.join(columns)})")
     if args.verify_fem_size_mm is None:
-        size = load_error_map().reference_fem_size
+        size = reference_fem_size()
         if base is not None:
             _check_fem_work(args, base, size)
         return size
@@ -752,15 +726,14 @@ def _verify_options(args: argparse.Namespace, columns: tuple[str, ...],
 def _check_fem_work(args: argparse.Namespace, base: ClutchDesign, size: float) -> None:
     """--verify-top's FEM solves: memory checked, more than MAX_FEM_UNASKED need --yes,
     above a minute (at the FEM's measured rate per node) said on stderr."""
-    section = build_section(base.clutch)
     try:
-        check_memory(section, size)
+        check_fem_size(base, size)
     except ParameterError as exc:
         raise CLIError(f"--verify-fem-size-mm: {exc}") from None
     n = args.verify_top
     if n > MAX_FEM_UNASKED and not args.yes:
         raise CLIError(f"--verify-top {n}: more than {MAX_FEM_UNASKED} FEM solves; add --yes")
-    seconds = time_estimate(section, size, n)
+    seconds = fem_solve_seconds(base, size, n)
     announce("sweep", f"--verify-top {n}: {n} FEM solves at {size * 1e3:g} mm", seconds,
              "one worker at the FEM's measured rate per grid node", args.yes)  # fmt: skip
 
@@ -845,13 +818,13 @@ def format_verified(rows: list, key: str, fem_size: float, workers: int, seconds
                      f"{r.circuit_torque:>12.5f} {r.circuit_error:>+8.2%} "
                      f"{_bound(r.circuit_bound):>10}")  # fmt: skip
     if rows:
-        err = np.abs([r.error for r in rows])
+        err = [abs(r.error) for r in rows]
         inside = sum(r.within_bound for r in rows)
-        lines.append(f"network vs FEM: max |error| {err.max():.2%}, median {np.median(err):.2%}; "
+        lines.append(f"network vs FEM: max |error| {max(err):.2%}, median {median(err):.2%}; "
                      f"{inside} of {len(rows)} within the map's bound")  # fmt: skip
-        circ = np.abs([r.circuit_error for r in rows])
+        circ = [abs(r.circuit_error) for r in rows]
         inside = sum(r.circuit_within_bound for r in rows)
-        lines.append(f"circuit vs FEM: max |error| {circ.max():.2%}, median {np.median(circ):.2%}; "
+        lines.append(f"circuit vs FEM: max |error| {max(circ):.2%}, median {median(circ):.2%}; "
                      f"{inside} of {len(rows)} within its map's bound")  # fmt: skip
     return "\n".join(lines)
 
@@ -948,30 +921,10 @@ def _optimize(args: argparse.Namespace) -> int:
     if not opt.feasible:
         raise CLIError("no design meets the constraints in the search box; relax a limit")
     key = OBJECTIVES[args.objective]
-    tried: list[dict] = []
-    chosen: tuple[Candidate, dict] | None = None
-    for rank, cand in enumerate(
-        opt.candidates[: args.tries] or (Candidate(opt.design, opt.value),)
-    ):
-        data = _check_candidate(args, for_workshop(cand.design, _ranges(wc))[0], cons)
-        tried.append({"rank": rank + 1, "n_drums": cand.design.clutch.n_drums,
-                      "design_mm": cand.design.clutch.to_mm(), "objective_value": cand.value,
-                      "fidelity": data["verdict"]["fidelity"],
-                      "violations": data["violations"]})  # fmt: skip
-        if chosen is None or (not data["violations"] and chosen[1]["violations"]):
-            chosen = (cand, data)
-        if not data["violations"]:
-            break
-    assert chosen is not None
-    cand, data = chosen
+    cand, data, tried = first_meeting(opt, args.tries, wc, cons, verify=not args.no_verify)
     bounds = parse_bounds(args.vary) if args.vary else None
-    box, source = search_box(base, bounds)
-    fl = {k: np.array([getattr(cand.design.clutch, k)]) for k in (*box, "n_drums")}
-    row = evaluate_rows(fl, base, cons, stability=cons.stable)
     data = {
-        "active_limits": list(active_limits(cons, row, 0)),
-        "edges": list(range_edges(cand.design, box, source, drums)),
-        "limits": _limits_json(base, cons),
+        **optimum_limits(base, cons, cand, drums, bounds),
         "objective": args.objective,
         "objective_column": key,
         "objective_value": cand.value,
@@ -982,7 +935,7 @@ def _optimize(args: argparse.Namespace) -> int:
         **data,
         "tried": tried,
     }
-    shipped, notes = for_workshop(cand.design, _ranges(wc))
+    shipped, notes = for_workshop(cand.design, ranges(wc))
     data["notes"] = notes
     if args.out:
         with atomic_path(args.out) as tmp:
@@ -991,14 +944,9 @@ def _optimize(args: argparse.Namespace) -> int:
     if args.verify_top is not None:
         t2 = time.perf_counter()
         top = list(opt.candidates[: args.verify_top])
-        f = {k: np.array([getattr(c.design.clutch, k) for c in top]) for k in (*box, "n_drums")}
-        rows = evaluate_rows(f, base, cons)
-        fem_size = load_error_map().reference_fem_size
+        fem_size = reference_fem_size()
         with sweep_executor(args.workers) as (executor, _):
-            verified = verify_designs([c.design for c in top], list(range(1, len(top) + 1)),
-                                      [c.value for c in top], rows[TORQUE].tolist(),
-                                      rows["torque_error_bound"].tolist(), fem_size,
-                                      executor)  # fmt: skip
+            verified = verify_candidates(top, base, cons, bounds, executor)
         data["verified"] = [vars(v) | {"error": v.error} for v in verified]
         t_verify = time.perf_counter() - t2
     if args.json:
@@ -1052,26 +1000,6 @@ def _limits_line(base: ClutchDesign, cons: Constraints, wc: WorstCase | None) ->
     return "limits: " + "; ".join(parts)
 
 
-def _judge_all(designs: list[ClutchDesign], fidelity: str, workers: int,
-               done: Any = None) -> list[dict]:  # fmt: skip
-    """Every design judged (``verdict.judge``) at ``fidelity``, on ``workers`` processes
-    (0: here); ``done(n)`` after each (a progress bar's)."""
-    check = reference_check if fidelity == "reference" else fast_check
-    out: list[dict] = []
-    with sweep_executor(workers) as (executor, _):
-        futures = None if executor is None else [executor.submit(check, d) for d in designs]
-        for i, d in enumerate(designs):
-            out.append(check(d) if futures is None else futures[i].result())
-            if done is not None:
-                done(i + 1)
-    return out
-
-
-def _ranges(wc: WorstCase | None) -> Uncertainty | None:
-    """The ranges the optimiser's worst case is taken over (None: ``--nominal``)."""
-    return None if wc is None else wc.uncertainty
-
-
 def _old_members(args: argparse.Namespace) -> set[Path]:
     """The member files an earlier run left in ``--designs``: refused without
     ``--overwrite`` (a folder of two runs' members would mix them), else to be removed."""
@@ -1084,13 +1012,6 @@ def _old_members(args: argparse.Namespace) -> set[Path]:
             "earlier run; give --overwrite to replace them, or another folder"
         )
     return old
-
-
-def _member_json(i: int, m: Member, ev: dict | None, violations: list[str]) -> dict:
-    return {"member": i, "n_drums": m.design.clutch.n_drums,
-            "design_mm": m.design.clutch.to_mm(), "fast": dict(m.row),
-            "active_limits": list(m.active), "edges": list(m.edges),
-            "reference": ev, "violations": violations}  # fmt: skip
 
 
 def _material_axes(specs: list[str]) -> dict[str, list[str]]:
@@ -1131,27 +1052,20 @@ def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...]
         raise CLIError("no design meets the constraints in the search box; relax a limit")
     # each member as its file says (its `[render]` rule, its ranges, no bench), judged by the
     # one verdict every command uses, at reference fidelity (or the fast path: --no-verify)
-    shipped = [for_workshop(m.design, _ranges(wc)) for m in ps.members]
+    shipped = shipped_members(ps, wc)
     t1 = time.perf_counter()
     desc = "optimize: members checked"
-    with progress_bar(len(shipped), desc, "design", not args.no_progress) as done:
-        refs = _judge_all([d for d, _ in shipped], "fast" if args.no_verify else "reference",
-                          args.workers, done)  # fmt: skip
+    with (progress_bar(len(shipped), desc, "design", not args.no_progress) as done,
+          sweep_executor(args.workers) as (executor, _)):  # fmt: skip
+        rows = judge_members(ps, shipped, cons, "fast" if args.no_verify else "reference",
+                             executor, done)  # fmt: skip
     t_ref = 0.0 if args.no_verify else time.perf_counter() - t1
-    rows = []
-    for i, (m, ev, (d, _)) in enumerate(zip(ps.members, refs, shipped, strict=True), 1):
-        rows.append(_member_json(i, m, ev, requirement_violations(ev, cons, d)))
     kept = [r for r in rows if not r["violations"]]
     verified = None
     if args.verify_top is not None and kept:
         t2 = time.perf_counter()
-        top = [(r, ps.members[r["member"] - 1]) for r in kept[: args.verify_top]]
         with sweep_executor(args.workers) as (executor, _):
-            verified = verify_designs([m.design for _, m in top], [r["member"] for r, _ in top],
-                                      [m.row[ps.objectives[0][1]] for _, m in top],
-                                      [m.row[TORQUE] for _, m in top],
-                                      [m.row["torque_error_bound"] for _, m in top],
-                                      load_error_map().reference_fem_size, executor)  # fmt: skip
+            verified = verify_members(ps, kept, args.verify_top, executor)
         t_verify = time.perf_counter() - t2
     written = []
     if args.designs and kept:
@@ -1166,7 +1080,7 @@ def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...]
         for path in old_members - {Path(w) for w in written}:  # --overwrite: none left over
             path.unlink(missing_ok=True)
     notes = shipped[0][1] if shipped else []
-    paper = _paper_beside(base, "fast" if args.no_verify else "reference", wc)
+    paper = paper_beside(base, "fast" if args.no_verify else "reference", wc)
     if args.plot:
         pareto_set_plot(ps, [r["member"] for r in kept], paper, args.plot)
     data = {
@@ -1186,7 +1100,7 @@ def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...]
         "members": rows,
         "kept": [r["member"] for r in kept],
         "dropped_at_reference": [r["member"] for r in rows if r["violations"]],
-        "limits": _limits_json(base, cons),
+        "limits": limits_record(base, cons),
         "box_mm": {f"{k}_mm": [lo * 1e3, hi * 1e3] for k, (lo, hi) in ps.box.items()},
         "box_source": {f"{k}_mm": v for k, v in ps.box_source.items()},
         "designs_written": written,
@@ -1202,7 +1116,7 @@ def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...]
         if verified is not None:
             print()
             print(format_verified(verified, ps.objectives[0][1],
-                                  load_error_map().reference_fem_size, max(args.workers, 1),
+                                  reference_fem_size(), max(args.workers, 1),
                                   t_verify).replace("rows", "members"))  # fmt: skip
         if written:
             print(
@@ -1218,17 +1132,6 @@ def _pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...]
               f"requirements at reference fidelity", file=sys.stderr)  # fmt: skip
         return EXIT_REQUIREMENT_VIOLATED
     return 0
-
-
-def _limits_json(base: ClutchDesign, cons: Constraints) -> dict:
-    pr = base.process
-    return {"min_torque_N_m": cons.min_torque, "max_mass_kg": cons.max_mass,
-            "max_diameter_m": cons.max_diameter, "max_length_m": cons.max_length,
-            "min_continuous_torque_above_drag_N_m": cons.min_continuous_torque,
-            "max_coil_power_W": cons.max_power, "min_time_at_peak_s": cons.peak_time,
-            "duty_torque_N_m": cons.duty_torque, "duty_time_s": cons.duty_time,
-            "runout_m": pr.runout, "tolerance_m": pr.tolerance, "min_wall_m": pr.min_wall,
-            "min_gap_m": pr.min_gap, "passive": cons.passive, "stable": cons.stable}  # fmt: skip
 
 
 def _explain_json(ev: dict) -> dict:
@@ -1249,18 +1152,6 @@ def _explain_json(ev: dict) -> dict:
         "time_to_fluid_limit_s": c["time_to_fluid_limit_s"],
         "coil_power_W": c["coil_power_W"], "fidelity": ev["fidelity"],
     }  # fmt: skip
-
-
-def _paper_on(base: ClutchDesign) -> ClutchDesign:
-    """The paper preset's clutch on ``base``'s operating point, transmission and process."""
-    return replace(design_preset("paper"), operating=base.operating,
-                   transmission=base.transmission, process=base.process)  # fmt: skip
-
-
-def _paper_beside(base: ClutchDesign, fidelity: str, wc: WorstCase | None) -> dict:
-    """The paper preset's clutch (``_paper_on``) judged at ``fidelity`` by the optimiser's
-    rule (``verdict.for_workshop``), as its own designs are."""
-    return judge(for_workshop(_paper_on(base), _ranges(wc))[0], fidelity)
 
 
 def explain(ev: dict, paper: dict, label: str) -> str:
@@ -1373,43 +1264,6 @@ def _print_pareto(args: argparse.Namespace, ps: ParetoSet, rows: list[dict], kep
         print(explain(ev, paper, f"member #{first['member']}"))
 
 
-def _check_candidate(args: argparse.Namespace, design: ClutchDesign, cons: Constraints) -> dict:
-    """One candidate (as its file will say: ``verdict.for_workshop``) judged on the fast path
-    and (unless --no-verify) at reference fidelity: its evaluations, its one verdict and the
-    requirements it misses at the highest fidelity run."""
-    fast = fast_check(design)
-    data: dict = {
-        "design_mm": design.clutch.to_mm(),
-        "required": {"passive": cons.passive, "stable": cons.stable},
-        "fast": fast,
-        "fast_bandwidth_error_stated": FAST_BANDWIDTH_ERROR,
-    }
-    checked = fast
-    if not args.no_verify:
-        ref = reference_check(design)
-        b_fast, b_ref = fast["haptic"]["bandwidth_hz"], ref["haptic"]["bandwidth_hz"]
-        data["reference"] = ref
-        data["bandwidth_change_reference_vs_fast"] = b_ref / b_fast - 1
-        checked = ref
-    violations = requirement_violations(checked, cons, design)
-    for ev in (fast, checked):  # the verdict from each evaluation's own data (the same
-        ev["verdict"] = verdict_of(ev)  # as judge's; a seam's data gets one too)
-    data["verdict"] = checked["verdict"]
-    data["requirements_met"] = not violations
-    data["violations"] = violations
-    return data
-
-
-def reference_check(design: ClutchDesign) -> dict:
-    """A design judged at reference fidelity (``verdict.judge``; a seam for the tests)."""
-    return judge(design, "reference")
-
-
-def fast_check(design: ClutchDesign) -> dict:
-    """A design judged on the fast path (``verdict.judge``)."""
-    return judge(design, "fast")
-
-
 def _print_optimum(
     args: argparse.Namespace,
     opt: Optimum,
@@ -1447,7 +1301,7 @@ def _print_optimum(
     for e in data["edges"]:
         print(f"  {e}")
     if "reference" in data:
-        paper = _paper_beside(cand.design, "reference", wc)
+        paper = paper_beside(cand.design, "reference", wc)
         print(explain(data["reference"], paper, "optimum"))
     for note in data.get("notes", ()):
         print(f"note: {note}")

@@ -1,0 +1,208 @@
+"""The optimiser's designs judged as their files will say (issue 43: no decision logic under
+``mrclutch/cli/``): each candidate or Pareto member as ``verdict.for_workshop`` ships it,
+judged by the one verdict every command uses (``verdict.judge``) on the fast path and at
+reference fidelity, the requirements it misses (``requirements.requirement_violations``),
+which members are kept, the paper preset judged beside them, and the FEM check of the best.
+The CLI (``mrclutch.cli.commands.optimize``, ``.pareto``) parses, calls these and prints.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import Executor
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from magnetics.error_map import load as load_error_map
+from mrclutch.design import ClutchDesign, design_preset
+from mrclutch.optimize import (
+    Candidate,
+    Constraints,
+    Member,
+    Optimum,
+    ParetoSet,
+    WorstCase,
+    active_limits,
+    evaluate_rows,
+    range_edges,
+    search_box,
+)
+from mrclutch.pipeline import FAST_BANDWIDTH_ERROR
+from mrclutch.requirements import requirement_violations
+from mrclutch.uncertainty import Uncertainty
+from mrclutch.verdict import for_workshop, judge, verdict_of
+from mrclutch.verify import TORQUE, VerifiedRow, verify_designs
+
+
+def reference_check(design: ClutchDesign) -> dict:
+    """A design judged at reference fidelity (``verdict.judge``; a seam for the tests)."""
+    return judge(design, "reference")
+
+
+def fast_check(design: ClutchDesign) -> dict:
+    """A design judged on the fast path (``verdict.judge``)."""
+    return judge(design, "fast")
+
+
+def judge_all(designs: list[ClutchDesign], fidelity: str, executor: Executor | None = None,
+              done: Callable[[int], None] | None = None) -> list[dict]:  # fmt: skip
+    """Every design judged (``verdict.judge``) at ``fidelity``, on ``executor`` (None:
+    here); ``done(n)`` after each (a progress bar's)."""
+    check = reference_check if fidelity == "reference" else fast_check
+    out: list[dict] = []
+    futures = None if executor is None else [executor.submit(check, d) for d in designs]
+    for i, d in enumerate(designs):
+        out.append(check(d) if futures is None else futures[i].result())
+        if done is not None:
+            done(i + 1)
+    return out
+
+
+def ranges(wc: WorstCase | None) -> Uncertainty | None:
+    """The ranges the optimiser's worst case is taken over (None: ``--nominal``)."""
+    return None if wc is None else wc.uncertainty
+
+
+def check_candidate(design: ClutchDesign, cons: Constraints, verify: bool = True) -> dict:
+    """One candidate (as its file will say: ``verdict.for_workshop``) judged on the fast path
+    and (``verify``) at reference fidelity: its evaluations, its one verdict and the
+    requirements it misses at the highest fidelity run."""
+    fast = fast_check(design)
+    data: dict = {
+        "design_mm": design.clutch.to_mm(),
+        "required": {"passive": cons.passive, "stable": cons.stable},
+        "fast": fast,
+        "fast_bandwidth_error_stated": FAST_BANDWIDTH_ERROR,
+    }
+    checked = fast
+    if verify:
+        ref = reference_check(design)
+        b_fast, b_ref = fast["haptic"]["bandwidth_hz"], ref["haptic"]["bandwidth_hz"]
+        data["reference"] = ref
+        data["bandwidth_change_reference_vs_fast"] = b_ref / b_fast - 1
+        checked = ref
+    violations = requirement_violations(checked, cons, design)
+    for ev in (fast, checked):  # the verdict from each evaluation's own data (the same
+        ev["verdict"] = verdict_of(ev)  # as judge's; a seam's data gets one too)
+    data["verdict"] = checked["verdict"]
+    data["requirements_met"] = not violations
+    data["violations"] = violations
+    return data
+
+
+def first_meeting(opt: Optimum, tries: int, wc: WorstCase | None, cons: Constraints,
+                  verify: bool = True) -> tuple[Candidate, dict, list[dict]]:  # fmt: skip
+    """The single-objective optimum's candidates checked best first (``check_candidate``)
+    until one meets every requirement, at most ``tries``: the one chosen (the first that
+    meets them, else the best), its check, and a record of each tried."""
+    tried: list[dict] = []
+    chosen: tuple[Candidate, dict] | None = None
+    for rank, cand in enumerate(opt.candidates[:tries] or (Candidate(opt.design, opt.value),)):
+        data = check_candidate(for_workshop(cand.design, ranges(wc))[0], cons, verify)
+        tried.append({"rank": rank + 1, "n_drums": cand.design.clutch.n_drums,
+                      "design_mm": cand.design.clutch.to_mm(), "objective_value": cand.value,
+                      "fidelity": data["verdict"]["fidelity"],
+                      "violations": data["violations"]})  # fmt: skip
+        if chosen is None or (not data["violations"] and chosen[1]["violations"]):
+            chosen = (cand, data)
+        if not data["violations"]:
+            break
+    assert chosen is not None
+    return chosen[0], chosen[1], tried
+
+
+def limits_record(base: ClutchDesign, cons: Constraints) -> dict:
+    """Every limit the optimiser enforced, as JSON (SI units in the key names)."""
+    pr = base.process
+    return {"min_torque_N_m": cons.min_torque, "max_mass_kg": cons.max_mass,
+            "max_diameter_m": cons.max_diameter, "max_length_m": cons.max_length,
+            "min_continuous_torque_above_drag_N_m": cons.min_continuous_torque,
+            "max_coil_power_W": cons.max_power, "min_time_at_peak_s": cons.peak_time,
+            "duty_torque_N_m": cons.duty_torque, "duty_time_s": cons.duty_time,
+            "runout_m": pr.runout, "tolerance_m": pr.tolerance, "min_wall_m": pr.min_wall,
+            "min_gap_m": pr.min_gap, "passive": cons.passive, "stable": cons.stable}  # fmt: skip
+
+
+def optimum_limits(base: ClutchDesign, cons: Constraints, cand: Candidate, drums: Sequence[int],
+                   bounds: Mapping[str, tuple[float, float]] | None) -> dict:  # fmt: skip
+    """The chosen candidate's active limits and range edges on the fast path, and the
+    limits enforced."""
+    box, source = search_box(base, bounds)
+    fl = {k: np.array([getattr(cand.design.clutch, k)]) for k in (*box, "n_drums")}
+    row = evaluate_rows(fl, base, cons, stability=cons.stable)
+    return {
+        "active_limits": list(active_limits(cons, row, 0)),
+        "edges": list(range_edges(cand.design, box, source, drums)),
+        "limits": limits_record(base, cons),
+    }
+
+
+def paper_on(base: ClutchDesign) -> ClutchDesign:
+    """The paper preset's clutch on ``base``'s operating point, transmission and process."""
+    return replace(design_preset("paper"), operating=base.operating,
+                   transmission=base.transmission, process=base.process)  # fmt: skip
+
+
+def paper_beside(base: ClutchDesign, fidelity: str, wc: WorstCase | None) -> dict:
+    """The paper preset's clutch (``paper_on``) judged at ``fidelity`` by the optimiser's
+    rule (``verdict.for_workshop``), as its own designs are."""
+    return judge(for_workshop(paper_on(base), ranges(wc))[0], fidelity)
+
+
+def member_record(i: int, m: Member, ev: dict | None, violations: list[str]) -> dict:
+    """Pareto member ``i`` as JSON: its fast-path row, its limits and its check."""
+    return {"member": i, "n_drums": m.design.clutch.n_drums,
+            "design_mm": m.design.clutch.to_mm(), "fast": dict(m.row),
+            "active_limits": list(m.active), "edges": list(m.edges),
+            "reference": ev, "violations": violations}  # fmt: skip
+
+
+def shipped_members(ps: ParetoSet, wc: WorstCase | None) -> list[tuple[ClutchDesign, list[str]]]:
+    """Each member as its file says (its ``[render]`` rule, its ranges, no bench), with the
+    notes to print (``verdict.for_workshop``)."""
+    return [for_workshop(m.design, ranges(wc)) for m in ps.members]
+
+
+def judge_members(ps: ParetoSet, shipped: list[tuple[ClutchDesign, list[str]]],
+                  cons: Constraints, fidelity: str, executor: Executor | None = None,
+                  done: Callable[[int], None] | None = None) -> list[dict]:  # fmt: skip
+    """Each shipped member judged by the one verdict every command uses at ``fidelity``
+    (reference, or the fast path: --no-verify), with the requirements it misses there
+    (``member_record``; kept: those with no violation)."""
+    refs = judge_all([d for d, _ in shipped], fidelity, executor, done)
+    judged = zip(ps.members, refs, shipped, strict=True)
+    return [member_record(i, m, ev, requirement_violations(ev, cons, d))
+            for i, (m, ev, (d, _)) in enumerate(judged, 1)]  # fmt: skip
+
+
+def reference_fem_size() -> float:
+    """m: the FEM element size the checks solve at by default (the error map's reference)."""
+    return load_error_map().reference_fem_size
+
+
+def verify_candidates(top: Sequence[Candidate], base: ClutchDesign, cons: Constraints,
+                      bounds: Mapping[str, tuple[float, float]] | None,
+                      executor: Executor | None) -> list[VerifiedRow]:  # fmt: skip
+    """The torque of the best candidates re-solved with the FEM at the reference size
+    (``verify.verify_designs``), beside the fast path's and its error bound."""
+    box, _ = search_box(base, bounds)
+    f = {k: np.array([getattr(c.design.clutch, k) for c in top]) for k in (*box, "n_drums")}
+    rows = evaluate_rows(f, base, cons)
+    return verify_designs([c.design for c in top], list(range(1, len(top) + 1)),
+                          [c.value for c in top], rows[TORQUE].tolist(),
+                          rows["torque_error_bound"].tolist(), reference_fem_size(),
+                          executor)  # fmt: skip
+
+
+def verify_members(ps: ParetoSet, kept: Sequence[dict[str, Any]], n: int,
+                   executor: Executor | None) -> list[VerifiedRow]:  # fmt: skip
+    """The torque of the first ``n`` kept members re-solved with the FEM at the reference
+    size (``verify.verify_designs``), beside the fast path's and its error bound."""
+    top = [(r, ps.members[r["member"] - 1]) for r in kept[:n]]
+    return verify_designs([m.design for _, m in top], [r["member"] for r, _ in top],
+                          [m.row[ps.objectives[0][1]] for _, m in top],
+                          [m.row[TORQUE] for _, m in top],
+                          [m.row["torque_error_bound"] for _, m in top],
+                          reference_fem_size(), executor)  # fmt: skip
