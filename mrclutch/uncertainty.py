@@ -422,7 +422,8 @@ def default_uncertainty(design: Any = None) -> Uncertainty:
 RANGE_FROM: dict[str, str] = {
     "default": "the operating temperature to 20 K above it (the default)",
     "typed": "typed in [uncertainty]",
-    "duty": "the operating temperature to the fluid's at the end of the duty hold (thermal model)",
+    "duty": "the operating temperature to the fluid's at the end of the [duty] hold (of the "
+    "current limit for peak_time_s without a duty torque; thermal model)",
 }
 
 
