@@ -52,7 +52,8 @@ import numpy as np
 from geometry.materials import DENSITY, MRF
 from geometry.regions import Regions
 from geometry.validation import ParameterError, check_choice, check_nonnegative, check_range
-from magnetics.materials import FLUIDS, MRFluid
+from magnetics.fluid import MRFluid
+from magnetics.materials import FLUIDS
 
 #: °C: the default fluid temperature, a room — not the datasheet's 40 °C.
 ROOM_TEMPERATURE = 20.0

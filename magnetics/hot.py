@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 
 from geometry.validation import ParameterError, check_positive, check_range
-from magnetics.materials import MRFluid
+from magnetics.fluid import MRFluid
 from magnetics.thermal import ALPHA_CU, Network
 
 #: °C: the temperature τy is referred to (the tool's room temperature, drag.ROOM_TEMPERATURE).

@@ -33,7 +33,8 @@ from magnetics.circuit import (
 )
 from magnetics.drag import ROOM_TEMPERATURE, Drag, Support, clutch_drag
 from magnetics.fem import MESHES, build_grid, solve_fem
-from magnetics.materials import FLUIDS, MATERIALS, Magnetic, MRFluid, magnetic
+from magnetics.fluid import MRFluid
+from magnetics.materials import FLUIDS, MATERIALS, Magnetic, magnetic
 from magnetics.network import network_from_regions
 from magnetics.network.torque import (  # noqa: F401  (the network's torque, importable here)
     CONVENTIONS,

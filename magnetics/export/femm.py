@@ -36,7 +36,8 @@ from typing import Any
 from geometry.outline import Outline, section_outline
 from geometry.section import Section
 from magnetics.fem.grid import DEFAULT_SIZE, _lines
-from magnetics.materials import FLUIDS, BHCurve, Magnetic, MRFluid, magnetic
+from magnetics.fluid import MRFluid
+from magnetics.materials import FLUIDS, BHCurve, Magnetic, magnetic
 
 #: B (T) added past a B–H table's last point on the slope μ0 (module docstring)
 EXTENSION_T = 1.0

@@ -11,7 +11,8 @@ from numpy.typing import NDArray
 
 from geometry.validation import ParameterError
 from magnetics.fem.grid import Grid
-from magnetics.materials import Magnetic, MRFluid, magnetic
+from magnetics.fluid import MRFluid
+from magnetics.materials import Magnetic, magnetic
 
 FloatArray = NDArray[np.float64]
 

@@ -19,18 +19,8 @@ from numpy.typing import ArrayLike, NDArray
 from geometry.params import broadcast_fields, valid
 from geometry.regions import Regions, per_topology
 from geometry.validation import ParameterError, check_choice
-from magnetics.materials import (
-    _CARLSON_K,
-    _S_LO,
-    _S_N,
-    _S_STEP,
-    FLUIDS,
-    MATERIALS,
-    Magnetic,
-    MRFluid,
-    _carlson_s_table,
-    magnetic,
-)
+from magnetics.fluid import _CARLSON_K, _S_LO, _S_N, _S_STEP, MRFluid, _carlson_s_table
+from magnetics.materials import FLUIDS, MATERIALS, Magnetic, magnetic
 from magnetics.network.build import Network, network_from_regions
 from magnetics.network.compiled import _loaded, load, numba_module, uncompiled
 from magnetics.network.kernels import _tables
