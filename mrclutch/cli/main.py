@@ -24,7 +24,6 @@ from mrclutch.cli.paths import OUTPUT_OPTIONS, check_writable
 _HAPTIC = "mrclutch.cli.commands.haptic"
 _GEOMETRY = "mrclutch.cli.commands.geometry"
 _MAGNETICS = "mrclutch.cli.commands.magnetics"
-_DESIGN = "mrclutch.cli.commands.design"
 #: The command table, in the order of ``--help``: name → (the module that registers and runs
 #: it, its one-line summary). The summary is the one ``--help`` lists; the module's own
 #: ``add_parser(help=...)`` must say the same (tests/mrclutch/test_cli_lazy.py).
@@ -38,14 +37,15 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "view": (_GEOMETRY, "3-D view cut in half; --screenshot works headless"),
     "torque": (_MAGNETICS, "torque against coil current (network, circuit or FEM)"),
     "field": (_MAGNETICS, "FEM flux-density map over the section at one current"),
-    "evaluate": (_DESIGN, "a clutch design and its haptic consequences, beside the "
-                 "equal-force motor"),
-    "report": (_DESIGN, "the full report of one design: CAD, views, torque curve, haptic "
-               "plots, HTML"),
-    "sweep": (_DESIGN, "evaluate a grid or random sample of designs on the fast path (CSV or "
-              "Parquet)"),
-    "optimize": (_DESIGN, "the trade-offs (a Pareto set: rendering bandwidth, transparency, "
-                 "continuous torque, mass) or one objective, under the builder's limits"),
+    "evaluate": ("mrclutch.cli.commands.evaluate", "a clutch design and its haptic "
+                 "consequences, beside the equal-force motor"),
+    "report": ("mrclutch.cli.commands.report_command", "the full report of one design: CAD, "
+               "views, torque curve, haptic plots, HTML"),
+    "sweep": ("mrclutch.cli.commands.sweep", "evaluate a grid or random sample of designs on "
+              "the fast path (CSV or Parquet)"),
+    "optimize": ("mrclutch.cli.commands.optimize", "the trade-offs (a Pareto set: rendering "
+                 "bandwidth, transparency, continuous torque, mass) or one objective, under "
+                 "the builder's limits"),
     "scale": ("mrclutch.cli.commands.scaling", "reach k× torque by more drums, longer drums "
               "or a larger diameter (Fig. 7b)"),
     "fidelity": ("mrclutch.cli.commands.fidelity", "speed against accuracy: time and error of "

@@ -117,7 +117,7 @@ def test_table2_is_compared_only_with_the_paper_clutch():
     scale, with no 'unexplained' remainder and no Table 2 verdict."""
     from dataclasses import replace
 
-    from mrclutch.cli.commands.design import format_budget
+    from mrclutch.cli.formatting import format_budget
     from mrclutch.design import design_preset
     from mrclutch.pipeline import evaluate
 

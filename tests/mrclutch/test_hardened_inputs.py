@@ -311,7 +311,7 @@ def test_fem_torque_over_thousands_of_currents_asks_for_yes(capsys):
 def test_a_sweep_of_many_tiny_chunks_says_its_estimate(tmp_path):
     """Chunks of one design: the per-chunk write is in the estimate, which the CLI says
     (announce) when above 30 s; 101 chunks are timed even under 1000 designs."""
-    from mrclutch.cli.commands.design import _say_estimate
+    from mrclutch.cli.commands.sweep import _say_estimate
     from mrclutch.design import design_preset
     from mrclutch.pipeline import BatchEvaluator
     from mrclutch.sweep import load_spec

@@ -10,7 +10,8 @@ from pathlib import Path
 import pytest
 
 from geometry.validation import ParameterError
-from mrclutch.cli.commands import design as design_cmd
+from mrclutch.cli.commands import optimize as optimize_cmd
+from mrclutch.cli.commands import optimize_pareto as pareto_cmd
 from mrclutch.cli.main import main
 from mrclutch.design import design_from_mapping, design_preset, design_to_toml, load_design
 from mrclutch.render import Render
@@ -165,8 +166,8 @@ def members(tmp_path_factory):
     """A small seeded Pareto run at reference fidelity writing its members."""
     folder = tmp_path_factory.mktemp("members")
     mp = pytest.MonkeyPatch()
-    real = design_cmd.pareto
-    mp.setattr(design_cmd, "pareto", lambda *a, **k: real(*a, **{**k, **QUICK}))
+    real = pareto_cmd.pareto
+    mp.setattr(pareto_cmd, "pareto", lambda *a, **k: real(*a, **{**k, **QUICK}))
     try:
         import io
         from contextlib import redirect_stdout
@@ -213,8 +214,8 @@ def test_designs_folder_of_an_earlier_run_needs_overwrite(members, capsys, monke
     (folder / "member_99.toml").write_text("stale")
     code, cap = _run(capsys, ["optimize", "--preset", "paper", "--designs", str(folder)])
     assert code == 2 and "--overwrite" in cap.err and cap.err.count("\n") == 1
-    real = design_cmd.pareto
-    monkeypatch.setattr(design_cmd, "pareto", lambda *a, **k: real(*a, **{**k, **QUICK}))
+    real = pareto_cmd.pareto
+    monkeypatch.setattr(pareto_cmd, "pareto", lambda *a, **k: real(*a, **{**k, **QUICK}))
     code, cap = _run(capsys, ["optimize", "--preset", "paper", "--drums", "2", "--seed", "3",
                               "--designs", str(folder), "--overwrite", "--no-verify"])  # fmt: skip
     assert code == 0, cap.err
@@ -223,8 +224,8 @@ def test_designs_folder_of_an_earlier_run_needs_overwrite(members, capsys, monke
 
 @pytest.mark.slow
 def test_objective_out_file_gets_the_optimisers_verdict(tmp_path, capsys, monkeypatch):
-    real = design_cmd.optimize
-    monkeypatch.setattr(design_cmd, "optimize",
+    real = optimize_cmd.optimize
+    monkeypatch.setattr(optimize_cmd, "optimize",
                         lambda *a, **k: real(*a, **k, maxiter=6, popsize=6))  # fmt: skip
     out = tmp_path / "best.toml"
     data = _json(capsys, ["optimize", "--objective", "bandwidth", "--drums", "2", "--tries",

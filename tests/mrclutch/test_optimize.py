@@ -11,7 +11,7 @@ import pytest
 import mrclutch.optimize as opt_mod
 from geometry import ParameterError
 from mrclutch import members
-from mrclutch.cli.commands import design as design_cmd
+from mrclutch.cli.commands import optimize as optimize_cmd
 from mrclutch.cli.main import main
 from mrclutch.design import design_preset, load_design
 from mrclutch.optimize import Constraints, optimize, parse_bounds
@@ -228,7 +228,7 @@ def test_cli_exits_3_when_the_reference_check_violates_a_requirement(
     monkeypatch.setattr(members, "reference_check", _violating_reference(key))
     out = tmp_path / "best.toml"
     argv = ["optimize", "--objective", "bandwidth", "--drums", "1", "--json", "--out", str(out)]
-    assert main(argv) == design_cmd.EXIT_REQUIREMENT_VIOLATED == 3
+    assert main(argv) == optimize_cmd.EXIT_REQUIREMENT_VIOLATED == 3
     cap = capsys.readouterr()
     assert phrase in cap.err and "reference fidelity" in cap.err
     data = json.loads(cap.out)
@@ -301,8 +301,8 @@ def test_evaluate_batch_opt_in_columns_match_the_scalar_path():
 
 def _quick_search(monkeypatch):
     """The CLI's search with a small population (the candidates logic is what is tested)."""
-    real = design_cmd.optimize
-    monkeypatch.setattr(design_cmd, "optimize",
+    real = optimize_cmd.optimize
+    monkeypatch.setattr(optimize_cmd, "optimize",
                         lambda *a, **k: real(*a, **k, maxiter=8, popsize=6))  # fmt: skip
 
 

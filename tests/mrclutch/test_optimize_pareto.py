@@ -12,7 +12,7 @@ from scipy.integrate import quad
 from geometry import ParameterError
 from magnetics import thermal
 from mrclutch import members
-from mrclutch.cli.commands import design as design_cmd
+from mrclutch.cli.commands import optimize_pareto as pareto_cmd
 from mrclutch.cli.main import main
 from mrclutch.design import design_from_mapping, design_preset, design_to_toml, load_design
 from mrclutch.optimize import (
@@ -323,8 +323,8 @@ def test_default_run_members_hold_their_K_over_the_default_ranges():
 
 
 def _quick_pareto(monkeypatch, **kw):
-    real = design_cmd.pareto
-    monkeypatch.setattr(design_cmd, "pareto", lambda *a, **k: real(*a, **{**k, **QUICK, **kw}))
+    real = pareto_cmd.pareto
+    monkeypatch.setattr(pareto_cmd, "pareto", lambda *a, **k: real(*a, **{**k, **QUICK, **kw}))
 
 
 def _check_at_reference(member, cons, base):

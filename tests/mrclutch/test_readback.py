@@ -318,7 +318,7 @@ def optimized():
     to both the printer and ``--json`` (caught on its way to the printer, then printed
     as ``--json`` prints it: one optimisation, not two)."""
     from mrclutch.cli.commands import _common
-    from mrclutch.cli.commands import design as cmd
+    from mrclutch.cli.commands import optimize as cmd
 
     seen: list[dict] = []
     original = cmd._print_optimum

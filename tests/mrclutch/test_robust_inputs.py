@@ -253,7 +253,7 @@ def test_field_at_a_size_beyond_memory_is_one_line(capsys, tmp_path):
 
 
 def test_a_sweep_above_the_bound_needs_yes_and_a_long_one_says_how_long(tmp_path, capsys):
-    from mrclutch.cli.commands import design as design_cmd
+    from mrclutch.cli.commands import sweep as sweep_cmd
     from mrclutch.pipeline import BatchEvaluator
     from mrclutch.sweep import load_spec
 
@@ -265,7 +265,7 @@ def test_a_sweep_above_the_bound_needs_yes_and_a_long_one_says_how_long(tmp_path
     code, _, err = _cli(["sweep", str(spec), "--out", str(tmp_path / "r.csv")], capsys)
     assert code == 2 and "--yes" in err and not (tmp_path / "r.csv").exists()
     sp, _ = load_spec(spec)
-    seconds = design_cmd._say_estimate(sp, BatchEvaluator(design_preset("paper")), 1)
+    seconds = sweep_cmd._say_estimate(sp, BatchEvaluator(design_preset("paper")), 1)
     err = capsys.readouterr().err
     assert seconds > 60 and "designs, about" in err and "designs/s" in err
 

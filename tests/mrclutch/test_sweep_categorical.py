@@ -62,7 +62,7 @@ def single(design):
 def test_the_speed_estimate_of_a_large_sweep(tmp_path, kind):
     """Above 1000 designs the CLI times its first designs (a material axis was passed as raw
     category numbers: 'materials.fluid = 2: unknown fluid')."""
-    from mrclutch.cli.commands.design import _say_estimate
+    from mrclutch.cli.commands.sweep import _say_estimate
 
     path = spec_file(tmp_path, RANDOM[kind], 'mode = "random"\nsamples = 1001\nchunk_size = 8')
     spec, base = base_of(path)
