@@ -18,6 +18,7 @@ from mrclutch import duty as D
 from mrclutch.cli.duty_format import duty_lines
 from mrclutch.design import design_from_mapping, design_to_toml
 from mrclutch.hot_range import duty_end_temperature, duty_range, resolved_ranges
+from mrclutch.optimize import process_uncertainty
 from mrclutch.pipeline import evaluate
 from mrclutch.robust import hand_box_batch, robust_verdicts
 from mrclutch.uncertainty import RANGE_FROM, range_from
@@ -93,6 +94,14 @@ def test_the_verdicts_box_takes_the_derived_range(hot) -> None:
     default = hand_box_batch(fields, hot, replace(hot.ranges, fluid_temperature=(20.0, 40.0)))
     assert derived.b1[1][0] < default.b1[1][0]  # (nominal, low, high)
     assert derived.b1[2][0] == pytest.approx(default.b1[2][0], rel=1e-12)  # the top: 20 °C
+
+
+def test_the_optimiser_and_the_sweep_take_the_derived_range(hot) -> None:
+    """The optimiser's worst case and the sweep's robust columns take the base design's
+    ranges: with "duty", the derived one (never the unresolved None, which would judge
+    every candidate at the operating temperature alone)."""
+    assert process_uncertainty(hot).fluid_temperature == hot.ranges.fluid_temperature
+    assert hot.ranges.fluid_temperature[1] > 40.0
 
 
 def test_round_trip_and_bad_values(hot) -> None:
