@@ -110,3 +110,35 @@ def test_version_is_read_when_asked(capsys: pytest.CaptureFixture[str]) -> None:
         main(["--version"])
     assert e.value.code == 0
     assert capsys.readouterr().out.strip() == f"mrclutch {version('mrclutch')}"
+
+
+#: What a single design's answer must not load (issue 40: interactive commands in well under
+#: a second): each of these costs ≈ 0.3–1 s to import (scipy.optimize alone ≈ 0.9 s of CPU,
+#: numba with a cached kernel ≈ 1 s).
+HEAVY = ("scipy", "numba", "llvmlite", "matplotlib", "build123d", "OCP", "pyvista",
+         "trimesh", "pandas", "pyarrow", "dask")  # fmt: skip
+
+
+def test_the_interactive_commands_load_nothing_heavy() -> None:
+    """``haptic``, ``torque``, ``compare``, ``evaluate`` (with its uncertainty) and the
+    analytic ``inertia`` on the paper preset, one after another in one interpreter: not one
+    of them imports scipy, numba, matplotlib or a CAD kernel (the network's single-design
+    solve runs its kernels uncompiled, magnetics.network; the verdict's thresholds use
+    geometry.numerics' root-find)."""
+    code = (
+        "import sys\nfrom mrclutch.cli.main import main\n"
+        "for argv in (['haptic'], ['torque', '--preset', 'paper'], ['compare'],\n"
+        "             ['evaluate', '--preset', 'paper'],\n"
+        "             ['inertia', '--preset', 'paper', '--method', 'analytic']):\n"
+        "    assert main(argv) == 0, argv\n"
+        "print('\\n'.join(sys.modules), file=sys.stderr)"
+    )
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                       cwd=ROOT, timeout=300)  # fmt: skip
+    assert p.returncode == 0, p.stderr[-2000:]
+    loaded = set(p.stderr.split())
+    assert "numpy" in loaded and "mrclutch.pipeline" in loaded  # the commands ran
+    assert not {n for n in loaded if n.split(".")[0] in HEAVY}, sorted(
+        {n.split(".")[0] for n in loaded if n.split(".")[0] in HEAVY}
+    )
