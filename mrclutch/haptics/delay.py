@@ -1,6 +1,6 @@
 """Cheaper stand-ins for the exact delay: Padé approximants and time stepping.
 
-The exact reference is :func:`mrclutch.haptics.model.max_stable_stiffness` (D-subdivision on the
+The exact reference is :func:`mrclutch.haptics.limits.max_stable_stiffness` (D-subdivision on the
 quasi-polynomial with the pure delay e^{−sτ}). The two approximations here give the same
 quantity — the largest virtual stiffness K [N/m] for which the free lever is stable — so
 their error can be measured against it (``mrclutch fidelity``):
@@ -17,7 +17,7 @@ their error can be measured against it (``mrclutch fidelity``):
   finite-time bias: :func:`simulate_growth`.)
 
 A zero-order hold of period T is folded into the delay as its phase lag T/2, as
-:func:`mrclutch.haptics.model.bandwidth` does.
+:func:`mrclutch.haptics.bandwidth.bandwidth` does.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ import numpy as np
 
 from geometry.validation import ParameterError, check_positive
 from mrclutch.haptics.actuator import HapticParams
-from mrclutch.haptics.model import _num_coeffs
+from mrclutch.haptics.impedance import _num_coeffs
 
 
 def pade_coefficients(order: int) -> tuple[np.ndarray, np.ndarray]:
@@ -133,7 +133,7 @@ def step_map(p: HapticParams, K: float, steps_per_delay: int) -> np.ndarray:
             [p.k / p.m2, p.b / p.m2, -p.k / p.m2, -p.b / p.m2],
         ],
         dtype=float,
-    )  # Eq. 1-2 equations of motion (mrclutch.haptics.model module docstring)
+    )  # Eq. 1-2 equations of motion (mrclutch.haptics.impedance module docstring)
     B = np.array([0, 1 / p.m1, 0, 0])
     h = tau / N
     M = np.zeros((6, 6))  # FOH discretisation by one matrix exponential [franklin-powell-workman]

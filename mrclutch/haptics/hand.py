@@ -7,7 +7,7 @@ ground, Z_h(s) = m_h s + b_h + k_h/s [N·s/m], the usual lumped model of a grasp
 (as in [hogan1989], [dolan1993], [tsuji1995]). The hand's mass moves with x2; its damping and
 stiffness act between x2 and ground (the body), *not* between x1 and x2 like the
 transmission's b and k. With F_a = −K E(s) x2 (E = e^{−sτ} × the zero-order hold's
-fundamental, as ``model._hold``) and the hand's voluntary force set to zero::
+fundamental, as ``impedance._hold``) and the hand's voluntary force set to zero::
 
     m1 s² x1 = −K E x2 − b1 s x1 − (bs + k)(x1 − x2)
     (m2 + m_h) s² x2 = −(b_h s + k_h) x2 + (bs + k)(x1 − x2)
@@ -21,10 +21,10 @@ Num = m2 s D1 + (bs + k)(m1 s + b1)) the coupled characteristic quasi-polynomial
            = s D1(s) [Z_p(s) + Z_h(s)] + K E(s)(bs + k)
 
 with s Z_h D1 = (m_h s² + b_h s + k_h) D1. Hands off (m_h = b_h = k_h = 0) it is
-``model._chi`` exactly; a mass-only hand is the lever with m2 → m2 + m_h (Num is affine in
+``limits._chi`` exactly; a mass-only hand is the lever with m2 → m2 + m_h (Num is affine in
 m2 through m2 s D1); b_h and k_h are no change of HapticParams (they are to ground).
 
-**Stability** (D-subdivision, as ``model._crossings``). P_h = s Num + s Z_h D1 has degree
+**Stability** (D-subdivision, as ``limits._crossings``). P_h = s Num + s Z_h D1 has degree
 4 (leading m1(m2 + m_h)) and K E (bs + k) degree 1: χ_h is retarded. At K = 0 its roots are
 the zeros of s D1 (Z_p + Z_h): Z_p + Z_h is positive real (both passive), so they lie in the
 closed left half-plane; with k_h > 0 none is at 0, with k_h = 0 the rigid-body root at 0
@@ -37,10 +37,10 @@ by Illinois regula falsi [dowell-jarratt1971], up to a frequency beyond which th
 increasing lower bound |lead|(ω − ω_a)⁴/(k + bω) ≤ |X(ω)| (ω_a the largest |root| of P_h,
 |E| ≤ 1) exceeds the gains sought. The stable K form (0, K_lim]: K_lim is the first K_c
 where the count 2 Σ sign turns positive. A hand changes only P_h, so hands off the crossings
-are ``model._crossings``' (same grid) and K_lim is ``model.max_stable_stiffness``.
+are ``limits._crossings``' (same grid) and K_lim is ``limits.max_stable_stiffness``.
 
 **Coupled-stability invariant** ([colgate-hogan1988]): if the device at K is passive
-(Re Z_cl ≥ 0, ``model.max_passive_stiffness``) then Z_cl + Z_h is positive real for every
+(Re Z_cl ≥ 0, ``limits.max_passive_stiffness``) then Z_cl + Z_h is positive real for every
 passive hand, and the coupled loop is stable: K_lim(hand) ≥ K_passive for every hand.
 
 **Transparency.** In free motion (K = 0) the hand moving the lever as x2 = X sin ωt feels
@@ -61,14 +61,8 @@ from numpy.polynomial import polynomial as P
 
 from geometry.validation import ParameterError, check_int, check_nonnegative, check_positive
 from mrclutch.haptics.actuator import HapticParams
-from mrclutch.haptics.model import (
-    _FIELDS,
-    _check_K,
-    _hold,
-    _num_coeffs,
-    _scan_imaginary_axis,
-    max_passive_stiffness,
-)
+from mrclutch.haptics.impedance import _check_K, _hold, _num_coeffs
+from mrclutch.haptics.limits import _FIELDS, _scan_imaginary_axis, max_passive_stiffness
 
 __all__ = [
     "DEFAULT_AMPLITUDE",
@@ -243,8 +237,8 @@ def _crossings_h(
 def max_stable_stiffness_coupled(p: HapticParams, hand: Hand = NO_HAND) -> Any:
     """Largest K [N/m] with the loop and hand stable for every K in (0, K] (module
     docstring: first destabilising crossing of χ_h; exact for a pure delay up to the scan).
-    inf if none. Vectorised designs are handled one by one, as model.max_stable_stiffness.
-    Hands off it equals ``model.max_stable_stiffness``."""
+    inf if none. Vectorised designs are handled one by one, as limits.max_stable_stiffness.
+    Hands off it equals ``limits.max_stable_stiffness``."""
     if p.shape:
         n = int(np.prod(p.shape))
         flat = HapticParams(
@@ -259,7 +253,7 @@ def max_stable_stiffness_coupled(p: HapticParams, hand: Hand = NO_HAND) -> Any:
 
 def is_stable_coupled(p: HapticParams, K: float, hand: Hand = NO_HAND) -> bool:
     """Whether χ_h at K has no root with Re s ≥ 0 (D-subdivision count). K = 0 with k_h = 0
-    keeps the rigid-body root at 0 (marginal), reported True as ``model.is_stable`` does."""
+    keeps the rigid-body root at 0 (marginal), reported True as ``limits.is_stable`` does."""
     K = _check_K(K)
     _one(p)
     if K == 0:

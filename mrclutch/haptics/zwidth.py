@@ -1,11 +1,11 @@
 """Z-width of the 2-DOF haptic lever: the virtual spring–damper pairs (K, B) it renders
-passively ([colgate-brown1994] coined the term), the sampled-data passivity condition of
-[colgate-schenkel1997] with the encoder limit of [abbott-okamura2005], and the stability of
-the free loop at points of the Z-width boundary. SI units: K [N/m], B [N·s/m].
+passively ([colgate-brown1994] coined the term), and the stability of the free loop at
+points of the Z-width boundary. SI units: K [N/m], B [N·s/m]. The sampled-data passivity
+condition of one rigid mass is ``mrclutch.haptics.sampled``.
 
-**Continuous-time Z-width** (model of ``mrclutch.haptics.model``, [lebel] Fig. 4b). The
+**Continuous-time Z-width** (model of ``mrclutch.haptics.impedance``, [lebel] Fig. 4b). The
 controller renders F_a = −E(s)(K + B s) x2, E = e^{−sτ} × (zero-order hold's fundamental
-when ``sample_period`` > 0, as ``model._hold``). Then::
+when ``sample_period`` > 0, as ``impedance._hold``). Then::
 
     Z_cl = [s Num + E (K + B s)(bs + k)] / (s D1)
     Re Z_cl(jω) = R(ω) + K gK(ω) + B gB(ω),   R = Re Z_p,
@@ -18,7 +18,7 @@ intersection of half-planes: convex. At a given B it is the interval [K_min(B), 
     K_min(B) = max(0, sup over {gK > 0} of −(R + B gB)/gK)   (convex in B)
 
 (empty, NaN, where K_min > K_max or R + B gB < 0 where gK = 0). Intercepts:
-K_max(0) = ``model.max_passive_stiffness`` and B_max = inf over {gB < 0} of R/(−gB) (the
+K_max(0) = ``limits.max_passive_stiffness`` and B_max = inf over {gB < 0} of R/(−gB) (the
 largest damper passive with K = 0). With a delay, gK > 0 at some frequencies, and P may
 extend past B_max with K_min > 0 (about 8 % of random designs): its right end B_top ≥ B_max
 is found by bisection on the frequency grid, then regula falsi on the refined bounds.
@@ -31,20 +31,11 @@ minimum: the same five 41-point zooms for K_max(0) and B_max (so K_max(0) equals
 ``max_passive_stiffness``), three 21-point zooms at the other B. Like
 ``max_passive_stiffness`` it is not certified against a dip narrower than the grid step.
 
-**Sampled-data passivity** ([colgate-schenkel1997], one rigid mass m with physical damping
-b, virtual environment H(z) = K + B(1 − z⁻¹)/T behind a zero-order hold, d whole samples
-of delay): passive iff b > (T/2)/(1 − cos θ) · Re{(1 − e^{−jθ}) e^{−jdθ} H(e^{jθ})} for
-0 ≤ θ = ωT ≤ π. With q = 1 − e^{−jθ}, |q|² = 2(1 − cos θ) and sum-to-product identities
-the right side is K T D_d(θ) − B cos((d+1)θ), D_d(θ) = sin((2d+1)θ/2)/(2 sin(θ/2)) (derived
-here; d = 0 gives the paper's b > KT/2 + |B|, and at B = 0, since |D_d| ≤ D_d(0) = d + ½,
-K < 2b/((2d+1)T)). The encoder limit of [abbott-okamura2005] adds K ≤ 2 f_c/Δ (Coulomb
-friction f_c, encoder resolution Δ; Δ = 0: ideal encoder, no limit).
-
 **Stability** of the free loop (χ(s) = s Num + E(s)(K + Bs)(bs + k), D-subdivision as
-``model._crossings``, extended to a ray). A point (K, B) is reached from 0 along the ray
+``limits._crossings``, extended to a ray). A point (K, B) is reached from 0 along the ray
 (K, B) = ρ (c, σ), c = cos φ, σ = sin φ. For ρ > 0 small the roots are those of s Num (left
 half-plane; Num is the passive device's) with the rigid-body root moved to ≈ −ρc/b1 (it
-stays at s = 0 when K = 0: marginal, reported stable as ``model.is_stable`` does for K = 0)
+stays at s = 0 when K = 0: marginal, reported stable as ``limits.is_stable`` does for K = 0)
 and the delay's roots coming from Re s = −∞. Roots cross the imaginary axis at jω where
 ρ = −jω Num(jω)/[(k + jbω) E(jω) (c + jσω)] is real and positive; each crossing moves 2
 roots (a conjugate pair) in the direction sign Re(ds/dρ). Without delay or hold the
@@ -53,7 +44,7 @@ of the imaginary part on a grid fine against the delay's phase period, up to a f
 beyond which ρ(ω) ≥ m1 m2 ω (ω − ω_a)³ / [(k + bω)(c + σω)] (ω_a the largest |root| of
 Num; this bound is increasing for ω > ω_a) exceeds the point's ρ. **Certified**: for a pure
 delay, the count is exact up to the grid scan for sign changes of Im ρ(ω) (two crossings
-closer than the scan step would be missed, as in ``model._crossings``); with a zero-order
+closer than the scan step would be missed, as in ``limits._crossings``); with a zero-order
 hold only its fundamental is modelled (aliasing neglected), as in ``model``. **Not
 certified**: that the region between the checked boundary points is stable — the stability
 boundary is not traced in (K, B), only the points asked for are checked.
@@ -70,16 +61,14 @@ from numpy.polynomial import polynomial as P
 from geometry.numerics import illinois
 from geometry.validation import ParameterError
 from mrclutch.haptics.actuator import HapticParams
-from mrclutch.haptics.model import _hold, _num_coeffs, _scan_imaginary_axis
+from mrclutch.haptics.impedance import _hold, _num_coeffs
+from mrclutch.haptics.limits import _scan_imaginary_axis
 
 __all__ = [
     "ZWIDTH_KEYS",
-    "encoder_stiffness_limit",
     "is_stable_spring_damper",
     "max_passive_damping",
     "passive_stiffness_interval",
-    "sampled_max_passive_stiffness",
-    "sampled_passivity_margin",
     "zwidth",
 ]
 
@@ -147,7 +136,7 @@ def _refine(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Minimum over u of ``ratio(rows, u)`` per row, from its values ``value`` on the grid
     rows ``u0``: zoom ``zooms`` times on the current minimum with a ``points`` grid over
-    its two neighbouring cells (as ``model.max_passive_stiffness``). Returns (min, u*)."""
+    its two neighbouring cells (as ``limits.max_passive_stiffness``). Returns (min, u*)."""
     rows = np.arange(value.shape[0])
     j = np.argmin(value, axis=1)
     best = value[rows, j]
@@ -216,7 +205,7 @@ def _bound(
 def passive_stiffness_interval(p: HapticParams, B: Any) -> tuple[Any, Any]:
     """(K_min(B), K_max(B)) [N/m]: the passive virtual springs at virtual damping B
     [N·s/m] (module docstring); NaN both where no K ≥ 0 is passive. ``p`` fields and ``B``
-    broadcast. K_max(0) is ``model.max_passive_stiffness`` (same grid and zooms)."""
+    broadcast. K_max(0) is ``limits.max_passive_stiffness`` (same grid and zooms)."""
     Ba = np.asarray(B, dtype=float)
     if np.any(~np.isfinite(Ba) | (Ba < 0)):
         raise ParameterError("B: every virtual damping must be finite and >= 0 N·s/m")
@@ -406,113 +395,6 @@ def zwidth(p: HapticParams, n_b: int = 17) -> dict[str, np.ndarray]:
         "zwidth_area_N2_s_per_m2": per(area),
         "zwidth_area_upper_N2_s_per_m2": per(upper),
     }
-
-
-# --- sampled-data passivity ----------------------------------------------------------
-
-
-def _theta(n: int = 2049) -> np.ndarray:
-    return np.linspace(0.0, math.pi, n)
-
-
-def _cs_terms(theta: np.ndarray, d: Any) -> tuple[np.ndarray, np.ndarray]:
-    """(D_d(θ), −cos((d+1)θ)): the K T and B coefficients of the right side of
-    [colgate-schenkel1997]'s condition (module docstring); D_d(0) = d + ½ (the limit)."""
-    half = 0.5 * theta
-    sh = np.sin(half)
-    safe = np.where(sh == 0.0, 1.0, sh)
-    dk = np.where(sh == 0.0, d + 0.5, np.sin((2 * d + 1) * half) / (2.0 * safe))
-    return dk, -np.cos((d + 1) * theta)
-
-
-def sampled_passivity_margin(b: Any, T: Any, K: Any, B: Any = 0.0, d: Any = 0) -> Any:
-    """b − max over 0 ≤ θ ≤ π of the right side of [colgate-schenkel1997]'s condition
-    [N·s/m]: passive iff > 0. Arguments broadcast; evaluated on 2049 θ (with θ = 0 and π,
-    where the d = 0 maximum lies) and zoomed five times on the maximum."""
-    b, T, K, B, d = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (b, T, K, B, d)))
-    shape = b.shape
-    b, T, K, B, d = (np.ravel(x)[:, None] for x in (b, T, K, B, d))
-
-    def rhs(th: np.ndarray) -> np.ndarray:
-        dk, cb = _cs_terms(th, d)
-        return K * T * dk + B * cb
-
-    th0 = np.broadcast_to(_theta(), (b.shape[0], _theta().size))
-    best, _ = _refine_max(th0, rhs)
-    out = (b[:, 0] - best).reshape(shape)
-    return out if shape else float(out)
-
-
-def _refine_max(th0: np.ndarray, f: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Max over θ ∈ [0, π] per row: grid, then five 41-point zooms (clipped to [0, π])."""
-    v = f(th0)
-    rows = np.arange(v.shape[0])
-    j = np.argmax(v, axis=1)
-    best, tb = v[rows, j], th0[rows, j]
-    step = th0[0, 1] - th0[0, 0]
-    zoom = np.linspace(-1.0, 1.0, 41)
-    for _ in range(5):
-        th = np.clip(tb[:, None] + step * zoom, 0.0, math.pi)
-        v = f(th)
-        j = np.argmax(v, axis=1)
-        vb = v[rows, j]
-        better = vb > best
-        best = np.where(better, vb, best)
-        tb = np.where(better, th[rows, j], tb)
-        step /= 20.0
-    return best, tb
-
-
-def encoder_stiffness_limit(coulomb_friction: Any, encoder_resolution: Any) -> Any:
-    """[abbott-okamura2005]: K ≤ 2 f_c/Δ [N/m] (Coulomb friction f_c [N], encoder
-    resolution Δ [m]); inf where Δ = 0 (ideal encoder)."""
-    fc = np.asarray(coulomb_friction, dtype=float)
-    dl = np.asarray(encoder_resolution, dtype=float)
-    if np.any(fc < 0) or np.any(dl < 0):
-        raise ParameterError("coulomb_friction and encoder_resolution must be >= 0")
-    with np.errstate(divide="ignore", invalid="ignore"):
-        out = np.where(dl > 0, 2.0 * fc / np.where(dl > 0, dl, 1.0), np.inf)
-    return out if out.ndim else float(out)
-
-
-def sampled_max_passive_stiffness(
-    b: Any,
-    T: Any,
-    B: Any = 0.0,
-    d: Any = 0,
-    *,
-    coulomb_friction: Any = 0.0,
-    encoder_resolution: Any = 0.0,
-) -> Any:
-    """Largest passive virtual stiffness [N/m] of [colgate-schenkel1997]'s sampled system
-    (module docstring): sup{K : b > K T D_d(θ) − B cos((d+1)θ) ∀θ ∈ [0, π]} =
-    inf over {D_d > 0} of (b + B cos((d+1)θ))/(T D_d(θ)), capped by
-    :func:`encoder_stiffness_limit`. NaN where no K ≥ 0 is passive. d = 0: 2(b − |B|)/T.
-    b [N·s/m] > 0, T [s] > 0, B [N·s/m] any real, d ≥ 0 integer samples; all broadcast."""
-    b, T, B, d = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (b, T, B, d)))
-    if np.any(b <= 0) or np.any(T <= 0) or np.any(d < 0) or np.any(d != np.round(d)):
-        raise ParameterError("need b > 0, T > 0 and an integer delay d >= 0 (samples)")
-    shape = b.shape
-    b, T, B, d = (np.ravel(x)[:, None] for x in (b, T, B, d))
-
-    def neg_ratio(th: np.ndarray) -> np.ndarray:  # −(b + B cos)/(T D) where D > 0
-        dk, cb = _cs_terms(th, d)
-        ok = dk > 0
-        r = (b - B * cb) / (T * np.where(ok, dk, 1.0))
-        return np.where(ok, -r, -np.inf)
-
-    th0 = np.broadcast_to(_theta(), (b.shape[0], _theta().size))
-    kmax = -_refine_max(th0, neg_ratio)[0]
-    # where D_d ≤ 0 the condition is a lower bound K > (b + B cos)/(T D_d) (grid only)
-    dk, cb = _cs_terms(th0, d)
-    rhs0 = b - B * cb
-    neg = dk < 0
-    k_lo = np.max(np.where(neg, rhs0 / (T * np.where(neg, dk, -1.0)), 0.0), axis=1)
-    none = np.any((dk == 0) & (rhs0 <= 0), axis=1) | (kmax < np.maximum(k_lo, 0.0))
-    kmax = np.where(none, np.nan, kmax)
-    kmax = np.minimum(kmax, np.ravel(encoder_stiffness_limit(coulomb_friction, encoder_resolution)))
-    kmax = kmax.reshape(shape)
-    return kmax if shape else float(kmax)
 
 
 # --- stability along a ray (D-subdivision) -------------------------------------------

@@ -17,7 +17,9 @@ from hypothesis import strategies as st
 from scipy.optimize import brentq
 
 from mrclutch.haptics.actuator import HapticParams
-from mrclutch.haptics.model import _k_eff, bandwidth, max_stable_stiffness
+from mrclutch.haptics.bandwidth import bandwidth
+from mrclutch.haptics.impedance import _k_eff
+from mrclutch.haptics.limits import max_stable_stiffness
 
 W = np.logspace(-1.0, 6.0, 100_001)
 

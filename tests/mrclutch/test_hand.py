@@ -30,13 +30,8 @@ from mrclutch.haptics.hand import (
     is_stable_coupled,
     max_stable_stiffness_coupled,
 )
-from mrclutch.haptics.model import (
-    _chi,
-    is_stable,
-    max_passive_stiffness,
-    max_stable_stiffness,
-    passive_impedance,
-)
+from mrclutch.haptics.impedance import passive_impedance
+from mrclutch.haptics.limits import _chi, is_stable, max_passive_stiffness, max_stable_stiffness
 from mrclutch.pipeline import evaluate
 
 TAU = 1e-3

@@ -188,7 +188,7 @@ def test_the_bandwidth_search_is_bounded_in_memory(monkeypatch):
     answer changes: the guard drops work, it never returns a wrong crossing."""
     import numpy as np
 
-    from mrclutch.haptics import model
+    from mrclutch.haptics import bandwidth as model
     from mrclutch.haptics.actuator import HapticParams
 
     rng = np.random.default_rng(0)

@@ -12,20 +12,18 @@ import pytest
 
 from geometry.validation import ParameterError
 from mrclutch.haptics.actuator import TABLE2_MR, HapticParams
-from mrclutch.haptics.model import (
-    _num_coeffs,
-    is_stable,
-    max_passive_stiffness,
-    max_stable_stiffness,
+from mrclutch.haptics.impedance import _num_coeffs
+from mrclutch.haptics.limits import is_stable, max_passive_stiffness, max_stable_stiffness
+from mrclutch.haptics.sampled import (
+    encoder_stiffness_limit,
+    sampled_max_passive_stiffness,
+    sampled_passivity_margin,
 )
 from mrclutch.haptics.zwidth import (
     ZWIDTH_KEYS,
-    encoder_stiffness_limit,
     is_stable_spring_damper,
     max_passive_damping,
     passive_stiffness_interval,
-    sampled_max_passive_stiffness,
-    sampled_passivity_margin,
     zwidth,
 )
 
@@ -272,7 +270,7 @@ def test_sampled_margin_is_the_true_maximum_not_the_grids(b, T, K, B, d):
     dropped the zoom survived the suite)."""
     from scipy.optimize import minimize_scalar
 
-    from mrclutch.haptics.zwidth import _cs_terms, sampled_passivity_margin
+    from mrclutch.haptics.sampled import _cs_terms, sampled_passivity_margin
 
     def rhs(th: float) -> float:
         dk, cb = _cs_terms(np.array([th]), d)

@@ -1,0 +1,230 @@
+"""The limits of the rendered spring on the 2-DOF lever (``mrclutch.haptics.impedance``):
+the largest passive K and the largest stable K (D-subdivision), and the tests at a K.
+
+**Passivity.** Re Z_cl(jω) = Re Z_p(jω) + K g(ω) with g = Re[E (bs+k)/(s D1)] is affine in
+K and Re Z_p ≥ 0, so the passive K form the interval [0, K_p] with
+K_p = inf over {g < 0} of Re Z_p/(−g) (dense log grid, then five 20× zooms on its minimum).
+
+**Stability** (exact for a pure delay, D-subdivision). For K > 0 small, the roots of χ are
+those of s Num (left half-plane) with the rigid-body root moved from 0 to ≈ −K/b1. Roots
+reach the right half-plane only by crossing the imaginary axis (χ is retarded), at jω with
+K E(jω) = −jω Num(jω)/(k + jbω) =: K(ω)·E — i.e. where X(ω) = −jω Num/((k+jbω)E) is real
+and positive, with K_c = X. Every crossing frequency is found (polynomial roots when there
+is no delay; otherwise sign changes of Im X on a grid fine against the delay's phase
+period, refined by Illinois regula falsi, up to a frequency beyond which the lower bound
+ω|Num(jω)|/|k+jbω| ≤ K(ω), increasing there, exceeds the best K_c), with its crossing
+direction sign Re(ds/dK) = Re[−E (bs+k)/χ'(s)]. The number of right-half-plane roots at K
+is 2 Σ sign over crossings with K_c < K: stable iff it is 0. The largest stable K is the
+first K_c where that count turns positive.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from numpy.polynomial import polynomial as P
+
+from geometry.numerics import illinois
+from geometry.validation import ParameterError
+from mrclutch.haptics.actuator import HapticParams
+from mrclutch.haptics.impedance import TWO_PI, _check_K, _hold, _num_coeffs
+
+#: Most frequencies one step of the crossing search may take (memory: 8 bytes each).
+MAX_GRID = 2_000_000
+
+
+def max_passive_stiffness(p: HapticParams) -> Any:
+    """Largest K [N/m] with Re Z_cl(jω) ≥ 0 at every ω (module docstring): inf over g < 0
+    of Re Z_p/(−g), on a log grid 1e-3 Hz – 1 MHz (40 per decade) around each design's
+    minimum, zoomed five times by a 41-point grid over the two neighbouring cells (each
+    zoom narrows the cell 20×: 0.025 → 8e-9 decade; the minimum's value is quadratic in
+    that). inf if g ≥ 0 everywhere. Vectorised over designs."""
+    shape = p.shape
+    m1, b1, k, b, m2, tau, T = (
+        np.ravel(np.broadcast_to(np.asarray(getattr(p, f), float), shape))[:, None]
+        for f in ("m1", "b1", "k", "b", "m2", "delay", "sample_period")
+    )
+    q = HapticParams(m1, b1, k, b, m2, delay=tau, sample_period=T)
+    a3, a2, a1, a0 = _num_coeffs(q)
+
+    def ratio(u: np.ndarray) -> np.ndarray:  # Re Z_p/(−g) where g < 0, else inf
+        w = TWO_PI * 10.0**u
+        s = 1j * w
+        d1 = (m1 * s + (b1 + b)) * s + k  # Eq. 2 denominator
+        g = (_hold(q, w, None) * (b * s + k) / (s * d1)).real
+        re = ((((a3 * s + a2) * s + a1) * s + a0) / d1).real  # Re Z_p, Eq. 2
+        neg = g < 0
+        return np.where(neg, re / np.where(neg, -g, 1.0), np.inf)
+
+    rows = np.arange(m1.shape[0])
+    u = np.broadcast_to(np.linspace(-3.0, 6.0, 361), (rows.size, 361))
+    best = np.full(rows.size, np.inf)
+    zoom = np.linspace(-1.0, 1.0, 41)
+    for _ in range(6):  # the full grid, then five zooms on [j−1, j+1]
+        r = ratio(u)
+        j = np.argmin(r, axis=1)
+        best = np.minimum(best, r[rows, j])
+        if not np.isfinite(best).any():
+            break
+        du = u[:, 1:2] - u[:, 0:1]
+        u = u[rows, j][:, None] + du * zoom
+    return best.reshape(shape) if shape else float(best[0])
+
+
+def is_passive(p: HapticParams, K: Any) -> Any:
+    """Whether the closed loop at K is passive (Re Z_cl ≥ 0 at every frequency)."""
+    return _check_K(K) <= max_passive_stiffness(p) * (1.0 + 1e-9)
+
+
+# --- stability (D-subdivision) -------------------------------------------------------
+
+
+def _scalar(p: HapticParams) -> HapticParams:
+    if p.shape:
+        raise ParameterError(f"design shape = {p.shape}: need one design (scalar fields)")
+    return p
+
+
+def _chi(p: HapticParams, K: Any, s: Any) -> Any:
+    """χ(s) = s Num(s) + K E(s)(bs + k), vectorised over K and s."""
+    a3, a2, a1, a0 = _num_coeffs(p)
+    num = ((a3 * s + a2) * s + a1) * s + a0
+    E = np.exp(-s * p.delay)
+    if p.sample_period > 0:
+        E = E * (1 - np.exp(-s * p.sample_period)) / (s * p.sample_period)
+    return s * num + K * E * (p.b * s + p.k)
+
+
+def _scan_imaginary_axis(
+    X: Callable[[Any], Any],
+    w_a: float,
+    tau: float,
+    lower: Callable[[float], float],
+    limit: float | None,
+    w_lo: float | None = None,
+) -> np.ndarray:
+    """Frequencies ω > 0 [rad/s] where Im X(ω) changes sign (D-subdivision: a crossing of
+    the imaginary axis where X, the gain that puts a root at jω, is real and > 0).
+
+    Log grid below ω_a (the largest mode; from ``w_lo`` if lower), then linear chunks of
+    doubling span with a step fine against both the delay's phase period π/(16τ) and the
+    modes, each bracket refined by regula falsi. ``lower(ω)``: an increasing lower bound
+    on |X| for ω ≥ ω_a; the scan stops once it exceeds ``limit`` (None: the smallest real
+    positive X found so far, i.e. up to the first crossing) or at 10⁴ (ω_a + 1/τ)."""
+    step = min(w_a / 50.0, math.pi / (16.0 * tau))
+    grid = w_a * np.logspace(-4, 0, 401)
+    if w_lo is not None and w_lo < grid[0]:  # a slow mode below the grid: start lower
+        grid = np.concatenate([np.geomspace(w_lo, grid[0], 101)[:-1], grid])
+    found, best = [], math.inf
+    while True:
+        xi = X(grid).imag
+        sc = np.nonzero(np.sign(xi[:-1]) * np.sign(xi[1:]) < 0)[0]
+        w = illinois(lambda _, x: X(x).imag, grid[sc], grid[sc + 1], xi[sc], xi[sc + 1], 1e-13)
+        found.append(w)
+        xv = X(w)
+        ok = (xv.real > 0) & (np.abs(xv.imag) <= 1e-6 * np.abs(xv))
+        best = min(best, float(np.min(xv.real[ok]))) if ok.any() else best
+        w_end = float(grid[-1])
+        if (w_end >= w_a and lower(w_end) > (best if limit is None else limit)) or (
+            w_end > 1e4 * (w_a + 1 / tau)
+        ):
+            break
+        n = math.ceil(w_end / step) + 1
+        if n > MAX_GRID:  # an absurd delay or stiffness: refuse rather than fill memory
+            raise StabilitySearchError(
+                f"stability search: delay {tau:.3g} s needs more than {MAX_GRID:.0e} "
+                "frequencies per scan step; not a haptic loop"
+            )
+        grid = np.linspace(w_end, 2 * w_end, n)
+    return np.concatenate(found)
+
+
+def _crossings(
+    p: HapticParams, k_stop: float | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Imaginary-axis crossings of χ for one design: frequencies ω_c [rad/s], gains K_c
+    [N/m] and directions sign Re(ds/dK) (+1: into the right half-plane) — every crossing
+    with K_c ≤ ``k_stop`` (None: up to the smallest K_c, the stability limit), possibly
+    more. Above ω_a (the largest |root| of Num) the bound K(ω) ≥ ω|Num(jω)|/|k + jbω| is
+    increasing, so the scan stops where it exceeds the gains sought."""
+    a = _num_coeffs(p)
+    roots = np.roots(a)
+    w_a = float(np.max(np.abs(roots)))
+    tau = p.delay + 0.5 * p.sample_period
+
+    def X(w: Any) -> Any:  # K(ω)·e^{jφ}: crossing where X is real and > 0
+        s = 1j * np.asarray(w, dtype=float)
+        num = ((a[0] * s + a[1]) * s + a[2]) * s + a[3]
+        return -s * num / ((p.b * s + p.k) * _hold(p, np.asarray(w, float), None))
+
+    def real_positive(xv: np.ndarray) -> np.ndarray:
+        return (xv.real > 0) & (np.abs(xv.imag) <= 1e-6 * np.abs(xv))
+
+    if tau == 0.0:
+        # Im[−jωNum(jω)(k − jbω)] is a polynomial in ω: its positive real roots, exactly.
+
+        c = np.array(a[::-1], dtype=complex) * (1j ** np.arange(4))  # Num(jω) in ω
+        poly = P.polymul(P.polymul([0, -1j], c), [p.k, -1j * p.b])
+        rts = np.roots(poly.imag[::-1])
+        wc = np.sort(rts.real[(np.abs(rts.imag) < 1e-9 * np.abs(rts)) & (rts.real > 0)])
+    else:
+
+        def lower(w: float) -> float:  # |X| ≥ ω|Num(jω)|/|k + jbω| (|E| ≤ 1), increasing
+            return abs(1j * w * np.polyval(a, 1j * w)) / abs(p.k + p.b * 1j * w)
+
+        wc = _scan_imaginary_axis(X, w_a, tau, lower, k_stop)
+    xv = X(wc)
+    ok = real_positive(xv)
+    wc, Kc = wc[ok], xv.real[ok]
+    s, h = 1j * wc, 1e-6 * wc
+    dchi = (_chi(p, Kc, s + h) - _chi(p, Kc, s - h)) / (2 * h)
+    dchi_dK = _chi(p, Kc + 1.0, s) - _chi(p, Kc, s)  # ∂χ/∂K = E (bs + k)
+    dirs = np.sign((-dchi_dK / dchi).real)
+    order = np.argsort(Kc)
+    return wc[order], Kc[order], dirs[order]
+
+
+class StabilitySearchError(ParameterError):
+    """The stability scan would need more than MAX_GRID frequencies per step."""
+
+
+def max_stable_stiffness(p: HapticParams) -> Any:
+    """Largest K [N/m] such that the free closed loop is stable for every K in (0, K]:
+    the first crossing gain at which the count of right-half-plane roots turns positive
+    (module docstring; exact for a pure delay). inf if no crossing destabilises; NaN where
+    the scan would need more than MAX_GRID frequencies a step (StabilitySearchError: an
+    extreme transmission or delay), so the limit is unknown.
+    Vectorised fields are handled design by design (slower than the numeric metrics)."""
+    if p.shape:
+        n = int(np.prod(p.shape))
+        flat = HapticParams(
+            **{f: np.ravel(np.broadcast_to(getattr(p, f), p.shape)) for f in _FIELDS}
+        )
+        return np.array([max_stable_stiffness(flat.item(i)) for i in range(n)]).reshape(p.shape)
+    try:
+        _, Kc, dirs = _crossings(p)
+    except StabilitySearchError:  # the scan cannot resolve this loop: the limit is unknown
+        return math.nan
+    count = np.cumsum(2 * dirs)
+    bad = np.nonzero(count > 0)[0]
+    return float(Kc[bad[0]]) if bad.size else math.inf
+
+
+_FIELDS = ("m1", "b1", "k", "b", "m2", "delay", "f_max", "workspace", "sample_period")
+
+
+def is_stable(p: HapticParams, K: float) -> bool:
+    """Whether the free closed loop at K has no root with Re s ≥ 0 (D-subdivision count).
+    K = 0 is the backdriven device: marginally stable (rigid-body root at 0), reported True.
+    """
+    K = _check_K(K)
+    _scalar(p)
+    if K == 0:
+        return True
+    _, Kc, dirs = _crossings(p, k_stop=K)
+    if np.any(np.isclose(Kc, K, rtol=1e-12)):
+        return False
+    return bool(np.sum(2 * dirs[Kc < K]) == 0)
