@@ -348,9 +348,12 @@ def optimize(
     maxiter: int = 60,
     popsize: int = 24,
     robust: Any = None,
+    progress: Callable[[int, int], None] | None = None,
 ) -> Optimum:
     """Best design on the fast path (see module docstring). ``robust``: as ``pareto``'s, a
-    limit on the final populations' members that meet every other limit."""
+    limit on the final populations' members that meet every other limit. ``progress``:
+    called (generations done, ``maxiter`` × the drum counts) after each generation and when
+    a drum count's search ends (it may end early, converged)."""
     from scipy.optimize import differential_evolution
 
     check_choice("objective", objective, tuple(OBJECTIVES))
@@ -362,6 +365,16 @@ def optimize(
     key = OBJECTIVES[objective]
     sign = -1.0 if objective in MINIMISED else 1.0
     evaluations = 0
+    generations, total = 0, maxiter * len(drum_counts)
+
+    def reached(n: int) -> None:
+        nonlocal generations
+        generations = max(generations, min(n, total))
+        if progress is not None:
+            progress(generations, total)
+
+    def generation_done(intermediate_result: Any) -> None:  # scipy's, after each generation
+        reached(generations + 1)
 
     def _pop_fields(x: np.ndarray, n: int) -> dict[str, np.ndarray]:
         fields = {k: x[i] for i, k in enumerate(names)}
@@ -405,6 +418,7 @@ def optimize(
             popsize=popsize,
             tol=1e-8,
             polish=False,
+            **({} if progress is None else {"callback": generation_done}),
         )
         return res.population[np.argsort(res.population_energies)].T
 
@@ -431,8 +445,9 @@ def optimize(
     per_count: dict[int, float] = {}
     again = 0
     stability_in_search = cons.stable and not cons.passive
-    for n in drum_counts:
+    for i, n in enumerate(drum_counts):
         found, rest_met = feasible_of(search(n, stability_in_search), n)
+        reached((i + 1) * maxiter)
         if not found and rest_met and cons.stable and not stability_in_search:
             # members meet every other limit but none is stable: search again with
             # stability in the penalty
