@@ -37,33 +37,89 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike
 
-from geometry import regions
 from geometry.materials import SLOTS, MaterialChoice
-from geometry.params import (
-    INTEGER_FIELDS,
-    LENGTH_FIELDS,
-    LENGTH_RANGES,
-    valid,
+from geometry.params import INTEGER_FIELDS, LENGTH_FIELDS, LENGTH_RANGES
+from geometry.validation import ParameterError, check_choice, check_int
+from mrclutch.design import ClutchDesign
+from mrclutch.optimize.limits import (
+    ACTIVE,
+    CONTINUOUS,
+    PAPER_CONTINUOUS_ABOVE_DRAG,
+    ROBUST_COLUMNS,
+    Constraints,
+    active_limits,
+    evaluate_rows,
+    limit_columns,
 )
-from geometry.validation import (
-    ParameterError,
-    check_choice,
-    check_int,
-    check_positive,
-    check_range,
-)
-from magnetics import thermal
-from mrclutch.design import ClutchDesign, current_limit
-from mrclutch.duty import duty_batch
-from mrclutch.feel import feel_batch
-from mrclutch.haptics.actuator import HapticParams
-from mrclutch.haptics.model import bandwidth, max_passive_stiffness
-from mrclutch.pipeline import batch_fields, evaluate_batch, fluid_limit
+from mrclutch.optimize.worst_case import WorstCase, process_uncertainty, robust_verdict
 from mrclutch.process import MAX_ECCENTRICITY
-from mrclutch.robust import hand_box_batch, robust_columns_batch
-from mrclutch.uncertainty import Uncertainty, default_uncertainty
+
+__all__ = [
+    "ACTIVE",
+    "CONTINUOUS",
+    "DEFAULT_BOUNDS",
+    "DEFAULT_MEMBERS",
+    "EDGE",
+    "MAX_CANDIDATES",
+    "MAX_ROBUST",
+    "MINIMISED",
+    "OBJECTIVES",
+    "PAPER_CONTINUOUS_ABOVE_DRAG",
+    "PARETO_OBJECTIVES",
+    "RENDERING",
+    "ROBUST_COLUMNS",
+    "Candidate",
+    "Constraints",
+    "Member",
+    "Optimum",
+    "ParetoSet",
+    "WorstCase",
+    "active_limits",
+    "evaluate_rows",
+    "limit_columns",
+    "optimize",
+    "pareto",
+    "parse_bounds",
+    "process_uncertainty",
+    "range_edges",
+    "robust_verdict",
+    "search_box",
+]
+
+
+__all__ = [
+    "ACTIVE",
+    "CONTINUOUS",
+    "DEFAULT_BOUNDS",
+    "DEFAULT_MEMBERS",
+    "EDGE",
+    "MAX_CANDIDATES",
+    "MAX_ROBUST",
+    "MINIMISED",
+    "OBJECTIVES",
+    "PAPER_CONTINUOUS_ABOVE_DRAG",
+    "PARETO_OBJECTIVES",
+    "RENDERING",
+    "ROBUST_COLUMNS",
+    "Candidate",
+    "Constraints",
+    "Member",
+    "Optimum",
+    "ParetoSet",
+    "WorstCase",
+    "active_limits",
+    "evaluate_rows",
+    "limit_columns",
+    "optimize",
+    "pareto",
+    "parse_bounds",
+    "process_uncertainty",
+    "range_edges",
+    "robust_verdict",
+    "search_box",
+]
+
 
 #: objective → the evaluate_batch column it reads.
 OBJECTIVES = {
@@ -82,199 +138,6 @@ DEFAULT_BOUNDS: dict[str, tuple[float, float]] = {
     "drum_inner_diameter": (6e-3, 18e-3),
     "zone_length": (3e-3, 9e-3),
 }
-
-
-#: N·m: continuous torque above the off-state drag of the paper's clutch on the fast
-#: path (0.0451 − 0.0041 N·m at 530 rpm; reference fidelity the same to 2 digits), the
-#: default floor of ``Constraints.min_continuous_torque`` (tests/mrclutch/test_optimize.py
-#: re-measures it).
-PAPER_CONTINUOUS_ABOVE_DRAG = 0.041
-
-
-@dataclass(frozen=True)
-class Constraints:
-    """Limits the optimum must meet (SI). ``max_power`` and ``peak_time`` default (None) to
-    the design's own: the amplifier's supply voltage × the current limit, and the operating
-    point's peak duration (``resolved``)."""
-
-    min_torque: float = 0.4  # N·m, Table 1's rated torque
-    max_mass: float = 0.100  # kg, whole clutch
-    max_diameter: float = 0.030  # m, Table 1 envelope
-    max_length: float = 0.040  # m
-    passive: bool = True  # a passive closed loop at K = K_max (Eq. 4)
-    stable: bool = True  # a stable free closed loop at K = K_max
-    #: N·m held forever above the off-state drag (slipping at the input speed; 0: none)
-    min_continuous_torque: float = PAPER_CONTINUOUS_ABOVE_DRAG
-    max_power: float | None = None  # W of coil heat at the current limit
-    peak_time: float | None = None  # s at the peak current before the wire or fluid limit
-    duty_torque: float = 0.0  # N·m (yield + drag) held for duty_time s (0: no duty cycle)
-    duty_time: float = 0.0  # s
-    #: N·m left at 0 A after the current limit (mrclutch.feel; None: no limit)
-    max_residual_torque: float | None = None
-    #: N of runout ripple at the hand (mrclutch.feel; None: no limit)
-    max_ripple_force: float | None = None
-    #: h of fluid life at the base design's [duty] (mrclutch.duty; None: no limit)
-    min_life: float | None = None
-
-    def __post_init__(self) -> None:
-        check_positive("min_torque", self.min_torque, " N·m")
-        check_positive("max_mass", self.max_mass, " kg")
-        check_positive("max_diameter", self.max_diameter, " m")
-        check_positive("max_length", self.max_length, " m")
-        check_range("min_continuous_torque", self.min_continuous_torque, 0.0, 1e3, " N·m")
-        if self.max_power is not None:
-            check_positive("max_power", self.max_power, " W")
-        if self.peak_time is not None:
-            check_range("peak_time", self.peak_time, 0.0, 1e6, " s")
-        check_range("duty_torque", self.duty_torque, 0.0, 1e3, " N·m")
-        check_range("duty_time", self.duty_time, 0.0, 1e7, " s")
-        if self.max_residual_torque is not None:
-            check_positive("max_residual_torque", self.max_residual_torque, " N·m")
-        if self.max_ripple_force is not None:
-            check_positive("max_ripple_force", self.max_ripple_force, " N")
-        if self.min_life is not None:
-            check_positive("min_life", self.min_life, " h")
-        if (self.duty_torque > 0) != (self.duty_time > 0):
-            raise ParameterError(
-                f"duty cycle: duty_torque = {self.duty_torque:g} N·m and "
-                f"duty_time = {self.duty_time:g} s: give both or neither"
-            )
-        for name in ("passive", "stable"):
-            if not isinstance(getattr(self, name), bool):
-                raise ParameterError(f"{name} = {getattr(self, name)!r}: must be True or False")
-
-    def resolved(self, base: ClutchDesign) -> Constraints:
-        """The limits with the design's defaults filled in (max_power, peak_time)."""
-        power = self.max_power
-        if power is None:  # what the amplifier delivers at its limits: P = V·I
-            power = base.amplifier.supply_voltage * base.operating.max_current
-        peak = self.peak_time if self.peak_time is not None else base.operating.peak_duration
-        return replace(self, max_power=power, peak_time=peak)
-
-    def terms(self, r: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """Each limit as g ≤ 0 (relative: g = value/limit − 1 or 1 − value/limit), by name;
-        ``r``: evaluate_rows' columns. Needs ``resolved`` limits. Stability is a term where
-        ``max_stable_K_N_per_m`` is present, the robust verdict where the worst-case
-        columns are."""
-        if self.max_power is None or self.peak_time is None:
-            raise ParameterError("Constraints.terms: resolve the limits first (resolved(base))")
-        g = {
-            "torque": 1 - r["max_torque_N_m"] / self.min_torque,
-            "mass": r["clutch_mass_kg"] / self.max_mass - 1,
-            "diameter": r["diameter_m"] / self.max_diameter - 1,
-            "length": r["length_m"] / self.max_length - 1,
-            "power": r["coil_power_W"] / self.max_power - 1,
-        }
-        if self.min_continuous_torque > 0:
-            g["continuous torque"] = 1 - r[CONTINUOUS] / self.min_continuous_torque
-        if self.peak_time > 0:
-            g["time at peak"] = 1 - r["time_at_peak_s"] / self.peak_time
-        if self.duty_time > 0:
-            g["duty cycle"] = 1 - r["time_at_duty_s"] / self.duty_time
-        if self.max_residual_torque is not None:
-            g["residual torque"] = r["residual_torque_N_m"] / self.max_residual_torque - 1
-        if self.max_ripple_force is not None:
-            g["ripple"] = r["ripple_force_N"] / self.max_ripple_force - 1
-        if self.min_life is not None:
-            g["fluid life"] = 1 - r["fluid_life_h"] / self.min_life
-        if self.passive:
-            g["passive"] = r["K_N_per_m"] / r["max_passive_K_N_per_m"] - 1
-        if self.stable and "max_stable_K_N_per_m" in r:
-            # stable for K below the first destabilising crossing (model.max_stable_stiffness)
-            g["stable"] = r["K_N_per_m"] / r["max_stable_K_N_per_m"] - (1 - 1e-9)
-        for key, col in ROBUST_COLUMNS.items():
-            if col in r and (self.stable if key == "robust stable" else self.passive):
-                g[key] = r["K_N_per_m"] / r[col] - (1 - 1e-9)
-        bad = r["valid"] != 1
-        return {k: np.where(bad, np.inf, np.nan_to_num(v, nan=np.inf, neginf=-1.0))
-                for k, v in g.items()}  # fmt: skip
-
-    def violation(self, r: Mapping[str, np.ndarray]) -> np.ndarray:
-        """Sum of relative violations (0 where every limit holds; inf for invalid designs)."""
-        v = sum(np.maximum(0, g) for g in self.terms(r).values())
-        return np.where(r["valid"] == 1, np.nan_to_num(np.asarray(v, dtype=float), nan=np.inf),
-                        np.inf)  # fmt: skip
-
-
-#: The column of the continuous torque above the off-state drag (N·m).
-CONTINUOUS = "continuous_above_drag_N_m"
-#: The robust verdict's columns (worst case over the uncertainty ranges), when computed.
-ROBUST_COLUMNS = {
-    "robust stable": "max_stable_K_worst_N_per_m",
-    "robust passive": "max_passive_K_worst_N_per_m",
-}
-
-
-def limit_columns(fields: Mapping[str, ArrayLike], base: ClutchDesign,
-                  r: Mapping[str, np.ndarray], duty_torque: float = 0.0
-                  ) -> dict[str, np.ndarray]:  # fmt: skip
-    """The builder's limits' columns of S designs beside ``evaluate_batch``'s ``r``:
-    coil power at the current limit (I²R at the coil temperature), seconds at the peak
-    (the current limit, holding the peak torque while slipping at the input speed) before
-    the wire or the fluid limit, the continuous torque above the off-state drag and, with
-    ``duty_torque``, the seconds at that torque. Same thermal network and transient as
-    ``evaluate`` (``pipeline.thermal_figures``); the duty's current is read on the chord
-    from 0 to the peak (yield torque ∝ current): the yield torque is concave in the
-    current (Carlson's tanh law [carlson], saturating steel), so the chord's current is at
-    least the true one and its time a lower bound."""
-    p, mats = batch_fields(fields, base)  # a material column: per row (issue 33)
-    ok = valid(p) & (np.asarray(r["valid"]) == 1)
-    op = base.operating
-    current = current_limit(op, p["wire_diameter"])
-    peak, off = np.asarray(r["max_torque_N_m"]), np.asarray(r["off_state_torque_N_m"])
-    w = op.input_speed
-
-    def fn(rg: regions.Regions, rows: np.ndarray) -> dict[str, np.ndarray]:
-        limit = fluid_limit(rg.materials)
-        net = thermal.network(rg, op.ambient_temperature, limit)
-        i = current[rows]
-        # R(T) = R20 (1 + α (T − 20)) (magnetics.thermal)
-        power = i * i * net.r20 * (1 + thermal.ALPHA_CU * (op.coil_temperature - 20.0))
-        tw, tf = thermal.time_to_limits_batch(net, i, peak[rows] * w,
-                                              op.wire_temperature_limit, limit)  # fmt: skip
-        out = {"coil_power_W": power, "time_at_peak_s": np.minimum(tw, tf)}
-        if duty_torque > 0:
-            y = peak[rows] - off[rows]
-            i_d = i * np.clip((duty_torque - off[rows]) / y, 0.0, None)
-            dw, df = thermal.time_to_limits_batch(
-                net, i_d, duty_torque * w, op.wire_temperature_limit, limit
-            )
-            out["time_at_duty_s"] = np.where(duty_torque <= peak[rows], np.minimum(dw, df), 0.0)
-        return out
-
-    out = regions.per_topology(p, ok, fn, mats)
-    out[CONTINUOUS] = np.asarray(r["continuous_torque_N_m"]) - off
-    if duty_torque <= 0:
-        out["time_at_duty_s"] = np.full(off.shape, np.inf)
-    return out
-
-
-def evaluate_rows(
-    fields: Mapping[str, ArrayLike],
-    base: ClutchDesign,
-    cons: Constraints,
-    *,
-    stability: bool = False,
-    zwidth: bool = False,
-) -> dict[str, np.ndarray]:
-    """``evaluate_batch`` (passivity as ``cons`` asks) and ``limit_columns``: every column
-    ``Constraints.terms`` reads."""
-    r = evaluate_batch(fields, base, passivity=cons.passive, stability=stability,
-                       zwidth=zwidth)  # fmt: skip
-    out = {**r, **limit_columns(fields, base, r, cons.duty_torque)}
-    feel = tuple(
-        k
-        for k, on in (
-            ("residual_torque_N_m", cons.max_residual_torque),
-            ("ripple_force_N", cons.max_ripple_force),
-        )
-        if on is not None
-    )
-    if feel:  # the steel's memory and the runout ripple (mrclutch.feel)
-        out.update(feel_batch(fields, base, feel))
-    if cons.min_life is not None:  # the fluid's life at the base's [duty] (mrclutch.duty)
-        out.update(duty_batch(fields, base, out))
-    return out
 
 
 #: How many ranked candidates ``optimize`` keeps for a check at higher fidelity.
@@ -516,8 +379,8 @@ RENDERING = {"bandwidth": "bandwidth_hz", "zwidth": "zwidth_area_N2_s_per_m2"}
 DEFAULT_MEMBERS = 14
 #: At most this many worst-case checks per member asked for (each ≈ 9 ms a design).
 MAX_ROBUST = 4
-#: A limit is *active* at a member when its relative term g lies within this of 0.
-ACTIVE = 0.02
+
+
 #: A member *touches* a search-range edge within this fraction of the range.
 EDGE = 0.01
 
@@ -545,11 +408,6 @@ class ParetoSet:
     drum_counts: tuple[int, ...]
     robust: str  # how the verdict was taken ("nominal: …" or "worst case …")
     front: Mapping[str, np.ndarray]  # every front design's objective columns (for plots)
-
-
-def active_limits(cons: Constraints, r: Mapping[str, np.ndarray], j: int) -> tuple[str, ...]:
-    """The limits within ACTIVE of binding at row j (``cons`` resolved)."""
-    return tuple(k for k, g in cons.terms(r).items() if abs(float(g[j])) <= ACTIVE)
 
 
 def range_edges(
@@ -795,79 +653,3 @@ def _spread(f: np.ndarray, k: int) -> list[int]:
         picked.append(j)
         dist = np.minimum(dist, np.linalg.norm(z - z[j], axis=-1))
     return picked
-
-
-def process_uncertainty(base: ClutchDesign) -> Uncertainty:
-    """The uncertainty ranges the optimiser's worst case takes: the design's declared
-    ``[uncertainty]`` if it has one; otherwise ``default_uncertainty`` (viscosity, fluid
-    temperature, delay, bench damping, yield-stress and B–H lots; docs/verdicts.md) with the
-    manufacturing ranges of its ``[process]``: the runout as the drums' eccentricity and
-    the tolerance as the gap's."""
-    if base.uncertainty is not None:
-        return base.ranges  # the declared ranges ("duty" resolved: mrclutch.hot_range)
-    pr = base.process
-    return replace(default_uncertainty(base), runout=pr.runout, gap_tolerance=pr.tolerance)
-
-
-@dataclass(frozen=True)
-class WorstCase:
-    """The haptic verdict over the uncertainty ranges, for ``pareto`` and ``optimize``.
-
-    Over ranges this wide no clutch keeps its K_max = F_max/d passive (docs/optimize.md),
-    so a design renders the largest K the worst case allows, K = min(K_max, worst-case
-    largest passive K, worst-case largest stable K), and its bandwidth is taken at that K
-    (``bandwidth_hz`` of its rows; K_max stays under ``K_max_N_per_m``).
-
-    * ``proxy`` (every design of the search): the worst-case passive K at the corner
-      (m1⁺, b1⁻, τ⁺) of the hand box without the geometry's tolerance corners (no extra
-      fast-path evaluation; passivity is monotone there: ``mrclutch.robust``);
-    * ``full`` (the members): ``robust_columns_batch``, the tolerance corners and the
-      bounded search of the stable K included; K is taken again from it, so every member
-      holds its K over the ranges by construction."""
-
-    uncertainty: Uncertainty
-
-    def _box(self, fields: Mapping[str, ArrayLike], base: ClutchDesign,
-             r: Mapping[str, np.ndarray]) -> Any:  # fmt: skip
-        """The hand box without the geometry's tolerance corners (no fast-path run)."""
-        unc = replace(self.uncertainty, gap_tolerance=0.0, drum_thickness_tolerance=0.0)
-        return hand_box_batch(fields, base, unc, nominal=r)
-
-    @staticmethod
-    def _at(box: Any, r: Mapping[str, np.ndarray], k_cap: np.ndarray) -> dict[str, np.ndarray]:
-        """K = min(K_max, k_cap) and the nominal bandwidth at it."""
-        k_max = np.asarray(r["K_max_N_per_m"] if "K_max_N_per_m" in r else r["K_N_per_m"],
-                           dtype=float)  # fmt: skip
-        k = np.minimum(k_max, k_cap)  # NaN (no finite worst case) stays NaN: refused
-        ok = np.isfinite(k) & (k > 0) & box.valid
-        bw = np.full(k.shape, np.nan)
-        if ok.any():  # the nominal pair of the valid rows only (an invalid row is NaN)
-            sub = HapticParams(box.m1[0][ok], box.b1[0][ok], box.k[ok], box.b[ok], box.m2[ok],
-                               delay=box.delay[0][ok])  # fmt: skip
-            bw[ok] = bandwidth(sub, k[ok])
-        return {"K_max_N_per_m": k_max, "K_N_per_m": k, "bandwidth_hz": bw}
-
-    def proxy(self, fields: Mapping[str, ArrayLike], base: ClutchDesign,
-              r: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:  # fmt: skip
-        box = self._box(fields, base, r)
-        kp = np.full(box.valid.shape, np.nan)
-        ok = box.valid
-        if ok.any():
-            (_, _, mhi), (_, blo, _), (_, _, thi) = box.m1, box.b1, box.delay
-            sub = HapticParams(mhi[ok], blo[ok], box.k[ok], box.b[ok], box.m2[ok],
-                               delay=thi[ok])  # fmt: skip
-            kp[ok] = max_passive_stiffness(sub)
-        return self._at(box, r, kp)
-
-    def full(self, fields: Mapping[str, ArrayLike], base: ClutchDesign,
-             r: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:  # fmt: skip
-        cols = robust_columns_batch(fields, base, self.uncertainty)
-        ks, kp = cols["max_stable_K_worst_N_per_m"], cols["max_passive_K_worst_N_per_m"]
-        out = self._at(self._box(fields, base, r), r, np.minimum(kp, ks) * (1 - 1e-6))
-        return {**out, **{c: cols[c] for c in ROBUST_COLUMNS.values()}}
-
-
-def robust_verdict(base: ClutchDesign, uncertainty: Uncertainty | None = None) -> WorstCase:
-    """The worst case for ``pareto(robust=...)`` and ``optimize(robust=...)`` over
-    ``uncertainty`` (None: ``process_uncertainty(base)``)."""
-    return WorstCase(uncertainty if uncertainty is not None else process_uncertainty(base))

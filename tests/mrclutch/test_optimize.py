@@ -251,7 +251,7 @@ def test_stability_is_searched_again_when_no_passive_member_is_stable(monkeypatc
     """The strategy's fallback: a stand-in physics where every gap under 0.8 mm is unstable
     at its K (the passive search's population holds no wider gap that is passive) sends the
     drum count to a second search with stability in the penalty, whose optimum is stable."""
-    import mrclutch.optimize as opt_mod
+    import mrclutch.optimize.limits as opt_limits
 
     def batch(fields, base, **kw):
         r = evaluate_batch(fields, base, **kw)
@@ -260,7 +260,7 @@ def test_stability_is_searched_again_when_no_passive_member_is_stable(monkeypatc
             r["max_stable_K_N_per_m"] = np.where(small_gap, 0.5, 2.0) * r["K_N_per_m"]
         return r
 
-    monkeypatch.setattr(opt_mod, "evaluate_batch", batch)
+    monkeypatch.setattr(opt_limits, "evaluate_batch", batch)
     # Only ~0.2 % of the box meets every limit with gaps ≥ 0.8 mm at 4 drums (uniform
     # draws): 10 members per parameter found it with the torque before the fringe's
     # laminate (issue 12) and missed it after, 16 find it
