@@ -22,6 +22,8 @@ from magnetics.hysteresis import HYSTERESIS, coercive_current
 from magnetics.materials import MATERIALS, MU0, LinearMaterial
 from magnetics.torque import torque_curve
 
+pytestmark = pytest.mark.slow  # FEM solves: ~40 s for the module on a 2-core machine
+
 SIZE = 0.5e-3  # m: the residual torque moves < 1 % from 0.5 to 0.25 mm on both designs
 PAPER = build_section(preset("paper"))
 #: A design whose residual is not negligible: 0.15 mm gaps (the gap needs less MMF, so the
