@@ -159,6 +159,12 @@ def main() -> None:
         for cmd in ("evaluate --preset paper", *INTERACTIVE.values()):  # the first runs
             _run(_mrclutch(cmd, tmp), env, ROOT)
         print(f"{'command':44s} {'median s':>9s} {'CPU s':>6s}  goal")
+        # the floor under every command: the interpreter and numpy (on the same load)
+        runs = [_run([sys.executable, "-c", "import numpy"], env, ROOT) for _ in range(a.rounds)]
+        floor = "(floor) python -c 'import numpy'"
+        print(f"{floor:44s} "
+              f"{statistics.median(r[0] for r in runs):9.2f} "
+              f"{statistics.median(r[2] for r in runs):6.2f}")  # fmt: skip
         for name, cmd in INTERACTIVE.items():
             runs = [_run(_mrclutch(cmd, tmp), env, ROOT) for _ in range(a.rounds)]
             med = statistics.median(r[0] for r in runs)
