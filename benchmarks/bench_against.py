@@ -7,6 +7,12 @@ subprocesses of each tree, the sweep's evaluator (``evaluate_batch`` on random d
 1–4 drums, the spec of examples/random_sweep.toml's ranges) and ``mrclutch --help``.
 Prints the median time of each and the ratio current/base (< 1: faster now). Alternating
 rounds keep the ratio honest on a shared, noisy machine.
+
+``--robust-designs N`` (default 300; 0: skip) also times, in each tree, the sweep's robust
+columns (``RobustBatchEvaluator`` with the three worst-case columns, what ``sweep --with
+max_stable_K_worst_N_per_m …`` runs) against the default columns (``BatchEvaluator``) on
+the same N designs (bench_robust's), and prints robust/default of each tree (issue 40's
+goal: ≤ 10×), CPU time (the machine is shared).
 """
 
 from __future__ import annotations
@@ -39,6 +45,25 @@ t, c = time.perf_counter(), time.process_time()
 for i in range(0, S, chunk):
     out = evaluate_batch({k: v[i:i + chunk] for k, v in f.items()})
 print(time.perf_counter() - t, time.process_time() - c)
+"""
+
+ROBUST = r"""
+import sys, time
+sys.path.insert(0, "benchmarks")
+from bench_robust import fields
+from mrclutch.design import design_preset
+from mrclutch.pipeline import BatchEvaluator
+from mrclutch.robust import ROBUST_COLUMNS, RobustBatchEvaluator
+d = design_preset("paper")
+f = fields(int(sys.argv[1]))
+plain, robust = BatchEvaluator(d), RobustBatchEvaluator(d, ROBUST_COLUMNS)
+plain(f)  # warm-up (imports, caches)
+def cpu(fn):
+    c = time.process_time()
+    fn(f)
+    return time.process_time() - c
+t_plain = sorted(cpu(plain) for _ in range(3))[1]
+print(t_plain, cpu(robust))
 """
 
 HELP = r"""
@@ -77,6 +102,7 @@ def main() -> None:
     ap.add_argument("--base", required=True, help="git revision to compare with")
     ap.add_argument("--designs", type=int, default=100_000)
     ap.add_argument("--rounds", type=int, default=5)
+    ap.add_argument("--robust-designs", type=int, default=300)
     a = ap.parse_args()
     with base_tree(a.base) as base:
         for name, code, args in (
@@ -95,6 +121,18 @@ def main() -> None:
                     f"{'':<38} rows/s now {a.designs / mn:.0f}, base {a.designs / mb:.0f}; "
                     f"per CPU second now {a.designs / cn:.0f}, base {a.designs / cb:.0f}"
                 )
+        if a.robust_designs > 0:  # the robust columns against the default, in each tree
+            ratio = {}
+            for tree, label in ((ROOT, "now"), (base, "base")):
+                t_plain, t_robust = _time(tree, ROBUST, str(a.robust_designs))
+                ratio[label] = t_robust / t_plain
+                print(
+                    f"robust columns, {a.robust_designs} designs ({label}): default "
+                    f"{t_plain:.3f} s, robust {t_robust:.3f} s CPU: ratio {ratio[label]:.1f}x"
+                )
+            print(
+                f"robust/default now {ratio['now']:.1f}x, base {ratio['base']:.1f}x (goal <= 10x)"
+            )
 
 
 if __name__ == "__main__":

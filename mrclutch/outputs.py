@@ -236,7 +236,7 @@ SWEEP_COLUMNS: tuple[str, ...] = (
 #: each with its cost relative to the default row (docs/sweeps.md).
 SWEEP_OPTIONAL: tuple[str, ...] = (
     "max_passive_K_N_per_m",  # about ×1.7
-    "max_stable_K_N_per_m",  # design by design, about ×8
+    "max_stable_K_N_per_m",  # the batch D-subdivision (mrclutch.robust_search)
     "zwidth_area_N2_s_per_m2",  # about ×7
     # over the uncertain inputs (mrclutch.robust.RobustBatchEvaluator; benchmarks/bench_robust.py)
     "max_stable_K_worst_N_per_m",

@@ -24,6 +24,8 @@ _LOG_POINTS = 300
 _PHASE_STEP = 0.25
 #: Most linear points a batch may take before designs go to the exact kernel one by one.
 _MAX_LINEAR = 4000
+#: Turns of the delay's phase (2π/τ each) beyond ω_a that the first, short scan covers.
+_TURNS = 3
 
 
 def stable_stiffness_batch(p: HapticParams) -> np.ndarray:
@@ -34,11 +36,16 @@ def stable_stiffness_batch(p: HapticParams) -> np.ndarray:
     first crossing met as K grows is destabilising: the stability limit is min K_c.
 
     Crossings are the sign changes of Im X on a grid of each design (log-spaced over
-    [1e-4 ω_a, ω_end], ω_a the largest |zero| of Num, ω_end = max(4 ω_a, 4/τ), merged with a
-    linear grid of step 0.25/τ), refined by Illinois regula falsi. Where the bound
-    |X(ω_end)| (increasing beyond ω_a) does not exceed the smallest K_c found, where no
-    crossing is found, or where a sample-and-hold is modelled, the design is handed to the
-    exact kernel. Returns inf where no crossing destabilises."""
+    [1e-4 ω_a, ω_top], ω_a the largest |zero| of Num, merged with a linear grid of step
+    0.25/τ), refined by Illinois regula falsi. |X(ω)| = ω|Num(jω)|/|k + jbω| does not
+    depend on τ and rises beyond ω_a (each factor |jω − z| does for ω ≥ |z|), so no
+    crossing beyond ω_top can give a smaller K_c once |X(ω_top)| exceeds the smallest found.
+    The scan first stops at ω_top = ω_a + ``_TURNS`` turns of the delay's phase (2π/τ each;
+    a positive-real crossing comes once a turn there), then, for designs where that bound
+    does not yet hold, runs to ω_end = max(4 ω_a, 4/τ). Where the bound still does not hold,
+    where no crossing is found, where the linear grid would exceed ``_MAX_LINEAR`` points or
+    where a sample-and-hold is modelled, the design is handed to the exact kernel. Returns
+    inf where no crossing destabilises."""
     shape = p.shape
     f = {n: np.ravel(np.broadcast_to(np.asarray(getattr(p, n), float), shape))
          for n in ("m1", "b1", "k", "b", "m2", "delay", "sample_period")}  # fmt: skip
@@ -46,73 +53,29 @@ def stable_stiffness_batch(p: HapticParams) -> np.ndarray:
     out = np.full(n, np.nan)
     if n == 0:
         return out.reshape(shape)
-    a3, a2, a1, a0 = (np.ravel(np.broadcast_to(c, shape)) for c in _num_coeffs(p))
+    coeffs = tuple(np.ravel(np.broadcast_to(c, shape)) for c in _num_coeffs(p))
+    a3, a2, a1, a0 = coeffs
     # largest |zero| of Num: companion matrices of the monic cubic, batched
     comp = np.zeros((n, 3, 3))
     comp[:, 0, :] = -np.stack([a2 / a3, a1 / a3, a0 / a3], axis=1)
     comp[:, 1, 0] = comp[:, 2, 1] = 1.0
     w_a = np.max(np.abs(np.linalg.eigvals(comp)), axis=1)
-    tau, k, b = f["delay"], f["k"], f["b"]
+    tau = f["delay"]
     exact = (f["sample_period"] > 0) | (tau <= 0)
-    with np.errstate(divide="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore"):
         w_end = np.maximum(4.0 * w_a, np.where(tau > 0, 4.0 / tau, 0.0))
-    n_lin = np.ceil(w_end * tau / _PHASE_STEP) + 2
-    exact |= n_lin > _MAX_LINEAR
-    rows = np.nonzero(~exact)[0]
-    rows = rows[np.argsort(n_lin[rows], kind="stable")]  # chunks of like grid sizes
-    if rows.size:
-        c = [x[rows] for x in (a3, a2, a1, a0, k, b, tau)]
-
-        def X(sel: np.ndarray, ww: np.ndarray) -> np.ndarray:
-            c3, c2, c1, c0, kk, bb, tt = (x[sel] for x in c)
-            if ww.ndim == 2:
-                c3, c2, c1, c0, kk, bb, tt = (x[:, None] for x in (c3, c2, c1, c0, kk, bb, tt))
-            s = 1j * ww
-            num = ((c3 * s + c2) * s + c1) * s + c0
-            return -s * num * np.exp(1j * ww * tt) / (kk + bb * s)
-
-        def im_x(sel: np.ndarray, ww: np.ndarray) -> np.ndarray:
-            """Im X·|k + jbω|² in real arithmetic: −jω Num(jω) = P + jQ, times (k − jbω)
-            = Gr + jGi, times e^{jωτ}."""
-            c3, c2, c1, c0, kk, bb, tt = (x[sel] for x in c)
-            if ww.ndim == 2:
-                c3, c2, c1, c0, kk, bb, tt = (x[:, None] for x in (c3, c2, c1, c0, kk, bb, tt))
-            w2 = ww * ww
-            P = (c1 - c3 * w2) * w2
-            Q = (c2 * w2 - c0) * ww
-            bw = bb * ww
-            th = ww * tt
-            return (P * kk + Q * bw) * np.sin(th) + (Q * kk - P * bw) * np.cos(th)
-
-        best = np.full(rows.size, np.inf)
-        t = np.linspace(0.0, 1.0, _LOG_POINTS)
-        for a in range(0, rows.size, 256):
-            sl = np.arange(a, min(a + 256, rows.size))
-            r = rows[sl]
-            m = int(np.max(n_lin[r]))
-            lo, hi = np.log(1e-4 * w_a[r]), np.log(w_end[r])
-            w_log = np.exp(lo[:, None] + (hi - lo)[:, None] * t)
-            w_lin = w_end[r, None] * np.linspace(0.0, 1.0, m)[1:]  # step ≤ 0.25/τ
-            w = np.sort(np.concatenate([w_log, w_lin], axis=1), axis=1)
-            im = im_x(sl, w)
-            d, j = np.nonzero(np.sign(im[:, :-1]) * np.sign(im[:, 1:]) < 0)
-            if d.size == 0:
-                continue
-            g = sl[d]
-            root = illinois(lambda act, x, g=g: im_x(g[act], x), w[d, j], w[d, j + 1],
-                            im[d, j], im[d, j + 1], 1e-12)  # fmt: skip
-            xr = X(g, root)
-            ok = (xr.real > 0) & (np.abs(xr.imag) <= 1e-6 * np.abs(xr))
-            np.minimum.at(best, g[ok], xr.real[ok])
-        # beyond ω_end, |X| ≥ ω|Num(jω)|/|k + jbω| rises: no smaller K_c once it exceeds best
-        s_end = 1j * w_end[rows]
-        c3, c2, c1, c0 = (x[rows] for x in (a3, a2, a1, a0))
-        bound = np.abs(s_end * (((c3 * s_end + c2) * s_end + c1) * s_end + c0)) / np.abs(
-            k[rows] + b[rows] * s_end
-        )
-        done = np.isfinite(best) & (bound > best)
+        w_first = np.minimum(w_end, w_a + np.where(tau > 0, _TURNS * TWO_PI / tau, 0.0))
+    todo = np.nonzero(~exact)[0]
+    for w_top in (w_first, w_end):  # a short scan first, the full one where it cannot tell
+        n_lin = np.ceil(w_top[todo] * tau[todo] / _PHASE_STEP) + 2
+        over = n_lin > _MAX_LINEAR
+        exact[todo[over]] = True
+        rows = todo[~over]
+        best = _crossing_scan(coeffs, f["k"], f["b"], tau, w_a, w_top, n_lin[~over], rows)
+        done = np.isfinite(best) & (_abs_x(coeffs, f["k"], f["b"], w_top, rows) > best)
         out[rows[done]] = best[done]
-        exact[rows[~done]] = True
+        todo = rows[~done]
+    exact[todo] = True
     for i in np.nonzero(exact)[0]:
         out[i] = max_stable_stiffness(
             HapticParams(
@@ -122,6 +85,67 @@ def stable_stiffness_batch(p: HapticParams) -> np.ndarray:
             )
         )
     return out.reshape(shape)
+
+
+def _abs_x(coeffs: tuple[np.ndarray, ...], k: np.ndarray, b: np.ndarray, w: np.ndarray,
+           rows: np.ndarray) -> np.ndarray:  # fmt: skip
+    """|X(ω)| = ω|Num(jω)|/|k + jbω| of ``rows`` at their ω (independent of the delay)."""
+    s = 1j * w[rows]
+    c3, c2, c1, c0 = (x[rows] for x in coeffs)
+    return np.abs(s * (((c3 * s + c2) * s + c1) * s + c0)) / np.abs(k[rows] + b[rows] * s)
+
+
+def _crossing_scan(coeffs: tuple[np.ndarray, ...], k: np.ndarray, b: np.ndarray,
+                   tau: np.ndarray, w_a: np.ndarray, w_top: np.ndarray, n_lin: np.ndarray,
+                   rows: np.ndarray) -> np.ndarray:  # fmt: skip
+    """The smallest K_c = Re X(ω_c) > 0 over the crossings of Im X = 0 in (0, ω_top] of
+    each of ``rows`` (inf where none): the grid and the refinement of
+    ``stable_stiffness_batch``; ``n_lin``: each row's linear points."""
+    best = np.full(rows.size, np.inf)
+    if rows.size == 0:
+        return best
+    order = np.argsort(n_lin, kind="stable")  # chunks of like grid sizes
+    c = [x[rows] for x in (*coeffs, k, b, tau)]
+
+    def X(sel: np.ndarray, ww: np.ndarray) -> np.ndarray:
+        c3, c2, c1, c0, kk, bb, tt = (x[sel] for x in c)
+        s = 1j * ww
+        num = ((c3 * s + c2) * s + c1) * s + c0
+        return -s * num * np.exp(1j * ww * tt) / (kk + bb * s)
+
+    def im_x(sel: np.ndarray, ww: np.ndarray) -> np.ndarray:
+        """Im X·|k + jbω|² in real arithmetic: −jω Num(jω) = P + jQ, times (k − jbω)
+        = Gr + jGi, times e^{jωτ}."""
+        c3, c2, c1, c0, kk, bb, tt = (x[sel] for x in c)
+        if ww.ndim == 2:
+            c3, c2, c1, c0, kk, bb, tt = (x[:, None] for x in (c3, c2, c1, c0, kk, bb, tt))
+        w2 = ww * ww
+        P = (c1 - c3 * w2) * w2
+        Q = (c2 * w2 - c0) * ww
+        bw = bb * ww
+        th = ww * tt
+        return (P * kk + Q * bw) * np.sin(th) + (Q * kk - P * bw) * np.cos(th)
+
+    t = np.linspace(0.0, 1.0, _LOG_POINTS)
+    for a in range(0, rows.size, 256):
+        sl = order[a : a + 256]
+        r = rows[sl]
+        m = int(np.max(n_lin[sl]))
+        lo, hi = np.log(1e-4 * w_a[r]), np.log(w_top[r])
+        w_log = np.exp(lo[:, None] + (hi - lo)[:, None] * t)
+        w_lin = w_top[r, None] * np.linspace(0.0, 1.0, m)[1:]  # step ≤ 0.25/τ
+        w = np.sort(np.concatenate([w_log, w_lin], axis=1), axis=1)
+        im = im_x(sl, w)
+        d, j = np.nonzero(np.sign(im[:, :-1]) * np.sign(im[:, 1:]) < 0)
+        if d.size == 0:
+            continue
+        g = sl[d]
+        root = illinois(lambda act, x, g=g: im_x(g[act], x), w[d, j], w[d, j + 1],
+                        im[d, j], im[d, j + 1], 1e-12)  # fmt: skip
+        xr = X(g, root)
+        ok = (xr.real > 0) & (np.abs(xr.imag) <= 1e-6 * np.abs(xr))
+        np.minimum.at(best, g[ok], xr.real[ok])
+    return best
 
 
 # ---- a bounded search over a box, vectorised over designs ------------------------------

@@ -192,3 +192,27 @@ def test_hand_keys_are_the_keys_hand_figures_returns():
     full = shape(hand_figures(TABLE2_MR, float(TABLE2_MR.k_max)))
     full.pop("notes")  # the unavailable side writes its own (empty) notes and a note
     assert shape(HAND_KEYS) == full
+
+
+def test_sweep_max_stable_K_column_is_the_per_design_limit():
+    """The sweep's ``max_stable_K_N_per_m`` column (``evaluate_batch(stability=True)``, the
+    batch kernel ``robust_search.stable_stiffness_batch``, issue 40) equals the exact
+    per-design kernel ``max_stable_stiffness`` of each design's pair at the hand
+    (``mr_at_hand`` of the row's figures) to 1e-9, on 12 random designs of 1–4 drums."""
+    from mrclutch.haptics.model import max_stable_stiffness
+    from mrclutch.pipeline import mr_at_hand
+
+    rng = np.random.default_rng(3)
+    n = 12
+    f = {"gap": rng.uniform(0.3e-3, 0.9e-3, n), "n_drums": rng.integers(1, 5, n),
+         "drum_thickness": rng.uniform(0.15e-3, 0.5e-3, n)}  # fmt: skip
+    base = design_preset("paper")
+    rows = evaluate_batch(f, base, stability=True)
+    ok = rows["valid"] > 0
+    assert ok.sum() >= 8  # most random designs are buildable: the check compares many
+    hp = mr_at_hand(base, rows["rotor_inertia_kg_m2"] + rows["fluid_inertia_kg_m2"],
+                    rows["drag_damping_N_m_s"], rows["max_torque_N_m"], rows["clutch_mass_kg"],
+                    rows["torque_delay_s"])  # fmt: skip
+    exact = np.array([max_stable_stiffness(hp.item(i)) for i in np.nonzero(ok)[0]])
+    assert np.all(np.isfinite(exact))
+    np.testing.assert_allclose(rows["max_stable_K_N_per_m"][ok], exact, rtol=1e-9)

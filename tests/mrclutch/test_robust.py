@@ -9,7 +9,12 @@ from hypothesis import strategies as st
 
 from mrclutch.design import design_preset
 from mrclutch.haptics.actuator import HapticParams
-from mrclutch.haptics.model import bandwidth, max_passive_stiffness, max_stable_stiffness
+from mrclutch.haptics.model import (
+    _num_coeffs,
+    bandwidth,
+    max_passive_stiffness,
+    max_stable_stiffness,
+)
 from mrclutch.robust import (
     ROBUST_COLUMNS,
     HandBox,
@@ -39,6 +44,28 @@ def test_stable_stiffness_batch_equals_the_exact_kernel():
     p = _random_params(np.random.default_rng(7), 300)
     fast = stable_stiffness_batch(p)
     exact = np.array([max_stable_stiffness(p.item(i)) for i in range(300)])
+    np.testing.assert_allclose(fast, exact, rtol=1e-9)
+
+
+def test_stable_stiffness_batch_equals_the_exact_kernel_where_the_delay_turns_often():
+    """Designs whose delay turns the phase hundreds of times below the largest zero ω_a of
+    Num (ω_a τ ≫ 1: a stiff, light lever with a long delay) are solved by the short scan
+    to ω_a + 3 turns and its |X| bound; with ω_a τ > 250 they took the exact kernel one by
+    one before (a linear grid of 16 ω_a τ > 4000 points): the same first crossing as the
+    exact kernel. ω_a here from np.roots, not from the kernel's companion matrices."""
+    rng = np.random.default_rng(11)
+    n = 40
+    p = HapticParams(
+        10 ** rng.uniform(-4, -3, n), 10 ** rng.uniform(-1, 0.5, n),
+        10 ** rng.uniform(4.5, 5, n), 10 ** rng.uniform(-1, 1, n),
+        10 ** rng.uniform(-3.5, -3, n), delay=10 ** rng.uniform(-2, -1.7, n),
+    )  # fmt: skip
+    c = [np.broadcast_to(x, (n,)) for x in _num_coeffs(p)]
+    w_a = np.array([max(abs(np.roots([x[i] for x in c]))) for i in range(n)])
+    assert np.sum(w_a * p.delay > 250) >= 10  # the regime that went exact before
+    fast = stable_stiffness_batch(p)
+    exact = np.array([max_stable_stiffness(p.item(i)) for i in range(n)])
+    assert np.all(np.isfinite(exact))
     np.testing.assert_allclose(fast, exact, rtol=1e-9)
 
 
