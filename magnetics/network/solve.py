@@ -22,6 +22,7 @@ row per design (``_pack``), each material as its piecewise-linear H(B) on a unif
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -40,6 +41,12 @@ class NetworkConvergenceError(ParameterError):
 
 
 _BLOCK = 2048  # designs whose currents' order of continuation is read from their median
+
+
+def prepare(net: Network, mats: Mapping[str, Magnetic]) -> Any:
+    """The network's arrays packed one row per design and its materials' tables, as the
+    kernel reads them (``_pack``, ``_materials``)."""
+    return _pack(net), _materials(net, mats)
 
 
 def _materials(net: Network, mats: Mapping[str, Magnetic]):  # type: ignore[no-untyped-def]
@@ -68,6 +75,15 @@ def solve_network(
     docs/magnetics.md); a row that does not converge from the continuation start is retried
     from the linear one. Designs that do not converge are refused together."""
     mats = MATERIALS if materials is None else materials
+    return _solve_packed(net, ampere_turns, None, mats, rtol, max_iter, start)
+
+
+def _solve_packed(net: Network, ampere_turns: ArrayLike, packed: Any, mats: Mapping[str, Magnetic],
+                  rtol: float = 1e-10, max_iter: int = 60,
+                  start: FloatArray | None = None) -> FloatArray:  # fmt: skip
+    """``solve_network`` with the network's arrays packed for the kernel (``packed``: the
+    ``prepare`` of ``net`` and ``mats``; None: packed here): repeated solves of one network
+    (the continuous torque's chords) pack it once."""
     ni = np.atleast_2d(np.asarray(ampere_turns, dtype=float))
     # writable C arrays, always: a read-only view would be a second overload to compile
     ni = np.array(np.broadcast_to(ni, (net.turns.size, ni.shape[-1])), order="C")
@@ -84,8 +100,7 @@ def solve_network(
     out = np.zeros(shape)
     ok = np.ones(shape[0], np.bool_)
     if out.size:
-        pk, off = _pack(net)
-        tab, inv, nseg = _materials(net, mats)
+        (pk, off), (tab, inv, nseg) = prepare(net, mats) if packed is None else packed
         kernel = _entry("_solve_rows", out.shape[0] * out.shape[1])
         kernel(pk, off, net.m, net.shell_k.shape[1], tab, inv, nseg, ni, order, x0, has_start,
                float(rtol), int(max_iter), out, ok)  # fmt: skip

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -24,7 +24,7 @@ from magnetics.materials import FLUIDS, MATERIALS, Magnetic, magnetic
 from magnetics.network.build import Network, network_from_regions
 from magnetics.network.compiled import _loaded, load, numba_module, uncompiled
 from magnetics.network.kernels import _tables
-from magnetics.network.solve import solve_network
+from magnetics.network.solve import _solve_packed, prepare, solve_network
 
 FloatArray = NDArray[np.float64]
 #: How a gap's torque reads its field across the gap's thickness (``network_film_torque``,
@@ -42,9 +42,14 @@ def network_yield_at(net: Network, materials: Mapping[str, Magnetic] | None = No
     ``continuous_torque``'s ``torque_at``. Each call's Newton starts from the last call's
     loop fluxes scaled to the new current (``seed``: (current (S,), loop fluxes (S, 1, ·))
     of a solve already done, e.g. at the peak), which roughly halves its steps on the
-    chords' nearby currents."""
+    chords' nearby currents. The network is packed for the kernel and its films' reading set
+    up once for all calls (``prepare``, ``film_reader``): the same numbers as
+    ``network_torque_and_flux`` at each call."""
+    mats = MATERIALS if materials is None else materials
     state = {} if seed is None else {"i": np.asarray(seed[0], dtype=float)[:, None],
                                      "x": np.asarray(seed[1], dtype=float)}  # fmt: skip
+    packed = prepare(net, mats) if net.turns.size else None
+    reading = film_reader(net, mats, fluid, convention)
 
     def at(current: FloatArray) -> FloatArray:
         cur = np.asarray(current, dtype=float)[:, None]
@@ -52,9 +57,9 @@ def network_yield_at(net: Network, materials: Mapping[str, Magnetic] | None = No
         if state:
             ratio = np.where(state["i"] != 0, cur / np.where(state["i"] != 0, state["i"], 1), 0)
             start = state["x"] * ratio[..., None]
-        t, x = network_torque_and_flux(net, cur, materials, fluid, convention, start)
+        x = _solve_packed(net, net.turns[:, None] * cur, packed, mats, start=start)
         state.update(i=cur, x=x)
-        return t.sum(-1)[:, 0]
+        return reading(x).sum(-1)[:, 0]
 
     return at
 
@@ -122,6 +127,18 @@ def network_film_torque(
 ) -> FloatArray:
     """Yield torque (S, C, 2m) of every film in zone A then B at the network's loop fluxes
     x (S, C, ``Network.unknowns``): the reading ``network_torque_and_flux`` describes."""
+    return film_reader(net, materials, fluid, convention)(x)
+
+
+def film_reader(
+    net: Network,
+    materials: Mapping[str, Magnetic] | None = None,
+    fluid: MRFluid | None = None,
+    convention: str = DEFAULT_CONVENTION,
+) -> Callable[[FloatArray], FloatArray]:
+    """``network_film_torque`` of ``net`` as a function of the loop fluxes x alone: what
+    does not depend on x (the films' geometry, the fringes, the tables) is set up once, for
+    a network read at many currents (the continuous torque's chords)."""
     mats = MATERIALS if materials is None else materials
     check_choice("convention", convention, CONVENTIONS)
     fl = FLUIDS[net.fluid] if fluid is None else fluid
@@ -131,16 +148,9 @@ def network_film_torque(
     c = two(net.fringe_c)  # (S, K, 2)
     r0, r1 = np.tile(net.gap_r0, 2), np.tile(net.gap_r1, 2)
     ok = length > 0
-    xl, xe = x[..., : net.m], x[..., net.leaks]
-    zones = np.abs(np.concatenate([xl - xe[..., :1], xl - xe[..., 1:]], axis=-1))  # A, B
-    phi = zones / np.where(ok, eff, 1.0)[:, None, :]  # Φ per metre of L_eff
+    eff_ok = np.where(ok, eff, 1.0)[:, None, :]
     w_end = np.log1p(c * np.pi * depth / np.where(ok, r1 - r0, 1.0)[..., None])  # (S, K, 2)
     scale = (r1 - r0)[..., None] / (np.pi * c)  # ds = (g/cπ)·e^w dw, (S, K, 2 ends)
-    # The film's fluid also carries the axial flux beside the walls (the sheaths): at the
-    # band's end of the zone B_z = q/A of the sheath that holds it (the inner half of film
-    # k beside wall k, the outer half beside wall k + 1; none beside the pole), falling
-    # linearly to 0 at the zone's far end as the sheath's flux builds up.
-    bz_in, bz_out = _film_axial_b(net, x)  # (S, C, K)
     t, tw = np.polynomial.legendre.leggauss(_AXIAL_POINTS)
     t, tw = 0.5 * (t + 1.0), 0.5 * tw  # along the zone, far end (0) to band (1)
     band_end = np.zeros((2 * net.m, 2))  # which end of each overlap faces the band
@@ -151,22 +161,36 @@ def network_film_torque(
     law = (fl.tau_y_max, _CARLSON_K, q_inf, s_at, d_at, _S_LO, _S_STEP, float(_S_N))
     if type(fl).tau_y is not MRFluid.tau_y or type(fl).tau_y_decay is not MRFluid.tau_y_decay:
         raise ParameterError(f"fluid {fl.name!r}: the network's torque reads Carlson's law only")
-    read = _reader(phi.size)
-    phi, length = np.ascontiguousarray(phi), np.ascontiguousarray(length, dtype=float)
+    length = np.ascontiguousarray(length, dtype=float)
+    mid = np.ascontiguousarray(0.5 * (r0 + r1))
+    r0, r1 = np.ascontiguousarray(r0), np.ascontiguousarray(r1)
 
-    def per_length(r: FloatArray, b_z: FloatArray) -> FloatArray:
-        """r²·(τy over the overlap · L + ∫ τy over both fringes) at radius r (S, K),
-        B_z at the zone's band end ``b_z`` (S, C, K) (``_read_rows``)."""
-        out = np.zeros(phi.shape)
-        read(phi, np.ascontiguousarray(b_z), np.ascontiguousarray(r), length, w_end, scale,
-             band_end, t, tw, tab, inv, nseg, *law, out)  # fmt: skip
-        return out
+    def reading(x: FloatArray) -> FloatArray:
+        xl, xe = x[..., : net.m], x[..., net.leaks]
+        zones = np.abs(np.concatenate([xl - xe[..., :1], xl - xe[..., 1:]], axis=-1))  # A, B
+        phi = np.ascontiguousarray(zones / eff_ok)  # Φ per metre of L_eff
+        # The film's fluid also carries the axial flux beside the walls (the sheaths): at
+        # the band's end of the zone B_z = q/A of the sheath that holds it (the inner half
+        # of film k beside wall k, the outer half beside wall k + 1; none beside the pole),
+        # falling linearly to 0 at the zone's far end as the sheath's flux builds up.
+        bz_in, bz_out = _film_axial_b(net, x)  # (S, C, K)
+        read = _reader(phi.size)
 
-    if convention == "mid-line":
-        tau = per_length(0.5 * (r0 + r1), 0.5 * (bz_in + bz_out))
-    else:
-        tau = np.minimum(per_length(r0, bz_in), per_length(r1, bz_out))
-    return np.where(ok[:, None, :], 2 * np.pi * tau, 0.0)
+        def per_length(r: FloatArray, b_z: FloatArray) -> FloatArray:
+            """r²·(τy over the overlap · L + ∫ τy over both fringes) at radius r (S, K),
+            B_z at the zone's band end ``b_z`` (S, C, K) (``_read_rows``)."""
+            out = np.zeros(phi.shape)
+            read(phi, np.ascontiguousarray(b_z), r, length, w_end, scale, band_end, t, tw,
+                 tab, inv, nseg, *law, out)  # fmt: skip
+            return out
+
+        if convention == "mid-line":
+            tau = per_length(mid, 0.5 * (bz_in + bz_out))
+        else:
+            tau = np.minimum(per_length(r0, bz_in), per_length(r1, bz_out))
+        return np.where(ok[:, None, :], 2 * np.pi * tau, 0.0)
+
+    return reading
 
 
 def _read_rows(phi, bz, r, length, w_end, scale, band_end, gt, gw, tab, inv, nseg, tau_max,
