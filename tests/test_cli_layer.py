@@ -61,8 +61,6 @@ PENDING: dict[str, set[str]] = {
         "magnetics.network",
         "magnetics.torque",
     },
-    # the report's torque curve (circuit, network, FEM) and its CAD export
-    "mrclutch.cli.report": {"geometry.export", "geometry.section", "magnetics.torque"},
     # the 3-D view: the CAD solids to meshes
     "mrclutch.cli.view": {"geometry.cad", "geometry.section"},
     # the plots: material colours (the registry), the haptic model's frequency responses
@@ -79,7 +77,6 @@ NUMPY_OK = {
 #: CLI modules not yet free of numpy (issue 43 item 1): may only shrink.
 NUMPY_PENDING = {
     "mrclutch.cli.commands.magnetics": "torque and field: currents and maps computed here",
-    "mrclutch.cli.report": "the report's torque curve and its errors computed here",
 }
 
 

@@ -35,13 +35,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from geometry.atomic import OutputError, fsync_dir, output_error, write_text
-from geometry.export import export_clutch
-from geometry.section import build_section
 from geometry.validation import ParameterError
-from magnetics.torque import torque_curve
 from mrclutch.cli.duty_format import duty_html
 from mrclutch.cli.feel_format import feel_html
 from mrclutch.cli.jsonio import to_jsonable
@@ -53,13 +48,9 @@ from mrclutch.cli.view import screenshot
 from mrclutch.design import ClutchDesign
 from mrclutch.outputs import CLUTCH_ROWS, HAND_ROWS, output, row_label
 from mrclutch.pipeline import evaluate
+from mrclutch.report_data import export_cad, section_of, torque_curves
 from mrclutch.sweep import sigterm_as_interrupt
 from mrclutch.verdict import judge_evaluation
-
-#: Currents of the report's torque curve (A): the paper's Fig. 2b range.
-CURVE_CURRENTS = np.linspace(0.0, 7.0, 29)
-#: Currents at which the FEM checks the circuit in the report (A).
-FEM_CHECK_CURRENTS = (1.0, 3.0, 5.0, 7.0)
 
 
 @dataclass(frozen=True)
@@ -156,7 +147,7 @@ def _build_in(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[st
     tick("3D view")
     _view(design, tmp / "view.png")
     tick("section drawing")
-    section_figure(build_section(design.clutch, design.materials), tmp / "section.png")
+    section_figure(section_of(design), tmp / "section.png")
     tick("torque–current curve (network, circuit and FEM)")
     curve = _torque(design, tmp / "torque.png")
     tick("haptic plots")
@@ -185,17 +176,7 @@ def _build_in(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[st
 
 
 def _cad(design: ClutchDesign, folder: Path) -> dict[str, Any]:
-    res = export_clutch(design.clutch, folder, materials=design.materials)
-    return {
-        "step": res.step.name,
-        "materials": res.materials.name if res.materials is not None else None,
-        "stl": {name: p.name for name, p in res.stl.items()},
-        "part_volumes_m3": {n: v * 1e-9 for n, v in res.volumes_mm3.items()},
-        "stl_volume_error_rel": {
-            n: res.stl_volumes_mm3[n] / v - 1 for n, v in res.volumes_mm3.items()
-        },
-        "notes": list(res.notes),
-    }
+    return export_cad(design, folder)
 
 
 def _view(design: ClutchDesign, path: Path) -> None:
@@ -203,30 +184,16 @@ def _view(design: ClutchDesign, path: Path) -> None:
 
 
 def _torque(design: ClutchDesign, path: Path) -> dict[str, Any]:
-    rpm = design.operating.input_speed_rpm
-    sec = build_section(design.clutch, design.materials)
-    circ = torque_curve(sec, CURVE_CURRENTS, method="circuit", speed_rpm=rpm)
-    net = torque_curve(sec, CURVE_CURRENTS, method="network", speed_rpm=rpm)
-    fem = torque_curve(sec, FEM_CHECK_CURRENTS, method="fem", speed_rpm=rpm)
-    plot_torque([circ, net, fem], path, title=f"{design.name} at {rpm:.0f} rpm")
-    err = {k: float(np.max(np.abs(np.interp(fem.currents, tc.currents, tc.torque)
-                                  / fem.torque - 1))) for k, tc in (("circuit", circ),
-                                                                    ("network", net))}  # fmt: skip
-    return {
-        "speed_rpm": rpm,
-        "circuit": {"current_A": circ.currents, "torque_N_m": circ.torque},
-        "network": {"current_A": net.currents, "torque_N_m": net.torque},
-        "fem": {"current_A": fem.currents, "torque_N_m": fem.torque},
-        "circuit_vs_fem_max_error_rel": err["circuit"],
-        "network_vs_fem_max_error_rel": err["network"],
-    }
+    curves, data = torque_curves(design)
+    plot_torque(curves, path, title=f"{design.name} at {data['speed_rpm']:.0f} rpm")
+    return data
 
 
 # ---- the one-page HTML -----------------------------------------------------------------
 
 
 def _fmt(v: Any, scale: float = 1.0, digits: int = 4) -> str:
-    if v is None or (isinstance(v, float) and not np.isfinite(v)):
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
         return "—"
     if isinstance(v, bool):
         return "yes" if v else "no"

@@ -172,8 +172,9 @@ class _no_resource_warning:
 
 def test_html_report_on_a_full_disk(tmp_path, disk_full, capsys, monkeypatch):
     import mrclutch.cli.report as rep
+    import mrclutch.report_data as report_data
 
-    monkeypatch.setattr(rep, "FEM_CHECK_CURRENTS", (7.0,))  # one FEM solve is enough here
+    monkeypatch.setattr(report_data, "FEM_CHECK_CURRENTS", (7.0,))  # one FEM solve is enough
     monkeypatch.setattr(rep, "_view", lambda design, path: write_bytes(path, b"png"))
     disk_full(".html")
     out = tmp_path / "rep"
