@@ -93,10 +93,12 @@ def check_candidate(design: ClutchDesign, cons: Constraints, verify: bool = True
 
 
 def first_meeting(opt: Optimum, tries: int, wc: WorstCase | None, cons: Constraints,
-                  verify: bool = True) -> tuple[Candidate, dict, list[dict]]:  # fmt: skip
+                  verify: bool = True, done: Callable[[int], None] | None = None
+                  ) -> tuple[Candidate, dict, list[dict]]:  # fmt: skip
     """The single-objective optimum's candidates checked best first (``check_candidate``)
     until one meets every requirement, at most ``tries``: the one chosen (the first that
-    meets them, else the best), its check, and a record of each tried."""
+    meets them, else the best), its check, and a record of each tried. ``done(n)`` after
+    each check (a progress bar's)."""
     tried: list[dict] = []
     chosen: tuple[Candidate, dict] | None = None
     for rank, cand in enumerate(opt.candidates[:tries] or (Candidate(opt.design, opt.value),)):
@@ -107,6 +109,8 @@ def first_meeting(opt: Optimum, tries: int, wc: WorstCase | None, cons: Constrai
                       "violations": data["violations"]})  # fmt: skip
         if chosen is None or (not data["violations"] and chosen[1]["violations"]):
             chosen = (cand, data)
+        if done is not None:
+            done(rank + 1)
         if not data["violations"]:
             break
     assert chosen is not None

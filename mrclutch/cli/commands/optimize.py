@@ -22,12 +22,8 @@ from mrclutch.cli.commands._common import (
 from mrclutch.cli.commands.optimize_pareto import run_pareto
 from mrclutch.cli.errors import EXIT_REQUIREMENT_VIOLATED, CLIError
 from mrclutch.cli.executors import sweep_executor
-from mrclutch.cli.formatting import (
-    explain,
-    format_evaluation,
-    format_verdict,
-    format_verified,
-)
+from mrclutch.cli.formatting import explain, format_evaluation, format_verdict, format_verified
+from mrclutch.cli.progress import bar as progress_bar
 from mrclutch.design import ClutchDesign, design_to_toml
 from mrclutch.members import (
     first_meeting,
@@ -300,20 +296,26 @@ def _optimize(args: argparse.Namespace) -> int:
         check_writable("--out", args.out, folder=False)
     wc = None if args.nominal else robust_verdict(base)
     t0 = time.perf_counter()
-    opt = optimize(
-        base,
-        objective=args.objective,
-        constraints=cons,
-        bounds=parse_bounds(args.vary) if args.vary else None,
-        drum_counts=drums,
-        seed=args.seed,
-        robust=wc,
-    )
+    gens = 60 * len(drums)  # optimize's default generations (maxiter) a drum count
+    with progress_bar(gens, "optimize: generations", "gen", not args.no_progress) as done:
+        opt = optimize(
+            base,
+            objective=args.objective,
+            constraints=cons,
+            bounds=parse_bounds(args.vary) if args.vary else None,
+            drum_counts=drums,
+            seed=args.seed,
+            robust=wc,
+            progress=lambda n, total: done(n * gens // max(total, 1)),
+        )
     t_fast = time.perf_counter() - t0
     if not opt.feasible:
         raise CLIError("no design meets the constraints in the search box; relax a limit")
     key = OBJECTIVES[args.objective]
-    cand, data, tried = first_meeting(opt, args.tries, wc, cons, verify=not args.no_verify)
+    checks = min(args.tries, len(opt.candidates)) or 1
+    desc = f"optimize: candidates checked at {'fast' if args.no_verify else 'reference'} fidelity"
+    with progress_bar(checks, desc, "design", not args.no_progress) as done:
+        cand, data, tried = first_meeting(opt, args.tries, wc, cons, not args.no_verify, done)
     bounds = parse_bounds(args.vary) if args.vary else None
     data = {
         **optimum_limits(base, cons, cand, drums, bounds),

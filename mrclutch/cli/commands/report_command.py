@@ -6,10 +6,8 @@ from __future__ import annotations
 import argparse
 
 from geometry.validation import check_choice
-from mrclutch.cli.commands._common import (
-    add_design_args,
-    load_design_args,
-)
+from mrclutch.cli.commands._common import add_design_args, load_design_args
+from mrclutch.cli.progress import bar as progress_bar
 from mrclutch.cli.report import write_report
 from mrclutch.pipeline import FIDELITIES
 
@@ -37,18 +35,16 @@ def _report(args: argparse.Namespace) -> int:
     design = load_design_args(args)
     check_choice("fidelity", args.fidelity, FIDELITIES)
     steps = 9  # the tick() calls of mrclutch.cli.report._build
-    if args.no_progress:
-        rep = write_report(design, args.out, fidelity=args.fidelity)
-    else:
-        from tqdm import tqdm
+    with progress_bar(steps, "report", "step", not args.no_progress) as done:
+        started = 0
 
-        with tqdm(total=steps, unit="step", desc="report") as bar:
+        def tick(msg: str) -> None:  # called as each step starts: its line, then the bar
+            nonlocal started
+            started += 1
+            done(started - 1, f"mrclutch report: step {started}/{steps}: {msg}")
 
-            def tick(msg: str) -> None:
-                bar.set_postfix_str(msg)
-                bar.update(1)
-
-            rep = write_report(design, args.out, fidelity=args.fidelity, progress=tick)
+        rep = write_report(design, args.out, fidelity=args.fidelity, progress=tick)
+        done(steps)
     print(rep.metrics["verdict"]["line"])  # the one verdict, as the page's badge says it
     print(f"report written to {rep.out_dir}/report.html ({len(rep.files)} files)")
     return 0
