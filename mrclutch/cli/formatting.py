@@ -9,10 +9,7 @@ import math
 from statistics import median
 
 from mrclutch.design import ClutchDesign
-from mrclutch.optimize import (
-    Constraints,
-    WorstCase,
-)
+from mrclutch.optimize import Constraints, WorstCase
 from mrclutch.outputs import CLUTCH_ROWS, HAND_ROWS, format_kmax, output, row_label
 from mrclutch.process import MAX_ECCENTRICITY
 from mrclutch.verdict import verdict_lines

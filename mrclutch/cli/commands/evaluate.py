@@ -6,17 +6,11 @@ from __future__ import annotations
 import argparse
 from dataclasses import replace
 
-from mrclutch.cli.commands._common import (
-    add_design_args,
-    load_design_args,
-    print_json,
-)
+from mrclutch.cli.commands._common import add_design_args, load_design_args, print_json
 from mrclutch.cli.duty_format import duty_lines
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.feel_format import feel_lines
-from mrclutch.cli.formatting import (
-    format_evaluation,
-)
+from mrclutch.cli.formatting import format_evaluation
 from mrclutch.duty import parse_duty
 from mrclutch.pipeline import null_notes
 from mrclutch.verdict import judge

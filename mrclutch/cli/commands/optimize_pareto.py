@@ -10,19 +10,10 @@ from dataclasses import replace
 from pathlib import Path
 
 from geometry.validation import check_choice, check_int
-from mrclutch.cli.commands._common import (
-    atomic_path,
-    check_writable,
-    print_json,
-)
+from mrclutch.cli.commands._common import atomic_path, check_writable, print_json
 from mrclutch.cli.errors import EXIT_REQUIREMENT_VIOLATED, CLIError
 from mrclutch.cli.executors import sweep_executor
-from mrclutch.cli.formatting import (
-    explain,
-    explain_json,
-    format_verified,
-    limits_line,
-)
+from mrclutch.cli.formatting import explain, explain_json, format_verified, limits_line
 from mrclutch.cli.plots.design import pareto_set_plot
 from mrclutch.cli.progress import bar as progress_bar
 from mrclutch.design import ClutchDesign, design_to_toml

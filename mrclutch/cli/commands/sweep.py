@@ -10,22 +10,16 @@ import time
 from typing import Any
 
 from geometry.validation import ParameterError
-from mrclutch.cli.commands._common import (
-    check_writable,
-)
+from mrclutch.cli.commands._common import check_writable
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.executors import sweep_executor
-from mrclutch.cli.formatting import (
-    format_verified,
-)
+from mrclutch.cli.formatting import format_verified
 from mrclutch.cli.longjobs import announce
 from mrclutch.cli.plots.design import PLOT_STEPS, pareto_plot
 from mrclutch.cli.progress import bar as progress_bar
 from mrclutch.design import ClutchDesign, design_from_mapping
 from mrclutch.estimates import check_fem_size, chunk_write_s, fem_solve_seconds, sweep_rate
-from mrclutch.members import (
-    reference_fem_size,
-)
+from mrclutch.members import reference_fem_size
 from mrclutch.outputs import SWEEP_OPTIONAL
 from mrclutch.pipeline import BatchEvaluator
 from mrclutch.robust import ROBUST_COLUMNS, RobustBatchEvaluator
@@ -258,7 +252,8 @@ def _sweep(args: argparse.Namespace) -> int:
                               fem_size)  # fmt: skip
         print(format_verified(verified, args.objective or TORQUE, fem_size, workers, t_verify))
         print(f"verified rows: {side}")
-    if args.pareto:
+    if args.pareto:  # said before drawing: the sweep's bar has ended (issue 40)
+        print(f"drawing the plot of {res.rows} designs …", file=sys.stderr, flush=True)
         with progress_bar(PLOT_STEPS, "sweep plot", "step", not args.no_progress) as done:
             pareto_plot(res.path, args.pareto, progress=done)
         print(f"Pareto front: {args.pareto}")
