@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from geometry import regions
-from geometry.params import valid
+from geometry.params import INT_RANGES, valid
 from geometry.regions import Regions
 from geometry.section import build_section
 from geometry.validation import ParameterError, check_range
@@ -276,21 +276,28 @@ def duty_json(fig: Mapping[str, Any]) -> dict[str, Any]:
     return out
 
 
+def design_context(design: Any, current_limit: float) -> Context:
+    """A hold's ``Context`` of one ``ClutchDesign`` at its current limit (A): its section,
+    the network's cold yield torque on ``GRID`` currents from 0 to the limit, its
+    operating point; what ``evaluation_duty`` and the sweep's hot columns both hold."""
+    op = design.operating
+    section = build_section(design.clutch, design.materials)
+    currents = np.linspace(0.0, current_limit, GRID)
+    curve = torque_curve(section, currents, method="network", speed_rpm=op.input_speed_rpm,
+                         support=design.support)  # fmt: skip
+    limit = FLUIDS[design.materials.fluid].temperature_range[1]  # as clutch.fluid_limit
+    return context(section.table, currents, curve.yield_torque, current_limit,
+                   op.input_speed, design.support, design.amplifier, op.ambient_temperature,
+                   limit, op.wire_temperature_limit, op.fluid_temperature)  # fmt: skip
+
+
 def evaluation_duty(ev: Any) -> dict[str, Any]:
     """``duty_figures`` of an evaluation (``mrclutch.pipeline.Evaluation``: its design,
     clutch figures and MR pair, at its rendered K), as JSON (``duty_json``), with the
     duty it was computed for."""
     design, fig, mr = ev.design, ev.clutch, ev.mr
-    op = design.operating
     duty = design_duty(design)
-    section = build_section(design.clutch, design.materials)
-    currents = np.linspace(0.0, fig.max_current, GRID)
-    curve = torque_curve(section, currents, method="network", speed_rpm=op.input_speed_rpm,
-                         support=design.support)  # fmt: skip
-    limit = FLUIDS[design.materials.fluid].temperature_range[1]  # as pipeline.fluid_limit
-    ctx = context(section.table, currents, curve.yield_torque, fig.max_current,
-                  op.input_speed, design.support, design.amplifier, op.ambient_temperature,
-                  limit, op.wire_temperature_limit, op.fluid_temperature)  # fmt: skip
+    ctx = design_context(design, fig.max_current)
     k = float(ev.haptic["K_N_per_m"])
     out = duty_json(duty_figures(ctx, duty, mr, design.transmission.reduction, k,
                                  fig.max_torque))  # fmt: skip
@@ -381,3 +388,46 @@ def duty_batch(fields: Mapping[str, Any], base: Any, r: Mapping[str, np.ndarray]
 
     out = regions.per_topology(p, ok, fn, mats)
     return {"fluid_volume_m3": out["vol"], "fluid_life_h": out["life"]}
+
+
+#: The sweep's hot columns (``outputs.SWEEP_OPTIONAL``, issue 41 item 3): the torque and
+#: b1 at the end of the hot peak hold and of the duty hold (``duty_figures``' ``peak`` and
+#: ``duty``).
+HOT_COLUMNS = (
+    "hot_peak_torque_N_m",
+    "hot_peak_b1_N_s_per_m",
+    "duty_end_torque_N_m",
+    "duty_end_b1_N_s_per_m",
+)
+
+
+def hot_batch(fields: Mapping[str, Any], base: Any, r: Mapping[str, np.ndarray],
+              mr: HapticParams) -> dict[str, np.ndarray]:  # fmt: skip
+    """``HOT_COLUMNS`` for S designs (a sweep's fields around ``base``, a ``ClutchDesign``):
+    each valid row's hold at the current limit for ``peak_time`` and, with a duty torque,
+    its duty hold (NaN without one), as ``evaluation_duty`` gives them. ``r``:
+    ``evaluate_batch``'s rows; ``mr``: the pair at the hand of its valid rows
+    (``at_hand.mr_at_hand``). Design by design: the thermal march feeds each design's
+    temperatures back into its own load at every step (``magnetics.hot.march``)."""
+    p, mats = batch_fields(fields, base)
+    ok = np.nonzero(valid(p) & (np.asarray(r["valid"]) == 1))[0]
+    out = {k: np.full(np.shape(r["valid"]), np.nan) for k in HOT_COLUMNS}
+    duty = design_duty(base)
+    red = base.transmission.reduction
+    ints = {name for name, _, _ in INT_RANGES}
+    for j, i in enumerate(ok):
+        clutch = replace(base.clutch, **{k: int(v[i]) if k in ints else float(v[i])
+                                         for k, v in p.items()})  # fmt: skip
+        m = mats if not isinstance(mats, np.ndarray) else mats[i]
+        design = replace(base, clutch=clutch, materials=m)
+        ctx = design_context(design, design.current_limit)
+        pair = mr.item(j) if mr.shape else mr
+        k = float(pair.k_max)  # the holds' torque and b1 do not depend on K
+        peak = hold(ctx, peak_load(ctx), duty.peak_time, pair, red, k)
+        out["hot_peak_torque_N_m"][i] = peak["torque_N_m"]
+        out["hot_peak_b1_N_s_per_m"][i] = peak["b1_N_s_per_m"]
+        if duty.torque > 0:
+            end = hold(ctx, duty_load(ctx, duty.torque), duty.time, pair, red, k)
+            out["duty_end_torque_N_m"][i] = end["torque_N_m"]
+            out["duty_end_b1_N_s_per_m"][i] = end["b1_N_s_per_m"]
+    return out

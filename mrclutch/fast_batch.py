@@ -32,7 +32,7 @@ from mrclutch.at_hand import mr_at_hand
 from mrclutch.batch import batch_fields
 from mrclutch.clutch import dynamic_range_db, fluid_limit
 from mrclutch.design import ClutchDesign, current_limit
-from mrclutch.duty import DUTY_COLUMNS, duty_batch
+from mrclutch.duty import DUTY_COLUMNS, HOT_COLUMNS, duty_batch, hot_batch
 from mrclutch.feel import FEEL_COLUMNS, feel_batch
 from mrclutch.haptics.hand import backdrive_force
 from mrclutch.haptics.model import (
@@ -94,7 +94,7 @@ class BatchEvaluator:
         on = set(self.optional)
         feel = tuple(k for k in self.optional if k in FEEL_COLUMNS)  # mrclutch.feel
         robust = on - {"max_passive_K_N_per_m", "max_stable_K_N_per_m", "zwidth_area_N2_s_per_m2",
-                       *FEEL_COLUMNS, *DUTY_COLUMNS}  # fmt: skip
+                       *FEEL_COLUMNS, *DUTY_COLUMNS, *HOT_COLUMNS}  # fmt: skip
         if robust:  # over the uncertain inputs: the application's robust layer computes them
             raise ParameterError(f"{sorted(robust)[0]}: a robust column; "
                                  "use mrclutch.robust.RobustBatchEvaluator")  # fmt: skip
@@ -105,6 +105,13 @@ class BatchEvaluator:
             out.update(feel_batch(fields, self.base, feel))
         if on & set(DUTY_COLUMNS):  # the fluid's volume and life (mrclutch.duty)
             out.update(duty_batch(fields, self.base, out))
+        if on & set(HOT_COLUMNS):  # the torque and b1 after the holds (mrclutch.duty)
+            ok = out["valid"] > 0
+            inertia = out["rotor_inertia_kg_m2"][ok] + out["fluid_inertia_kg_m2"][ok]
+            mr = mr_at_hand(self.base, inertia, out["drag_damping_N_m_s"][ok],
+                            out["max_torque_N_m"][ok], out["clutch_mass_kg"][ok],
+                            out["torque_delay_s"][ok])  # fmt: skip
+            out.update(hot_batch(fields, self.base, out, mr))
         return {k: out[k] for k in self.columns}
 
 

@@ -165,6 +165,17 @@ _ALL = (
            "(magnetics.life)", "fluid volume", "mL", 1e6),
     Output("fluid_life_h", "h", "hours until the fluid has dissipated its lifetime energy "
            "(LDE, unverified per fluid) at the design's [duty] (mrclutch.duty)", "fluid life"),
+    # ---- issue 41 item 3: hot torque and b1 (mrclutch.duty, magnetics.hot) ------------
+    Output("hot_peak_torque_N_m", "N·m", "torque at the end of the hot peak hold: the "
+           "current limit held slipping for the [duty] peak_time_s, the temperatures fed "
+           "back into R(T), η(T) and τy(T) (mrclutch.duty, docs/hot.md)", "hot peak torque"),
+    Output("hot_peak_b1_N_s_per_m", "N·s/m", "b1 at the hand at the end of the hot peak "
+           "hold (the films at η(T); mrclutch.duty)", "hot peak b1"),
+    Output("duty_end_torque_N_m", "N·m", "torque at the end of the [duty] hold "
+           "(torque_N_m for time_s); NaN without a duty torque (mrclutch.duty)",
+           "torque after the duty"),
+    Output("duty_end_b1_N_s_per_m", "N·s/m", "b1 at the hand at the end of the [duty] "
+           "hold; NaN without a duty torque (mrclutch.duty)", "b1 after the duty"),
 )  # fmt: skip
 
 #: Every output, by key.
@@ -251,6 +262,12 @@ SWEEP_OPTIONAL: tuple[str, ...] = (
     # issue 41 (mrclutch.duty.duty_batch): the fluid's volume and life, no solve
     "fluid_volume_m3",
     "fluid_life_h",
+    # issue 41 item 3 (mrclutch.duty.hot_batch): the hot peak and duty holds, design by
+    # design (two thermal marches of 300 steps each)
+    "hot_peak_torque_N_m",
+    "hot_peak_b1_N_s_per_m",
+    "duty_end_torque_N_m",
+    "duty_end_b1_N_s_per_m",
 )
 
 

@@ -223,3 +223,31 @@ def test_a_hold_moves_b1_from_the_operating_fluid_temperature() -> None:
     ctx_t = peak["fluid_temperature_C"]
     # the hold's fluid is cooler than 130 °C (it starts from ambient): thicker films, more b1
     assert (peak["b1_N_s_per_m"] >= b1) == (ctx_t <= 130.0)
+
+
+def test_sweep_hot_columns_are_evaluate_json_of_the_same_design() -> None:
+    """``sweep --with`` the hot columns (``BatchEvaluator`` with ``HOT_COLUMNS``, what a
+    sweep runs) of the paper row equal ``evaluate --json --duty 0.2:60`` of the paper
+    design: the torque and b1 after the 30 s peak hold and after the duty hold. The
+    duty's torque is held (0.2 N·m); a 1.3× gap gives another design (less peak torque:
+    the fluid's τy fills a wider gap with a weaker field), so the row is its own."""
+    run = [sys.executable, "-m", "mrclutch", "evaluate", "--preset", "paper", "--no-uncertainty",
+           "--duty", "0.2:60", "--json"]  # fmt: skip
+    data = json.loads(subprocess.run(run, capture_output=True, text=True, check=True).stdout)
+    from mrclutch.pipeline import BatchEvaluator
+
+    base = replace(PAPER, duty=D.Duty(torque=0.2, time=60.0))
+    gap = base.clutch.gap
+    rows = BatchEvaluator(base, optional=D.HOT_COLUMNS)({"gap": np.array([gap, 1.3 * gap])})
+    d = data["duty"]
+    want = {"hot_peak_torque_N_m": d["peak"]["torque_N_m"],
+            "hot_peak_b1_N_s_per_m": d["peak"]["b1_N_s_per_m"],
+            "duty_end_torque_N_m": d["duty"]["torque_N_m"],
+            "duty_end_b1_N_s_per_m": d["duty"]["b1_N_s_per_m"]}  # fmt: skip
+    for key, value in want.items():
+        assert rows[key][0] == pytest.approx(value, rel=1e-9), key
+    assert rows["duty_end_torque_N_m"][0] == pytest.approx(0.2, rel=1e-3)
+    assert rows["hot_peak_torque_N_m"][1] < rows["hot_peak_torque_N_m"][0]
+    none = BatchEvaluator(PAPER, optional=D.HOT_COLUMNS)({"gap": np.array([gap])})
+    assert np.isnan(none["duty_end_torque_N_m"][0]) and np.isnan(none["duty_end_b1_N_s_per_m"][0])
+    assert none["hot_peak_torque_N_m"][0] == pytest.approx(rows["hot_peak_torque_N_m"][0])
