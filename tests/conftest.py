@@ -43,5 +43,5 @@ def pytest_unconfigure(config: pytest.Config) -> None:
 @pytest.fixture(scope="session")
 def figures_runner(tmp_path_factory):
     """One docs_figures.Runner for the session (each command the docs' figures quote runs
-    once a worker: ``mrclutch fidelity``'s full run, a minute, feeds its 50 figures)."""
+    once a worker: ``mrclutch fidelity``'s full run, a minute, feeds docs/fidelity.md's table)."""
     return docs_figures.Runner(tmp_path_factory.mktemp("figures"))
