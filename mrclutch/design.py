@@ -84,8 +84,6 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from geometry import regions
 from geometry.materials import MaterialChoice
 from geometry.params import DrumClutch, preset
