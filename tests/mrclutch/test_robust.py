@@ -2,6 +2,8 @@
 kernel, the box search, the monotonicity claims the corners rest on, and the never-
 optimistic guarantee against dense sampling of the ranges."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -121,6 +123,29 @@ def test_no_uncertainty_gives_the_nominal_answer(paper_box):
         assert lim[f"{q}_best"][0] == pytest.approx(lim[f"{q}_nominal"][0], rel=1e-9)
     # the paper pair's nominal limits (evaluate's figures)
     assert lim["max_stable_K_nominal"][0] == pytest.approx(253.4, rel=1e-3)
+
+
+def test_robust_sweep_columns_are_each_designs_robust_verdict():
+    """The sweep's robust columns (``RobustBatchEvaluator``, every design in one batch:
+    the batch stable-K kernel, the box search vectorised over designs) equal the worst
+    cases of each design's own robust read-out (``robust_verdicts(evaluate(design))``,
+    one design at a time) on a sample of three designs, to 1e-6 (the batch kernel's grid
+    depends on its chunk, the roots on it only to Illinois' 1e-12)."""
+    from mrclutch.pipeline import evaluate
+    from mrclutch.robust import RobustBatchEvaluator, robust_verdicts
+
+    d = design_preset("paper")
+    designs = [{}, {"gap": 0.5e-3}, {"n_drums": 3, "drum_thickness": 0.3e-3}]
+    fields = {k: np.array([x.get(k, getattr(d.clutch, k)) for x in designs])
+              for k in ("gap", "n_drums", "drum_thickness")}  # fmt: skip
+    rows = RobustBatchEvaluator(d, ROBUST_COLUMNS)(fields)
+    keys = {"max_stable_K_worst_N_per_m": "max_stable_K_N_per_m",
+            "max_passive_K_worst_N_per_m": "max_passive_K_N_per_m",
+            "bandwidth_worst_hz": "bandwidth_hz"}  # fmt: skip
+    for i, x in enumerate(designs):
+        one = robust_verdicts(evaluate(replace(d, clutch=replace(d.clutch, **x))))
+        for col, key in keys.items():
+            assert rows[col][i] == pytest.approx(one[key]["worst"], rel=1e-6), (i, col)
 
 
 def test_robust_columns_batch_worst_below_nominal_and_nan_for_invalid(paper_box):
