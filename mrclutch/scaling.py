@@ -23,10 +23,13 @@ from typing import Any
 
 import numpy as np
 
+from geometry.params import INT_RANGES
 from geometry.validation import ParameterError, check_range
 from mrclutch.design import ClutchDesign
 from mrclutch.pipeline import evaluate_batch
 
+#: The most drums a design takes (DrumClutch's n_drums range): the drums route stops there.
+MAX_DRUMS = next(hi for name, _, hi in INT_RANGES if name == "n_drums")
 #: Paper §IV-B: "2X scaling increase by 14 % the total reflected inertia of MR system".
 PAPER_TOTAL_INERTIA_INCREASE_2X = 0.14
 
@@ -63,13 +66,16 @@ def scaling_study(
         return _figures(design, {name: value})["max_torque_N_m"] - target
 
     routes: list[tuple[str, str, float]] = []
-    n = c.n_drums
-    while torque("n_drums", n) < 0:
-        n += 1
-        if n > 20:
-            raise ParameterError(f"factor = {factor}: not reached with up to 20 drums")
-    routes.append(("more drums", "n_drums", n))
     notes: list[str] = []
+    n = c.n_drums
+    while n < MAX_DRUMS and torque("n_drums", n) < 0:
+        n += 1
+    if torque("n_drums", n) < 0:  # the other routes may still reach it: not a refusal
+        notes.append(
+            f"more drums: {factor:g}× torque is out of reach with up to {MAX_DRUMS} drums "
+            f"(the most drums a design takes); the row is at {n} drums"
+        )
+    routes.append(("more drums", "n_drums", n))
     for name, route, hi in (
         ("zone_length", "longer drums", 0.1),
         ("drum_inner_diameter", "larger diameter", 0.1),

@@ -60,3 +60,16 @@ def test_cli_says_why_beside_the_figures(tmp_path, capsys):
     text = capsys.readouterr().out
     assert "at its own K_max" in text and "the added mass lowers it" in text
     assert text.count("% at the base K_max") == 3  # one line per route
+
+
+def test_twenty_drums_answer_with_the_drums_route_out_of_reach():
+    """20 drums is the most a design takes (geometry.params.INT_RANGES): the drums route
+    cannot add one, so its row stays at 20 (torque 1×) with a note, and the longer-drum and
+    larger-diameter routes still answer (the study was refused as a whole before)."""
+    paper = design_preset("paper")
+    twenty = replace(paper, clutch=replace(paper.clutch, n_drums=20))
+    _, routes, notes = scaling_study(twenty)
+    by = {r.name: r for r in routes}
+    assert by["more drums"].value == 20 and by["more drums"].torque_ratio == pytest.approx(1.0)
+    assert any(n.startswith("more drums") and "up to 20 drums" in n for n in notes)
+    assert any(r.torque_ratio == pytest.approx(2.0, rel=1e-6) for r in routes)
