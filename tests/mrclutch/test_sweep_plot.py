@@ -6,7 +6,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from mrclutch.cli.plots.design import MAX_LINES, PLOT_STEPS, pareto_plot, sample_lines
+from mrclutch.cli.plots.design import (
+    BINS,
+    MAX_LINES,
+    MAX_REST_LINES,
+    PLOT_STEPS,
+    binned_mean,
+    pareto_plot,
+    sample_lines,
+    sample_rows,
+)
 from mrclutch.sweep import pareto_front
 
 
@@ -45,9 +54,11 @@ def test_sample_lines_keeps_ends_and_at_most_the_limit():
     assert sample_lines(order[:50]).tolist() == order[:50].tolist()
 
 
-def test_plot_of_a_large_front_draws_a_sample_and_reports_its_steps(tmp_path):
+def test_plot_of_a_large_front_draws_a_sample_and_reports_its_steps(tmp_path, monkeypatch):
     """3000 valid rows on a front of 3000 (each better in one objective, worse in
-    another): the panel draws ``MAX_LINES`` of them and says so; progress runs 1 … 4."""
+    another): the scatter panels draw every point (3000 ≤ ``MAX_POINTS``), the
+    parallel-coordinates panel ``MAX_LINES`` of the front and says so, no grey line (no
+    design is off the front); progress runs 1 … 4."""
     n = 3000
     t = np.linspace(0, 1, n)
     cols = {"valid": np.ones(n), "bandwidth_hz": 10 + 50 * t, "max_torque_N_m": 2 - t,
@@ -56,8 +67,120 @@ def test_plot_of_a_large_front_draws_a_sample_and_reports_its_steps(tmp_path):
     csv.write_text(",".join(cols) + "\n" + "\n".join(
         ",".join(f"{float(cols[k][i])!r}" for k in cols) for i in range(n)) + "\n")  # fmt: skip
     steps = []
+    figs = _drawn(monkeypatch)
     out = pareto_plot(csv, tmp_path / "p.png", progress=steps.append)
     assert out.stat().st_size > 0 and steps == list(range(1, PLOT_STEPS + 1))
+    top, par = figs[0].axes[0], figs[0].axes[2]
+    assert not top.images and len(top.collections[0].get_offsets()) == n
+    grey, red = par.collections
+    assert len(red.get_segments()) == MAX_LINES and len(grey.get_segments()) == 0
+    assert f"{MAX_LINES} of its {n} designs" in par.get_title() and "grey" not in par.get_title()
     import matplotlib.pyplot as plt
 
     assert plt.get_fignums() == []  # save_png closed it
+
+
+def _results_csv(path, cols):
+    n = len(next(iter(cols.values())))
+    path.write_text(",".join(cols) + "\n" + "\n".join(
+        ",".join(f"{float(cols[k][i])!r}" for k in cols) for i in range(n)) + "\n")  # fmt: skip
+    return path
+
+
+def _drawn(monkeypatch):
+    """The figures ``pareto_plot`` hands to ``save_png`` (written and closed as usual)."""
+    import mrclutch.cli.plots.design as design_plots
+
+    figs, real = [], design_plots.save_png
+
+    def keep(fig, out, dpi=110):
+        figs.append(fig)
+        return real(fig, out, dpi=dpi)
+
+    monkeypatch.setattr(design_plots, "save_png", keep)
+    return figs
+
+
+def test_sample_rows_is_a_seeded_random_subset_in_order():
+    """Every 10th row of a grid holds one value of its fastest axis (index mod 10): an
+    evenly spaced sample of 10⁵ rows by 10⁴ would draw that one value only; the random one
+    holds each of the ten values ~10⁴/10 = 1000 times (±3σ = ±90 for a share of 1/10)."""
+    s = sample_rows(100_000, 10_000)
+    assert s.size == 10_000 and np.all(np.diff(s) > 0) and 0 <= s[0] and s[-1] < 100_000
+    assert np.array_equal(s, sample_rows(100_000, 10_000))  # the same figure every time
+    counts = np.bincount(s % 10, minlength=10)
+    assert counts.min() > 1000 - 90 and counts.max() < 1000 + 90
+    assert sample_rows(50, 10_000).tolist() == list(range(50))
+
+
+def test_binned_mean_by_hand():
+    """Points (0, 0) c=1, (0.2, 0.1) c=3 and (1, 1) c=5 in 2 × 2 cells over [0, 1]²: the
+    lower-left cell holds the first two (mean 2), the upper-right the third (5), the other
+    two none (masked); a NaN point is left out."""
+    x, y = np.array([0.0, 0.2, 1.0, np.nan]), np.array([0.0, 0.1, 1.0, 0.5])
+    mean, xe, ye = binned_mean(x, y, np.array([1.0, 3.0, 5.0, 7.0]), bins=(2, 2))
+    assert xe.tolist() == [0, 0.5, 1] and ye.tolist() == [0, 0.5, 1]
+    assert mean[0, 0] == 2 and mean[1, 1] == 5  # rows: y, columns: x
+    assert mean.mask.tolist() == [[False, True], [True, False]]
+
+
+def test_plot_of_many_rows_draws_what_it_says(tmp_path, monkeypatch):
+    """20 000 rows, 1 in 20 invalid (19 000 valid): the scatter panels bin all 19 000 (past
+    ``MAX_POINTS`` = 10⁴) in ``BINS`` cells and circle every design of the front; the
+    parallel-coordinates panel draws the front (fewer than ``MAX_LINES`` here) over
+    ``MAX_REST_LINES`` = 2000 grey lines of the other valid designs; the titles say both
+    samples, the axes their units and ranges. Bandwidth spans 10 – 60 Hz, torque 0.5 – 2
+    N·m, damping 1e-4 – 5e-4 N·m·s = 100 – 500 µN·m·s (worst, 500, first)."""
+    n = 20_000
+    rng = np.random.default_rng(7)
+    bw = rng.uniform(10, 60, n)
+    tq = rng.uniform(0.5, 2.0, n)
+    damp = rng.uniform(1e-4, 5e-4, n)
+    bw[:2], tq[:2], damp[:2] = (10, 60), (0.5, 2.0), (5e-4, 1e-4)  # the ranges' ends
+    valid = np.where(np.arange(n) % 20 == 19, 0.0, 1.0)
+    csv = _results_csv(tmp_path / "r.csv", {
+        "valid": valid, "bandwidth_hz": bw, "max_torque_N_m": tq,
+        "drag_damping_N_m_s": damp, "clutch_mass_kg": rng.uniform(0.05, 0.2, n)})  # fmt: skip
+    figs = _drawn(monkeypatch)
+    pareto_plot(csv, tmp_path / "p.png")
+    (fig,) = figs
+    ok = valid == 1
+    front = pareto_front(np.column_stack([bw[ok], tq[ok], damp[ok]]), [True, True, False])
+    assert 0 < front.sum() < MAX_LINES
+    top, _, par = fig.axes[:3]
+    (image,), circles = top.images, top.collections[-1]
+    assert image.get_array().shape == (BINS[1], BINS[0])
+    # 19 000 uniform points in 10 800 cells leave 1 − e^(−19000/10800) = 82.8 % of them
+    # holding some (torque and bandwidth are independent here); each a mean of 50–200 g
+    cells = image.get_array()
+    assert 0.80 < cells.count() / cells.size < 0.86
+    assert 50 <= cells.min() and cells.max() <= 200
+    drawn = {tuple(p) for p in np.asarray(circles.get_offsets())}
+    assert drawn == set(zip(tq[ok][front], bw[ok][front], strict=True))  # every front design
+    grey, red = par.collections
+    assert len(grey.get_segments()) == MAX_REST_LINES
+    assert len(red.get_segments()) == front.sum()
+    assert f"a random sample of {MAX_REST_LINES} of the other {ok.sum() - front.sum()}" \
+        in par.get_title()  # fmt: skip
+    assert (f"19000 valid designs of 20000;\nbinned in {BINS[0]} × {BINS[1]} cells, each the "
+            "mean mass of its designs") in fig._suptitle.get_text()  # fmt: skip
+    assert top.get_ylabel() == "bandwidth at K_max (Hz)"
+    assert top.get_xlabel().startswith("max torque (N·m")
+    ticks = [t.get_text() for t in par.get_xticklabels()]
+    assert ticks[0].endswith("10 – 60 Hz") and ticks[1].endswith("0.5 – 2 N·m")
+    assert ticks[2].endswith("500 – 100 µN·m·s")
+
+
+def test_sweep_says_it_draws_the_plot_on_stderr(tmp_path, capsys):
+    """After the sweep's rows, before the drawing: one line on stderr, nothing on stdout but
+    the command's own lines."""
+    from mrclutch.cli.main import main
+
+    spec = tmp_path / "s.toml"
+    spec.write_text('[sweep]\nmode = "random"\nsamples = 40\nseed = 1\n\n[parameters]\n'
+                    "gap_mm = {min = 0.3, max = 0.8}\n")  # fmt: skip
+    code = main(["sweep", str(spec), "--out", str(tmp_path / "r.csv"), "--no-progress",
+                 "--pareto", str(tmp_path / "p.png")])  # fmt: skip
+    out, err = capsys.readouterr()
+    assert code == 0 and (tmp_path / "p.png").stat().st_size > 1000
+    assert "drawing the plot of 40 designs …" in err and "drawing" not in out

@@ -16,15 +16,21 @@ from mrclutch.sweep import is_parquet, pareto_front, read_results
 __all__ = ["pareto_plot", "pareto_set_plot", "read_results"]
 
 
-#: Lines a parallel-coordinates panel draws at most: past this many front designs it draws
-#: this many, evenly spaced along the front's bandwidth order (10⁵ lines are a solid block
-#: that takes ~20 s to draw, issue 40), and says so in its title.
+#: Lines a parallel-coordinates panel draws of the front at most: past this many front
+#: designs it draws this many, evenly spaced along the front's bandwidth order, and says so
+#: in its title.
 MAX_LINES = 200
-#: Points a scatter panel draws at most: past this many valid designs, this many evenly
-#: spaced in the file's order (a sweep's rows are its designs in random or grid order) and
-#: every front member; the title says how many of how many (10⁵ points drawn three times
-#: and a "best" legend placed among them took ~20 s, issue 40).
+#: Lines the parallel-coordinates panel draws, in grey behind the front, of the valid
+#: designs off it: a random sample of at most this many (said in its title). All 10⁵ lines
+#: of a sweep are a solid block that took ~20 s to draw (issue 40).
+MAX_REST_LINES = 2000
+#: Points a scatter panel draws at most: past this many valid designs it bins them all
+#: instead (``BINS`` cells, each coloured by the mean mass of its designs; empty cells
+#: blank) and circles every front member; the title says which (10⁵ points drawn three
+#: times and a "best" legend placed among them took ~20 s, issue 40).
 MAX_POINTS = 10_000
+#: Cells (across, up) of a scatter panel's 2-D histogram past ``MAX_POINTS`` designs.
+BINS = (120, 90)
 #: The columns ``pareto_plot`` reads (a sweep's CSV has ~40: only these are parsed).
 PLOT_COLUMNS = ("valid", "bandwidth_hz", "max_torque_N_m", "drag_damping_N_m_s",
                 "clutch_mass_kg")  # fmt: skip
@@ -54,17 +60,46 @@ def sample_lines(order: np.ndarray, most: int = MAX_LINES) -> np.ndarray:
     return order[np.unique(np.round(np.linspace(0, order.size - 1, most)).astype(int))]
 
 
+def sample_rows(n: int, most: int, seed: int = 0) -> np.ndarray:
+    """At most ``most`` of the indices 0 … n−1, in order: a random sample without
+    replacement (seeded: a file draws the same figure every time); all of them when
+    n ≤ most. Random rather than evenly spaced: every k-th row of a grid sweep can be one
+    value of its fastest axis."""
+    if n <= most:
+        return np.arange(n)
+    return np.sort(np.random.default_rng(seed).choice(n, size=most, replace=False))
+
+
+def binned_mean(x: np.ndarray, y: np.ndarray, c: np.ndarray, bins: tuple[int, int] = BINS
+                ) -> tuple[np.ma.MaskedArray, np.ndarray, np.ndarray]:  # fmt: skip
+    """The mean of ``c`` over the points (x, y) in each cell of a ``bins`` grid spanning
+    them (rows: y, columns: x, as an image), masked where a cell holds none; and the cell
+    edges in x and y. Non-finite points are left out."""
+    ok = np.isfinite(x) & np.isfinite(y) & np.isfinite(c)
+    n, xe, ye = np.histogram2d(x[ok], y[ok], bins=bins)
+    total, _, _ = np.histogram2d(x[ok], y[ok], bins=[xe, ye], weights=c[ok])
+    mean = np.ma.masked_where(n == 0, total / np.maximum(n, 1))
+    return mean.T, xe, ye
+
+
+def _span(values: np.ndarray, unit: str) -> str:
+    """An axis' range in its unit, worst to best as drawn."""
+    return f"{values[0]:.3g} – {values[1]:.3g} {unit}"
+
+
 def pareto_plot(results: str | Path, out: str | Path,
                 progress: Callable[[int], None] | None = None) -> Path:  # fmt: skip
     """The Pareto front of three objectives: rendering bandwidth (max), max torque (max) and
     off-state viscous damping (min). Top two panels: bandwidth against each other objective,
-    mass as colour, with that panel's own two-objective front (a step line, computed on the
-    panel's axes) and the three-objective front outlined (it may lie inside a 2-D cloud: a
-    design there wins on the third objective). Bottom: the three-objective front on all three
-    axes at once (parallel coordinates, each axis from the worst to the best valid design;
-    at most ``MAX_LINES`` lines, a sample evenly spaced along the front, ``sample_lines``).
-    ``progress(n)``: called with the steps done of ``PLOT_STEPS`` (read, fronts, drawn,
-    written)."""
+    mass as colour (past ``MAX_POINTS`` designs binned, ``binned_mean``), with
+    that panel's own two-objective front (a step line, computed on the panel's axes) and
+    every design of the three-objective front circled (it may lie inside a 2-D cloud: a
+    design there wins on the third objective). Bottom: the three-objective front on all
+    three axes at once (parallel coordinates, each axis from the worst to the best valid
+    design; at most ``MAX_LINES`` lines, evenly spaced along the front, ``sample_lines``)
+    over a random sample of at most ``MAX_REST_LINES`` of the other valid designs in grey.
+    Every sample is said on the figure. ``progress(n)``: called with the steps done of
+    ``PLOT_STEPS`` (read, fronts, drawn, written)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -80,13 +115,19 @@ def pareto_plot(results: str | Path, out: str | Path,
     front = pareto_front(np.column_stack([bw, tq, damp]), [True, True, False])
     step(2)
     fig, axes = plt.subplots(3, 1, figsize=(6, 11), constrained_layout=True)
-    dots = sample_lines(np.arange(bw.size), MAX_POINTS)
+    binned = bw.size > MAX_POINTS
     span = {"vmin": np.nanmin(mass), "vmax": np.nanmax(mass)} if mass.size else {}  # all rows'
     for ax, x, label, big in ((axes[0], tq, "max torque (N·m; more is better)", True),
                               (axes[1], damp, "viscous damping (µN·m·s; less is better)",
                                False)):  # fmt: skip
-        sc = ax.scatter(x[dots], bw[dots], c=mass[dots], s=6, cmap="viridis", alpha=0.6,
-                        linewidths=0, **span)  # fmt: skip
+        if binned:  # every design, in cells: one image, not 10⁵ markers
+            mean, xe, ye = binned_mean(x, bw, mass)
+            sc = ax.imshow(mean, origin="lower", extent=(xe[0], xe[-1], ye[0], ye[-1]),
+                           aspect="auto", interpolation="nearest", cmap="viridis",
+                           **span)  # fmt: skip
+        else:
+            sc = ax.scatter(x, bw, c=mass, s=6, cmap="viridis", alpha=0.6, linewidths=0,
+                            **span)  # fmt: skip
         two = pareto_front(np.column_stack([bw, x]), [True, big])
         k = np.flatnonzero(two)
         k = k[np.argsort(x[k])]
@@ -99,30 +140,45 @@ def pareto_plot(results: str | Path, out: str | Path,
         ax.grid(alpha=0.3)
         ax.legend(loc="lower right", fontsize=9)  # not "best": a search among 10⁵ points
     fig.colorbar(sc, ax=axes[:2], label="clutch mass (g)")
-    names = ("bandwidth\n(max)", "max torque\n(max)", "damping\n(min)")
-    cols = [bw, tq, -damp]  # larger is better on every axis
     ax = axes[2]
-    title = "the three-objective front on its own axes"
+    title = "the three-objective front (crimson) on its own axes"
+    names = ["bandwidth (Hz)\n(max)", "max torque (N·m)\n(max)", "damping (µN·m·s)\n(min)"]
     if ok.any():
+        cols = [bw, tq, -damp]  # larger is better on every axis
         lo = [float(np.nanmin(c)) for c in cols]
         hi = [float(np.nanmax(c)) for c in cols]
         scaled = np.column_stack([(c - a) / (b - a) if b > a else np.ones_like(c)
                                   for c, a, b in zip(cols, lo, hi, strict=True)])  # fmt: skip
+        ranges = [(lo[0], hi[0]), (lo[1], hi[1]), (-lo[2], -hi[2])]  # worst to best
+        names = [f"{n}\n{_span(v, u)}" for n, v, u in
+                 zip(names, ranges, ("Hz", "N·m", "µN·m·s"), strict=True)]  # fmt: skip
         k = np.flatnonzero(front)
+        rest = np.flatnonzero(~front & np.all(np.isfinite(scaled), axis=1))
+        grey = rest[sample_rows(rest.size, MAX_REST_LINES, seed=1)]
         shown = sample_lines(k[np.argsort(bw[k], kind="stable")])
-        lines = [np.column_stack([np.arange(3), scaled[j]]) for j in shown]
-        ax.add_collection(LineCollection(lines, colors="crimson", alpha=0.5, linewidths=0.8))
+        x3 = np.arange(3.0)
+        ax.add_collection(LineCollection([np.column_stack([x3, scaled[j]]) for j in grey],
+                                         colors="0.45", alpha=0.25, linewidths=0.6,
+                                         zorder=1))  # fmt: skip
+        ax.add_collection(LineCollection([np.column_stack([x3, scaled[j]]) for j in shown],
+                                         colors="crimson", alpha=0.45, linewidths=0.7,
+                                         zorder=2))  # fmt: skip
         if shown.size < k.size:
             title += f"\n({shown.size} of its {k.size} designs, evenly spaced in bandwidth)"
+        if grey.size < rest.size:
+            title += f"\ngrey: a random sample of {grey.size} of the other {rest.size} designs"
+        elif rest.size:
+            title += f"\ngrey: the other {rest.size} designs"
     ax.set_xticks(range(3), names, fontsize=9)
     ax.set_yticks([0, 1], ["worst", "best"])
     ax.set_xlim(-0.1, 2.1)
     ax.set_ylim(-0.05, 1.05)
     ax.set_title(title, fontsize=10)
     ax.grid(alpha=0.3)
-    shown = "" if dots.size == bw.size else f"; {dots.size} of them drawn, evenly spaced"
+    how = (f";\nbinned in {BINS[0]} × {BINS[1]} cells, each the mean mass of its designs"
+           if binned else "")  # fmt: skip
     fig.suptitle(f"Pareto front: max bandwidth, max torque, min damping\n"
-                 f"({ok.sum()} valid designs of {ok.size}{shown})", fontsize=11)  # fmt: skip
+                 f"({ok.sum()} valid designs of {ok.size}{how})", fontsize=11)  # fmt: skip
     step(3)
     save_png(fig, out, dpi=110)
     step(PLOT_STEPS)

@@ -1,0 +1,107 @@
+"""The sweep's Pareto plot on 10⁵ rows (issue 40: ≤ 2 s), and what its samples save.
+
+    python benchmarks/bench_sweep_plot.py [--csv RESULTS.csv] [--rounds 3]
+
+Without ``--csv`` it first runs ``mrclutch sweep examples/random_sweep.toml`` (10⁵ random
+designs, minutes) into a temporary folder. Then, each in a fresh process (imports
+included: what ``sweep --pareto`` adds after its rows), ``pareto_plot`` on those rows:
+
+- as shipped: the scatter panels a random sample of ``MAX_POINTS``, the
+  parallel-coordinates panel at most ``MAX_LINES`` lines of the front over a random sample
+  of ``MAX_REST_LINES`` of the other designs;
+- everything drawn (the three limits set past the row count: every point and every line of
+  the valid designs, what a plot without samples draws).
+
+Prints the median wall and CPU time (user + system of the child, what a loaded machine
+inflates least) of ``--rounds`` runs, each step's share (read, fronts, drawing, PNG) and
+the ratio of the two, with the machine and its load average: times are this machine's.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+GOAL_S = 2.0
+
+#: One plot in a fresh process: its steps' times as JSON on stdout.
+CHILD = r"""
+import json, sys, time
+t0 = time.perf_counter()
+import mrclutch.cli.plots.design as d
+if sys.argv[3] == "all":
+    d.MAX_POINTS = d.MAX_LINES = d.MAX_REST_LINES = 10**9
+marks = [time.perf_counter()]
+d.pareto_plot(sys.argv[1], sys.argv[2], progress=lambda n: marks.append(time.perf_counter()))
+print(json.dumps({"import": marks[0] - t0, "steps": [b - a for a, b in zip(marks, marks[1:])],
+                  "total": marks[-1] - t0}))
+"""
+STEPS = ("read", "fronts", "drawing", "PNG")
+
+
+def _child_cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def plot_once(csv: Path, png: Path, mode: str) -> tuple[float, float, dict]:
+    """(wall s, CPU s, the child's step times) of one plot in a fresh process."""
+    env = {**os.environ, "PYTHONPATH": f"{ROOT}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"}
+    cpu0, t0 = _child_cpu(), time.perf_counter()
+    out = subprocess.run([sys.executable, "-c", CHILD, str(csv), str(png), mode], env=env,
+                         capture_output=True, text=True, check=True)  # fmt: skip
+    wall = time.perf_counter() - t0
+    return wall, _child_cpu() - cpu0, json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def sweep_rows(tmp: Path) -> Path:
+    """The 10⁵ rows of examples/random_sweep.toml, swept here."""
+    csv = tmp / "random_sweep.csv"
+    print("sweeping examples/random_sweep.toml (10^5 designs) ...", file=sys.stderr)
+    subprocess.run([sys.executable, "-m", "mrclutch", "sweep",
+                    str(ROOT / "examples" / "random_sweep.toml"), "--out", str(csv),
+                    "--no-progress"], check=True)  # fmt: skip
+    return csv
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--csv", type=Path, help="a sweep's results (default: sweep 10^5 rows)")
+    ap.add_argument("--rounds", type=int, default=3)
+    args = ap.parse_args()
+    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, "
+          f"Python {platform.python_version()}; load average before: "
+          f"{os.getloadavg()[0]:.2f}")  # fmt: skip
+    with tempfile.TemporaryDirectory() as folder:
+        tmp = Path(folder)
+        csv = args.csv if args.csv is not None else sweep_rows(tmp)
+        rows = sum(1 for _ in csv.open()) - 1
+        print(f"rows: {rows} ({csv})")
+        result = {}
+        for mode, what in (("shipped", "as shipped (samples)"), ("all", "everything drawn")):
+            runs = [plot_once(csv, tmp / f"{mode}.png", mode) for _ in range(args.rounds)]
+            wall = statistics.median(r[0] for r in runs)
+            cpu = statistics.median(r[1] for r in runs)
+            mid = sorted(runs, key=lambda r: r[0])[len(runs) // 2][2]
+            steps = ", ".join(f"{n} {s:.2f}" for n, s in zip(STEPS, mid["steps"], strict=False))
+            result[mode] = (wall, cpu)
+            goal = f"  (goal <= {GOAL_S:g} s)" if mode == "shipped" else ""
+            print(f"{what:24s} wall {wall:6.2f} s  CPU {cpu:6.2f} s{goal}\n"
+                  f"{'':24s} import {mid['import']:.2f} s; steps (s): {steps}")  # fmt: skip
+        (w1, c1), (w2, c2) = result["shipped"], result["all"]
+        print(f"everything drawn / as shipped: wall ratio {w2 / w1:.1f}, CPU ratio {c2 / c1:.1f}")
+    print(f"load average after: {os.getloadavg()[0]:.2f}")
+
+
+if __name__ == "__main__":
+    main()
