@@ -26,7 +26,9 @@ def test_export_writes_step_and_stls(exported):
 
 def test_inertia_json_three_methods(capsys):
     assert main(["inertia", "--preset", "paper", "--json"]) == 0
-    out = json.loads(capsys.readouterr().out)
+    cap = capsys.readouterr()
+    out = json.loads(cap.out)  # the JSON alone on stdout; the bar of its 4 steps on stderr
+    assert "inertia: CAD solids built" in cap.err and "4/4" in cap.err
     ref = out["analytic"]["rotor_inertia_kg_m2"]
     for m in ("analytic", "mesh", "brep"):
         assert out[m]["rotor_inertia_kg_m2"] == pytest.approx(ref, rel=1e-2)
@@ -46,7 +48,9 @@ def test_inertia_one_method_is_that_method_alone(capsys):
     from geometry.section import build_section
 
     assert main(["inertia", "--preset", "paper", "--json", "--method", "analytic"]) == 0
-    out = json.loads(capsys.readouterr().out)
+    cap = capsys.readouterr()
+    out = json.loads(cap.out)
+    assert cap.err == ""  # no CAD step: no bar
     assert {"mesh", "brep"}.isdisjoint(out) and "analytic" in out
     ref = analytic_mass(build_section(preset("paper")))
     assert out["analytic"]["rotor_inertia_kg_m2"] == ref.rotor_inertia

@@ -36,6 +36,7 @@ from geometry.validation import ParameterError, check_choice, check_positive, ch
 from mrclutch.cli.commands._common import add_design_args, load_clutch, load_design_args, print_json
 from mrclutch.cli.commands.handoff import export_handoff
 from mrclutch.cli.errors import CLIError
+from mrclutch.cli.progress import bar
 from mrclutch.cli.view import screenshot, show
 
 CAD_SUFFIXES = (".step", ".stp", ".stl")
@@ -165,19 +166,25 @@ def cmd_inertia(args: argparse.Namespace) -> int:
         raise CLIError("--density/--part-density apply to a STEP/STL file only")
     design = load_design_args(args)
     clutch = design.clutch
-    tol = _tolerance(args, clutch)
-    s = build_section(clutch, design.materials)
     wanted = INERTIA_METHODS[1:] if args.method == "all" else (args.method,)
-    # the CAD solids (build123d, seconds) only for the methods that weigh them
-    solids = material_solids(clutch, s) if set(wanted) - {"analytic"} else None
+    # the chord height bounds the mesh only: --method analytic|brep never reads it
+    tol = _tolerance(args, clutch) if "mesh" in wanted else None
+    s = build_section(clutch, design.materials)
+    cad = bool(set(wanted) - {"analytic"})
     reps = {}
-    for m in wanted:
-        if m == "analytic":
-            reps[m] = analytic_mass(s)
-        elif m == "mesh":
-            reps[m] = mesh_mass(clutch, tol, solids=solids, materials=design.materials)
-        else:
-            reps[m] = brep_mass(clutch, solids, materials=design.materials)
+    # the CAD solids (build123d, seconds) only for the methods that weigh them, under a bar
+    # of the steps with its estimate (issue 40: a wait over ~2 s says how long)
+    with bar(1 + len(wanted), "inertia", "step", enabled=cad) as done:
+        solids = material_solids(clutch, s) if cad else None
+        done(1, "inertia: CAD solids built" if cad else None)
+        for k, m in enumerate(wanted, 2):
+            if m == "analytic":
+                reps[m] = analytic_mass(s)
+            elif m == "mesh":
+                reps[m] = mesh_mass(clutch, tol, solids=solids, materials=design.materials)
+            else:
+                reps[m] = brep_mass(clutch, solids, materials=design.materials)
+            done(k)
     out: dict[str, Any] = {k: _method(r) for k, r in reps.items()}
     # the clutch's mass by the most exact method run (the B-rep, else the first)
     out["clutch_mass_kg"] = reps.get("brep", reps[wanted[0]]).clutch_mass
