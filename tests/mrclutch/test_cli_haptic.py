@@ -17,7 +17,8 @@ def _json(capsys, argv):
 
 def test_haptic_json_keys_and_units(capsys):
     m = _json(capsys, ["haptic", "--actuator", "maxon-136209", "--stiffness", "200", "--json"])
-    assert tuple(m) == (*METRIC_KEYS, "source")
+    assert tuple(m) == (*METRIC_KEYS, "source", "nulls")  # nulls: the reason of each null
+    assert m["nulls"] == {}  # this pair resonates: no null
     assert m["source"] == "maxon-136209, Table 1 catalogue"
     assert m["K_N_per_m"] == 200.0 and m["delay_s"] == 0.0
     assert m["m1_kg"] == pytest.approx(38.5e-3, abs=0.5e-3)

@@ -29,7 +29,7 @@ from mrclutch.haptics.actuator import (
 )
 from mrclutch.haptics.model import bandwidth, is_stable, metrics
 from mrclutch.outputs import format_kmax
-from mrclutch.pipeline import evaluate
+from mrclutch.pipeline import evaluate, null_notes
 from mrclutch.verdict import judge_evaluation, verdict_lines
 
 ACTUATOR_NAMES = ("mr-paper", "maxon-118890", "maxon-136206", "maxon-136209")
@@ -130,8 +130,9 @@ def run_haptic(args: argparse.Namespace) -> int:
         _, data = judged
         h = data["haptic"]
         if args.json:
-            print_json({**h, "source": data["source"], "verdict": data["verdict"],
-                        "render": data["render"]})  # fmt: skip
+            out = {**h, "source": data["source"], "verdict": data["verdict"],
+                   "render": data["render"]}  # fmt: skip
+            print_json({**out, "nulls": null_notes(out)})  # every null with its reason
             return 0
         print("\n".join(verdict_lines(data)))
         print(f"MR pair of design {data['design']} ({data['source']})")
@@ -147,7 +148,7 @@ def run_haptic(args: argparse.Namespace) -> int:
     m = metrics(reflect(act, tr), K)
     src = catalogue_source(act.name)
     if args.json:
-        print_json({**m, "source": src})
+        print_json({**m, "source": src, "nulls": null_notes(m)})
     else:
         print(f"{act.name} on a {lever * 1e3:g} mm lever, gearing {gearing:g}, n = {tr.ratio:.3f}")
         _print_metrics(m, src if K is None else "typed")
@@ -214,7 +215,7 @@ def run_compare(args: argparse.Namespace) -> int:
     if args.plot:
         compare_figure({"MR pair (Table 2)": mr, "Maxon 136206": em}, K, args.plot)
     if args.json:
-        print_json(res)
+        print_json({**res, "nulls": null_notes(res)})  # every null with its reason
         return 0
     for side, title, p in (("mr", "MR pair (Table 2 identified)", mr),
                            ("em", "Maxon 136206", em)):  # fmt: skip
@@ -256,6 +257,7 @@ def _compare_design(args: argparse.Namespace, ev: Any, data: dict[str, Any]) -> 
         "bandwidth_gain_lumped": data["bandwidth_gain_lumped"],
         "sources": {"mr": src, "em": f"Maxon 136206 geared to the pair's force ({src})"},
     }
+    res["nulls"] = null_notes(res)  # every null with its reason (evaluate's table)
     if args.plot:
         sides = {"MR pair": ev.mr, "Maxon 136206 (equal force)": ev.motor}
         compare_figure({n: p for n, p in sides.items() if p is not None}, K, args.plot)
