@@ -442,6 +442,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--report", action="store_true", help="print the table of --out")
     ap.add_argument("--summary", action="store_true", help="print --out's counts as JSON")
     ap.add_argument("--only", nargs="*", help="re-run these 'module:index' mutants only")
+    ap.add_argument("--map-tests", nargs="*", default=None, metavar="TEST",
+                    help="the tests the coverage map is built from (default: the run's); a "
+                    "mutant's second stage still runs every importer of its package")  # fmt: skip
     ap.add_argument(
         "--coverage",
         type=Path,
@@ -454,6 +457,8 @@ def main(argv: list[str] | None = None) -> int:
     args.out = args.out or ROOT / _RUN["out"]
     args.coverage = args.coverage or ROOT / _RUN["coverage"]
     IGNORED.extend(args.without)
+    if args.map_tests:
+        _RUN["tests"] = tuple(args.map_tests)
     if args.report or args.summary:
         got = [Mutant(**d) for d in json.loads(args.out.read_text())["mutants"]]
         print(json.dumps(summary(got)) if args.summary else report(got))
