@@ -12,14 +12,13 @@ tests/magnetics/test_materials_table.py checks the doc holds what this prints.
 
 from __future__ import annotations
 
-import argparse
 import re
 import sys
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from geometry.atomic import write_text
+from geometry import docblock
 from geometry.materials import RECORDS, is_builtin
 from magnetics.hot import tau_y_coefficient
 from magnetics.materials import FLUIDS
@@ -90,31 +89,17 @@ def table() -> str:
 
 def block() -> str:
     """What the doc holds between the markers (the command that writes it, then the table)."""
-    return f"{BEGIN}\n`python -m magnetics.materials_table --write`:\n\n{table()}\n{END}"
+    return docblock.block(BEGIN, END, "python -m magnetics.materials_table --write", table())
 
 
 def replaced(text: str) -> str:
     """``text`` with its marked block replaced by ``block()``; ValueError without markers."""
-    i, j = text.find(BEGIN), text.find(END)
-    if i < 0 or j < i:
-        raise ValueError(f"no {BEGIN} … {END} block")
-    return text[:i] + block() + text[j + len(END) :]
+    return docblock.replaced(text, BEGIN, END, block())
 
 
 def main(argv: list[str] | None = None) -> int:
     """Print the table, or rewrite it in docs/materials.md (``--write``)."""
-    ap = argparse.ArgumentParser(prog="python -m magnetics.materials_table")
-    ap.add_argument("--write", action="store_true", help="rewrite the block in docs/materials.md")
-    args = ap.parse_args(argv)
-    if not args.write:
-        print(table())
-        return 0
-    try:
-        write_text(DOC, replaced(DOC.read_text()))
-    except (OSError, ValueError) as e:
-        print(f"materials_table: {DOC.name}: {e}", file=sys.stderr)
-        return 2
-    return 0
+    return docblock.main(argv, "python -m magnetics.materials_table", DOC, table, replaced)
 
 
 if __name__ == "__main__":

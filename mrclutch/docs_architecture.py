@@ -14,13 +14,11 @@ exists.
 
 from __future__ import annotations
 
-import argparse
 import ast
 import re
-import sys
 from pathlib import Path
 
-from geometry.atomic import write_text
+from geometry import docblock
 
 ROOT = Path(__file__).resolve().parents[1]
 DOC = ROOT / "docs" / "architecture.md"
@@ -79,28 +77,17 @@ def table() -> str:
 
 def block() -> str:
     """The generated block, with its markers and the command that writes it."""
-    return f"{BEGIN}\n`python -m mrclutch.docs_architecture --write`:\n\n{table()}\n{END}"
+    return docblock.block(BEGIN, END, "python -m mrclutch.docs_architecture --write", table())
 
 
 def replaced(text: str) -> str:
     """``text`` with its map block replaced by the current one."""
-    i, j = text.find(BEGIN), text.find(END)
-    if i < 0 or j < i:
-        raise ValueError(f"{DOC.name}: no {BEGIN} … {END} block")
-    return text[:i] + block() + text[j + len(END) :]
+    return docblock.replaced(text, BEGIN, END, block())
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m mrclutch.docs_architecture",
-                                 description=__doc__.split("\n\n")[0])  # fmt: skip
-    ap.add_argument("--write", action="store_true", help=f"rewrite the map in {DOC.name}")
-    args = ap.parse_args(argv)
-    if args.write:
-        write_text(DOC, replaced(DOC.read_text(encoding="utf-8")))
-        print(DOC)
-    else:
-        sys.stdout.write(table() + "\n")
-    return 0
+    """Print the map, or rewrite it in docs/architecture.md (``--write``)."""
+    return docblock.main(argv, "python -m mrclutch.docs_architecture", DOC, table, replaced)
 
 
 if __name__ == "__main__":

@@ -70,3 +70,27 @@ def test_every_cited_dotted_name_exists(name: str) -> None:
             obj = getattr(obj, attr)
         return
     pytest.fail(f"docs/architecture.md cites {name}: no such module")
+
+
+def test_the_block_writer_rewrites_only_its_block_and_refuses_a_doc_without_one(
+    tmp_path, capsys
+) -> None:
+    from geometry import docblock
+
+    doc = tmp_path / "d.md"
+    doc.write_text("head\n<!-- b -->\nold\n<!-- /b -->\ntail\n")
+    new = docblock.block("<!-- b -->", "<!-- /b -->", "cmd --write", "| x |")
+    assert new == "<!-- b -->\n`cmd --write`:\n\n| x |\n<!-- /b -->"
+
+    def rewrite(t: str) -> str:
+        return docblock.replaced(t, "<!-- b -->", "<!-- /b -->", new)
+
+    assert docblock.main(["--write"], "prog", doc, lambda: "| x |", rewrite) == 0
+    assert doc.read_text() == f"head\n{new}\ntail\n"
+    assert docblock.main([], "prog", doc, lambda: "| x |", rewrite) == 0
+    assert capsys.readouterr().out.endswith("| x |\n")
+    doc.write_text("no markers\n")
+    assert docblock.main(["--write"], "prog", doc, lambda: "", rewrite) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "d.md: no <!-- b --> … <!-- /b --> block" in err
+    assert doc.read_text() == "no markers\n"
