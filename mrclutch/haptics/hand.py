@@ -59,10 +59,16 @@ from typing import Any
 import numpy as np
 from numpy.polynomial import polynomial as P
 
+from geometry.numerics import illinois
 from geometry.validation import ParameterError, check_int, check_nonnegative, check_positive
 from mrclutch.haptics.actuator import HapticParams
 from mrclutch.haptics.impedance import _check_K, _hold, _num_coeffs
-from mrclutch.haptics.limits import _FIELDS, _scan_imaginary_axis, max_passive_stiffness
+from mrclutch.haptics.limits import (
+    _FIELDS,
+    MAX_GRID,
+    StabilitySearchError,
+    max_passive_stiffness,
+)
 
 __all__ = [
     "DEFAULT_AMPLITUDE",
@@ -173,23 +179,152 @@ def _one(p: HapticParams) -> HapticParams:
     return p
 
 
+def _hand_rows(hands: Any) -> np.ndarray:
+    """Hands as rows (m_h, b_h, k_h): a list of Hand, or an (H, 3) array."""
+    if isinstance(hands, Hand):
+        hands = [hands]
+    if len(hands) and isinstance(hands[0], Hand):
+        return np.array([[h.m, h.b, h.k] for h in hands], dtype=float).reshape(-1, 3)
+    return np.asarray(hands, dtype=float).reshape(-1, 3)
+
+
+def _p_hands(p: HapticParams, rows: np.ndarray) -> np.ndarray:
+    """P_h = s Num + (m_h s² + b_h s + k_h) D1 of each hand row, (H, 5), descending."""
+    a3, a2, a1, a0 = _num_coeffs(p)
+    d2, d1, d0 = p.m1, p.b1 + p.b, p.k  # Eq. 2 denominator D1 [lebel]
+    m, b, k = rows[:, 0], rows[:, 1], rows[:, 2]
+    # s · Eq. 2 numerator [lebel] + s Z_h D1 (the product of the two quadratics)
+    return np.stack(
+        [
+            a3 + m * d2,
+            a2 + m * d1 + b * d2,
+            a1 + m * d0 + b * d1 + k * d2,
+            a0 + b * d0 + k * d1,
+            k * d0,
+        ],
+        axis=1,
+    )
+
+
 def _p_hand(p: HapticParams, h: Hand) -> np.ndarray:
     """P_h = s Num + (m_h s² + b_h s + k_h) D1, coefficients descending (degree 4)."""
-    a3, a2, a1, a0 = _num_coeffs(p)
-    s_num = np.array([a3, a2, a1, a0, 0.0])  # s · Eq. 2 numerator [lebel]
-    d1 = np.array([p.m1, p.b1 + p.b, p.k])  # Eq. 2 denominator [lebel]
-    zh = np.polymul([h.m, h.b, h.k], d1)  # s Z_h D1
-    return s_num + np.concatenate([np.zeros(5 - zh.size), zh])
+    return _p_hands(p, _hand_rows(h))[0]
 
 
-def _chi_h(p: HapticParams, h: Hand, K: Any, s: Any) -> Any:
-    """χ_h(s) = P_h(s) + K E(s)(bs + k) (module docstring), vectorised over K and s."""
-    c = _p_hand(p, h)
-    poly = (((c[0] * s + c[1]) * s + c[2]) * s + c[3]) * s + c[4]
+def _chi_c(p: HapticParams, c: np.ndarray, K: Any, s: Any) -> Any:
+    """χ_h(s) = P_h(s) + K E(s)(bs + k) with P_h's coefficients ``c`` (last axis, 5)."""
+    poly = (((c[..., 0] * s + c[..., 1]) * s + c[..., 2]) * s + c[..., 3]) * s + c[..., 4]
     E = np.exp(-s * p.delay)
     if p.sample_period > 0:
         E = E * (1 - np.exp(-s * p.sample_period)) / (s * p.sample_period)
     return poly + K * E * (p.b * s + p.k)
+
+
+def _chi_h(p: HapticParams, h: Hand, K: Any, s: Any) -> Any:
+    """χ_h(s) = P_h(s) + K E(s)(bs + k) (module docstring), vectorised over K and s."""
+    return _chi_c(p, _p_hand(p, h), K, s)
+
+
+def _scan_hands(
+    p: HapticParams,
+    c: np.ndarray,
+    w_a: np.ndarray,
+    w_lo: np.ndarray,
+    X: Any,
+    k_stop: float | None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """``limits._scan_imaginary_axis`` for every hand at once (rows of ``c``; the same
+    grid per hand, rows padded by repeating an end point, which makes no sign change):
+    (hand index, ω) of every sign change of Im X, refined by Illinois regula falsi."""
+    tau = p.delay + 0.5 * p.sample_period
+    step = np.minimum(w_a / 50.0, math.pi / (16.0 * tau))
+    grid = w_a[:, None] * np.logspace(-4, 0, 401)
+    low = ~np.isnan(w_lo) & (w_lo < grid[:, 0])  # a slow mode below the grid: start lower
+    if low.any():
+        pre = np.repeat(grid[:, :1], 100, axis=1)
+        pre[low] = np.geomspace(w_lo[low], grid[low, 0], 101, axis=1)[:, :-1]
+        grid = np.concatenate([pre, grid], axis=1)
+    rows = np.arange(c.shape[0])
+    best = np.full(c.shape[0], math.inf)
+    limit = None if k_stop is None else float(k_stop)
+    hids, ws = [], []
+    while True:
+        xi = X(rows[:, None], grid).imag
+        r, j = np.nonzero(np.sign(xi[:, :-1]) * np.sign(xi[:, 1:]) < 0)
+        hid = rows[r]
+        w = illinois(lambda act, x, hid=hid: X(hid[act], x).imag, grid[r, j], grid[r, j + 1],
+                     xi[r, j], xi[r, j + 1], 1e-13)  # fmt: skip
+        hids.append(hid)
+        ws.append(w)
+        xv = X(hid, w)
+        ok = (xv.real > 0) & (np.abs(xv.imag) <= 1e-6 * np.abs(xv))
+        np.minimum.at(best, hid[ok], xv.real[ok])
+        w_end, wa = grid[:, -1], w_a[rows]
+        # |jω − r| ≥ ω − |r|, |E| ≤ 1: a lower bound on |X|, increasing past ω_a
+        lower = c[rows, 0] * np.maximum(w_end - wa, 0.0) ** 4 / (p.k + p.b * w_end)
+        target = best[rows] if limit is None else limit
+        done = ((w_end >= wa) & (lower > target)) | (w_end > 1e4 * (wa + 1 / tau))
+        rows, w_end = rows[~done], w_end[~done]
+        if rows.size == 0:
+            break
+        n = np.ceil(w_end / step[rows]).astype(int) + 1
+        if n.max() > MAX_GRID:  # an absurd delay or stiffness: refuse rather than fill memory
+            raise StabilitySearchError(
+                f"stability search: delay {tau:.3g} s needs more than {MAX_GRID:.0e} "
+                "frequencies per scan step; not a haptic loop"
+            )
+        # np.linspace(w_end, 2 w_end, n) per row, padded with its end 2 w_end
+        i = np.arange(n.max())[None, :]
+        grid = w_end[:, None] + i * (w_end / (n - 1))[:, None]
+        grid = np.where(i >= (n - 1)[:, None], 2 * w_end[:, None], grid)
+    return np.concatenate(hids), np.concatenate(ws)
+
+
+def _crossings_hands(
+    p: HapticParams, hands: Any, k_stop: float | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Imaginary-axis crossings of χ_h for every hand at once: (hand index, ω_c [rad/s],
+    K_c [N/m], direction), sorted by hand, then K_c ascending. Every crossing with
+    K_c ≤ ``k_stop`` (None: up to each hand's first, its stability limit) is found."""
+    rows = _hand_rows(hands)
+    c = _p_hands(p, rows)
+    comp = np.zeros((c.shape[0], 4, 4))  # companion matrices, as np.roots builds them
+    comp[:, 0, :] = -c[:, 1:] / c[:, :1]
+    comp[:, [1, 2, 3], [0, 1, 2]] = 1.0
+    mags = np.abs(np.linalg.eigvals(comp))
+    w_a = mags.max(axis=1)
+    tau = p.delay + 0.5 * p.sample_period
+
+    def X(hid: Any, w: Any) -> Any:  # K(ω)·e^{jφ}: crossing where X is real and > 0
+        w = np.asarray(w, dtype=float)
+        s = 1j * w
+        return -_chi_c(p, c[hid], 0.0, s) / ((p.b * s + p.k) * _hold(p, w, None))
+
+    if tau == 0.0:
+        hid_l, wc_l = [], []
+        for i, ci in enumerate(c):
+            # Im[−P_h(jω)(k − jbω)] is a polynomial in ω: its positive real roots, exactly
+            cw = np.array(ci[::-1], dtype=complex) * (1j ** np.arange(5))  # P_h(jω) in ω
+            poly = -P.polymul(cw, [p.k, -1j * p.b])
+            rts = np.roots(np.trim_zeros(poly.imag[::-1], "f"))
+            w = np.sort(rts.real[(np.abs(rts.imag) < 1e-9 * np.abs(rts)) & (rts.real > 0)])
+            hid_l.append(np.full(w.size, i))
+            wc_l.append(w)
+        hid, wc = np.concatenate(hid_l), np.concatenate(wc_l)
+    else:
+        nz = np.where(mags > 1e-12 * w_a[:, None], mags, np.inf).min(axis=1)
+        hands_on = np.any(rows != 0.0, axis=1)
+        w_lo = np.where(hands_on, 1e-2 * nz, np.nan)  # a slow hand mode
+        hid, wc = _scan_hands(p, c, w_a, w_lo, X, k_stop)
+    xv = X(hid, wc)
+    ok = (xv.real > 0) & (np.abs(xv.imag) <= 1e-6 * np.abs(xv))
+    hid, wc, Kc = hid[ok], wc[ok], xv.real[ok]
+    s, dh, ch = 1j * wc, 1e-6 * wc, c[hid]
+    dchi = (_chi_c(p, ch, Kc, s + dh) - _chi_c(p, ch, Kc, s - dh)) / (2 * dh)
+    dchi_dK = _chi_c(p, ch, Kc + 1.0, s) - _chi_c(p, ch, Kc, s)  # ∂χ/∂K = E (bs + k)
+    dirs = np.sign((-dchi_dK / dchi).real)
+    order = np.lexsort((Kc, hid))
+    return hid[order], wc[order], Kc[order], dirs[order]
 
 
 def _crossings_h(
@@ -197,41 +332,24 @@ def _crossings_h(
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Imaginary-axis crossings of χ_h: ω_c [rad/s], K_c [N/m] ascending, directions. Every
     crossing with K_c ≤ ``k_stop`` (None: up to the first, the stability limit) is found."""
-    c = _p_hand(p, h)
-    roots = np.roots(c)
-    mags = np.abs(roots)
-    w_a = float(np.max(mags))
-    tau = p.delay + 0.5 * p.sample_period
+    _, wc, Kc, dirs = _crossings_hands(p, [h], k_stop)
+    return wc, Kc, dirs
 
-    def X(w: Any) -> Any:  # K(ω)·e^{jφ}: crossing where X is real and > 0
-        w = np.asarray(w, dtype=float)
-        s = 1j * w
-        poly = (((c[0] * s + c[1]) * s + c[2]) * s + c[3]) * s + c[4]
-        return -poly / ((p.b * s + p.k) * _hold(p, w, None))
 
-    if tau == 0.0:
-        # Im[−P_h(jω)(k − jbω)] is a polynomial in ω: its positive real roots, exactly
-        cw = np.array(c[::-1], dtype=complex) * (1j ** np.arange(5))  # P_h(jω) in ω
-        poly = -P.polymul(cw, [p.k, -1j * p.b])
-        rts = np.roots(np.trim_zeros(poly.imag[::-1], "f"))
-        wc = np.sort(rts.real[(np.abs(rts.imag) < 1e-9 * np.abs(rts)) & (rts.real > 0)])
-    else:
-        nz = mags[mags > 1e-12 * w_a]
-        w_lo = 1e-2 * float(np.min(nz)) if h != NO_HAND else None  # a slow hand mode
-
-        def lower(w: float) -> float:  # |jω − r| ≥ ω − |r|, |E| ≤ 1: increasing past ω_a
-            return c[0] * max(w - w_a, 0.0) ** 4 / (p.k + p.b * w)
-
-        wc = _scan_imaginary_axis(X, w_a, tau, lower, k_stop, w_lo)
-    xv = X(wc)
-    ok = (xv.real > 0) & (np.abs(xv.imag) <= 1e-6 * np.abs(xv))
-    wc, Kc = wc[ok], xv.real[ok]
-    s, dh = 1j * wc, 1e-6 * wc
-    dchi = (_chi_h(p, h, Kc, s + dh) - _chi_h(p, h, Kc, s - dh)) / (2 * dh)
-    dchi_dK = _chi_h(p, h, Kc + 1.0, s) - _chi_h(p, h, Kc, s)  # ∂χ/∂K = E (bs + k)
-    dirs = np.sign((-dchi_dK / dchi).real)
-    order = np.argsort(Kc)
-    return wc[order], Kc[order], dirs[order]
+def _limits_hands(p: HapticParams, hands: Any) -> np.ndarray:
+    """The stability limit K_lim [N/m] of each hand (first K_c where the count of
+    right-half-plane roots, 2 Σ direction, turns positive; inf if none), in one scan."""
+    rows = _hand_rows(hands)
+    hid, _, Kc, dirs = _crossings_hands(p, rows)
+    out = np.full(rows.shape[0], math.inf)
+    if hid.size:
+        cum = np.cumsum(2 * dirs)
+        start = np.searchsorted(hid, hid)  # each crossing's hand's first crossing
+        count = cum - np.concatenate([[0.0], cum])[start]  # 2 Σ sign within the hand
+        bad = np.nonzero(count > 0)[0]
+        first = bad[np.unique(hid[bad], return_index=True)[1]]
+        out[hid[first]] = Kc[first]
+    return out
 
 
 def max_stable_stiffness_coupled(p: HapticParams, hand: Hand = NO_HAND) -> Any:
@@ -246,9 +364,7 @@ def max_stable_stiffness_coupled(p: HapticParams, hand: Hand = NO_HAND) -> Any:
         )
         out = [max_stable_stiffness_coupled(flat.item(i), hand) for i in range(n)]
         return np.array(out).reshape(p.shape)
-    _, Kc, dirs = _crossings_h(p, hand)
-    bad = np.nonzero(np.cumsum(2 * dirs) > 0)[0]
-    return float(Kc[bad[0]]) if bad.size else math.inf
+    return float(_limits_hands(p, [hand])[0])
 
 
 def is_stable_coupled(p: HapticParams, K: float, hand: Hand = NO_HAND) -> bool:
@@ -279,6 +395,15 @@ class CoupledStability:
     hands_checked: int
 
 
+def _compass_move(worst: Hand, name: str, sgn: float, step: float, lo: float, hi: float
+                  ) -> Hand | None:  # fmt: skip
+    """The compass search's neighbour of ``worst`` along ``name`` (None: clipped onto it)."""
+    v = getattr(worst, name)
+    new = v * math.exp(sgn * step) if v > 0 else lo + 0.1 * (hi - lo)
+    new = min(max(new, lo), hi)
+    return None if new == v else replace(worst, **{name: new})
+
+
 def coupled_stability(
     p: HapticParams, K: float, hand_range: HandRange = HAND_RANGE, n: int = 3
 ) -> CoupledStability:
@@ -287,15 +412,21 @@ def coupled_stability(
     from the worst of them inside the box (log steps halved 8 times). For each hand the
     limit is exact (first destabilising crossing of χ_h); over the box it is sampled, not
     certified (a dip of the limit between samples could be missed). Stable iff
-    K ≤ the least limit. Hands off (``hands_off_max_stable_K``) is model's limit."""
+    K ≤ the least limit. Hands off (``hands_off_max_stable_K``) is model's limit.
+
+    The grid and the hands-off loop are one scan (``_limits_hands``); the compass search
+    polls its remaining directions from the current point in one scan and takes them in
+    order up to the first that improves (the rest are polled again from there): the same
+    points, order and moves as polling one neighbour at a time."""
     _one(p)
     K = float(_check_K(K))
     if not isinstance(hand_range, HandRange):
         raise ParameterError(f"hand_range = {hand_range!r}: must be a HandRange")
     hands = hand_range.grid(n)
-    lims = [max_stable_stiffness_coupled(p, h) for h in hands]
-    j = int(np.argmin(lims))
-    worst, best = hands[j], lims[j]
+    lims = _limits_hands(p, [*hands, NO_HAND])
+    hands_off = float(lims[-1])
+    j = int(np.argmin(lims[:-1]))
+    worst, best = hands[j], float(lims[j])
     checked = len(hands)
     # compass search in log space from the worst sample, clipped to the box
     bounds = {
@@ -303,32 +434,34 @@ def coupled_stability(
         "b": (hand_range.b_min, hand_range.b_max),
         "k": (hand_range.k_min, hand_range.k_max),
     }
+    dirs = [(name, sgn, lo, hi) for name, (lo, hi) in bounds.items() if hi > lo
+            for sgn in (-1.0, 1.0)]  # fmt: skip
     step = 0.5 * math.log(2.0)
     for _ in range(8):
         moved = True
         while moved:
             moved = False
-            for name, (lo, hi) in bounds.items():
-                if hi <= lo:
-                    continue
-                for sgn in (-1.0, 1.0):
-                    v = getattr(worst, name)
-                    new = v * math.exp(sgn * step) if v > 0 else lo + 0.1 * (hi - lo)
-                    new = min(max(new, lo), hi)
-                    if new == v:
-                        continue
-                    cand = replace(worst, **{name: new})
-                    lim = max_stable_stiffness_coupled(p, cand)
+            i = 0
+            while i < len(dirs):
+                moves = [(d, _compass_move(worst, name, sgn, step, lo, hi))
+                         for d, (name, sgn, lo, hi) in enumerate(dirs) if d >= i]  # fmt: skip
+                cands = [(d, c) for d, c in moves if c is not None]
+                if not cands:
+                    break
+                i = len(dirs)
+                lims_c = _limits_hands(p, [c for _, c in cands])
+                for (d, cand), lim in zip(cands, lims_c, strict=True):
                     checked += 1
                     if lim < best * (1 - 1e-9):
-                        worst, best, moved = cand, lim, True
+                        worst, best, moved, i = cand, float(lim), True, d + 1
+                        break
         step *= 0.5
     return CoupledStability(
         K=K,
         stable=bool(K <= best),
         worst_hand=worst,
         max_stable_K=float(best),
-        hands_off_max_stable_K=float(max_stable_stiffness_coupled(p, NO_HAND)),
+        hands_off_max_stable_K=hands_off,
         hands_checked=checked,
     )
 

@@ -22,6 +22,7 @@ from mrclutch.haptics.hand import (
     HandRange,
     _chi_h,
     _crossings_h,
+    _limits_hands,
     _p_hand,
     backdrive_force,
     coupled_stability,
@@ -324,3 +325,89 @@ def test_paper_preset_figures() -> None:
     assert fig["max_stable_K_hands_off_N_per_m"] == pytest.approx(253.4, rel=0.01)
     assert fig["max_stable_K_all_hands_N_per_m"] == pytest.approx(2126.0, rel=0.01)
     assert fig["backdrive_force_N"] == pytest.approx(0.0416, rel=0.01)
+
+
+# --- the batched scan (issue 40: one scan for the grid and the compass's polls) ----------
+
+
+def _designs_for_batch() -> list[HapticParams]:
+    """Delay-free, delayed, sampled and the paper pair: every path of the scan."""
+    return [
+        TABLE2_MR,
+        *_random(2, seed=40),
+        *_random(2, seed=41, delay=TAU),
+        *_random(2, seed=42, delay=2e-4, sample_period=1e-3),
+    ]
+
+
+def test_batched_limits_equal_one_hand_at_a_time() -> None:
+    # 27 grid hands + hands off + one-parameter hands in one scan, against each hand
+    # scanned alone (its own grid, its own Illinois brackets): the same crossing to the
+    # scan's tolerance (Illinois rtol 1e-13 on ω)
+    hands = [*HAND_RANGE.grid(3), Hand(), Hand(m=0.3), Hand(b=5.0), Hand(k=100.0)]
+    for p in _designs_for_batch():
+        together = _limits_hands(p, hands)
+        alone = np.array([max_stable_stiffness_coupled(p, h) for h in hands])
+        assert together.shape == (len(hands),)
+        np.testing.assert_array_equal(np.isfinite(together), np.isfinite(alone))
+        fin = np.isfinite(alone)
+        np.testing.assert_allclose(together[fin], alone[fin], rtol=1e-9)
+
+
+def test_batched_limits_against_the_model_limit() -> None:
+    # independent code (limits.max_stable_stiffness, the scan without a hand): hands off it
+    # is the model's limit, and a mass-only hand is the lever with m2 -> m2 + m_h
+    for p in _designs_for_batch():
+        lims = _limits_hands(p, [Hand(), Hand(m=0.2), Hand(m=0.02)])
+        ref = [max_stable_stiffness(replace(p, m2=p.m2 + m)) for m in (0.0, 0.2, 0.02)]
+        np.testing.assert_allclose(lims, ref, rtol=1e-9)
+
+
+def _compass_one_at_a_time(p: HapticParams, hr: HandRange, n: int) -> tuple[Hand, float, int]:
+    """The compass search polling one neighbour at a time (the pre-batch procedure)."""
+    hands = hr.grid(n)
+    lims = [max_stable_stiffness_coupled(p, h) for h in hands]
+    j = int(np.argmin(lims))
+    worst, best, checked = hands[j], lims[j], len(hands)
+    bounds = {"m": (hr.m_min, hr.m_max), "b": (hr.b_min, hr.b_max), "k": (hr.k_min, hr.k_max)}
+    step = 0.5 * math.log(2.0)
+    for _ in range(8):
+        moved = True
+        while moved:
+            moved = False
+            for name, (lo, hi) in bounds.items():
+                if hi <= lo:
+                    continue
+                for sgn in (-1.0, 1.0):
+                    v = getattr(worst, name)
+                    new = min(max(v * math.exp(sgn * step) if v > 0 else lo + 0.1 * (hi - lo),
+                                  lo), hi)  # fmt: skip
+                    if new == v:
+                        continue
+                    cand = replace(worst, **{name: new})
+                    lim = max_stable_stiffness_coupled(p, cand)
+                    checked += 1
+                    if lim < best * (1 - 1e-9):
+                        worst, best, moved = cand, lim, True
+        step *= 0.5
+    return worst, best, checked
+
+
+@pytest.mark.parametrize("n", [2, 3])
+def test_batched_compass_search_takes_the_same_steps(n: int) -> None:
+    # the polls batched per step visit the same points in the same order: same worst hand,
+    # same count of hands checked, the same limit to the scan's tolerance; a box with
+    # k_h = 0 at its lower end exercises the "v = 0" start of an axis
+    boxes = [HAND_RANGE, HandRange(0.05, 1.0, 0.0, 20.0, 0.0, 1000.0)]
+    for p in _designs_for_batch()[:5]:
+        for hr in boxes:
+            worst, best, checked = _compass_one_at_a_time(p, hr, n)
+            r = coupled_stability(p, 100.0, hr, n)
+            assert r.hands_checked == checked
+            assert (r.worst_hand.m, r.worst_hand.b, r.worst_hand.k) == pytest.approx(
+                (worst.m, worst.b, worst.k), rel=1e-12
+            )
+            assert r.max_stable_K == pytest.approx(best, rel=1e-9)
+            assert r.hands_off_max_stable_K == pytest.approx(
+                max_stable_stiffness_coupled(p), rel=1e-12
+            )
