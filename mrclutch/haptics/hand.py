@@ -57,7 +57,6 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
-from numpy.polynomial import polynomial as P
 
 from geometry.numerics import illinois
 from geometry.validation import ParameterError, check_int, check_nonnegative, check_positive
@@ -280,6 +279,32 @@ def _scan_hands(
     return np.concatenate(hids), np.concatenate(ws)
 
 
+def _positive_real_roots(poly: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(row, root) of the positive real roots of each row's polynomial (descending), as
+    ``np.roots`` finds them (eigenvalues of the companion matrix), every row of the same
+    degree in one call; rows ascending, each row's roots ascending."""
+    hid_l, wc_l = [], []
+    lead = np.argmax(poly != 0, axis=1)  # leading zeros trimmed, as np.trim_zeros(.., "f")
+    for deg in np.unique(poly.shape[1] - 1 - lead):
+        rows = np.nonzero(poly.shape[1] - 1 - lead == deg)[0]
+        if deg < 1:
+            continue
+        q = poly[rows][:, poly.shape[1] - 1 - deg :]
+        comp = np.zeros((rows.size, deg, deg))
+        comp[:, 0, :] = -q[:, 1:] / q[:, :1]
+        comp[:, np.arange(1, deg), np.arange(deg - 1)] = 1.0
+        rts = np.linalg.eigvals(comp)
+        keep = (np.abs(rts.imag) < 1e-9 * np.abs(rts)) & (rts.real > 0)
+        r, _ = np.nonzero(keep)
+        hid_l.append(rows[r])
+        wc_l.append(rts.real[keep])
+    if not hid_l:
+        return np.zeros(0, int), np.zeros(0)
+    hid, wc = np.concatenate(hid_l), np.concatenate(wc_l)
+    order = np.lexsort((wc, hid))
+    return hid[order], wc[order]
+
+
 def _crossings_hands(
     p: HapticParams, hands: Any, k_stop: float | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -301,16 +326,13 @@ def _crossings_hands(
         return -_chi_c(p, c[hid], 0.0, s) / ((p.b * s + p.k) * _hold(p, w, None))
 
     if tau == 0.0:
-        hid_l, wc_l = [], []
-        for i, ci in enumerate(c):
-            # Im[−P_h(jω)(k − jbω)] is a polynomial in ω: its positive real roots, exactly
-            cw = np.array(ci[::-1], dtype=complex) * (1j ** np.arange(5))  # P_h(jω) in ω
-            poly = -P.polymul(cw, [p.k, -1j * p.b])
-            rts = np.roots(np.trim_zeros(poly.imag[::-1], "f"))
-            w = np.sort(rts.real[(np.abs(rts.imag) < 1e-9 * np.abs(rts)) & (rts.real > 0)])
-            hid_l.append(np.full(w.size, i))
-            wc_l.append(w)
-        hid, wc = np.concatenate(hid_l), np.concatenate(wc_l)
+        # Im[−P_h(jω)(k − jbω)] is a polynomial in ω: its positive real roots, exactly
+        cw = c[:, ::-1].astype(complex) * (1j ** np.arange(5))  # P_h(jω) in ω, ascending
+        im = -(cw[:, :, None] * np.array([p.k, -1j * p.b])[None, None, :]).imag
+        poly = np.zeros((c.shape[0], 6))  # ascending in ω: the product of the two
+        poly[:, :5] += im[:, :, 0]
+        poly[:, 1:] += im[:, :, 1]
+        hid, wc = _positive_real_roots(poly[:, ::-1])
     else:
         nz = np.where(mags > 1e-12 * w_a[:, None], mags, np.inf).min(axis=1)
         hands_on = np.any(rows != 0.0, axis=1)

@@ -331,9 +331,11 @@ def test_paper_preset_figures() -> None:
 
 
 def _designs_for_batch() -> list[HapticParams]:
-    """Delay-free, delayed, sampled and the paper pair: every path of the scan."""
+    """Delay-free (b = 0: the crossing polynomial's degree drops), delayed, sampled and the
+    paper pair: every path of the scan."""
     return [
         TABLE2_MR,
+        replace(_random(1, seed=39)[0], b=0.0),
         *_random(2, seed=40),
         *_random(2, seed=41, delay=TAU),
         *_random(2, seed=42, delay=2e-4, sample_period=1e-3),
