@@ -25,7 +25,7 @@ from mrclutch.haptics.actuator import (
     reflect,
 )
 from mrclutch.haptics.delay import lag_stable_stiffness
-from mrclutch.haptics.hand import hand_figures
+from mrclutch.haptics.hand import hand_figures, hand_figures_at
 from mrclutch.haptics.model import (
     StabilitySearchError,
     max_stable_stiffness,
@@ -90,10 +90,14 @@ def with_measured(design: ClutchDesign, mr: HapticParams, current: float, source
     return replace(mr, **new), f"measured ({', '.join(names[k] for k in new)}) + {source}"
 
 
-def hand_or_why(p: HapticParams, k: float, unavailable: dict[str, str], side: str
-                 ) -> dict[str, Any]:  # fmt: skip
+def hand_or_why(p: HapticParams, k: float, unavailable: dict[str, str], side: str,
+                prior: Mapping[str, Any] | None = None) -> dict[str, Any]:  # fmt: skip
     """``hand_figures``, or (where the stability scan cannot resolve the loop) the same keys
-    None with a note, the reason also in ``unavailable``."""
+    None with a note, the reason also in ``unavailable``. ``prior``: this design's hand
+    figures at another K, taken to ``k`` (``hand_figures_at``) instead of searching the
+    hands again."""
+    if prior is not None and "note" not in prior:
+        return hand_figures_at(prior, k)
     try:
         return hand_figures(p, k)
     except StabilitySearchError as exc:

@@ -135,6 +135,9 @@ class Evaluation:
     model_mr: HapticParams | None = None  # the model's pair where measured values replace it
     #: ``mrclutch.feel.feel_figures``: the residual torque and its loop, the runout ripple
     feel: Mapping[str, Any] = field(default_factory=dict)
+    #: the pair's and the motor's parameters ``hand`` was computed on (by identity: a
+    #: ``rendered`` at another K reuses those figures, whose search does not depend on K)
+    hand_of: tuple[HapticParams, ...] = field(default=(), repr=False, compare=False)
 
     @functools.cached_property
     def duty(self) -> dict[str, Any]:
@@ -320,7 +323,9 @@ def rendered(ev: Evaluation, K: float) -> Evaluation:
         em_m = {**em_m, "K_max_N_per_m": float(em.k_max)}
     budget = hand_budget(ev.design, ev.clutch, mr, t2_m)
     names = ZWIDTH_SIDES[: len(sides)]
-    hand = {side: hand_or_why(p, K, unavailable, side)
+    same = len(ev.hand_of) == len(sides) and all(
+        a is b for a, b in zip(ev.hand_of, sides, strict=True))  # fmt: skip
+    hand = {side: hand_or_why(p, K, unavailable, side, ev.hand.get(side) if same else None)
             for side, p in zip(names, sides, strict=True)}  # fmt: skip
     return replace(ev, haptic=mr_m, motor_metrics=em_m, budget=budget, hand=hand,
-                   unavailable=MappingProxyType(unavailable))  # fmt: skip
+                   unavailable=MappingProxyType(unavailable), hand_of=tuple(sides))  # fmt: skip

@@ -53,6 +53,7 @@ human motion [kern-hatzfeld2023] (our choice of point in that band; the force is
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -81,6 +82,7 @@ __all__ = [
     "coupled_stability",
     "felt_impedance",
     "hand_figures",
+    "hand_figures_at",
     "is_stable_coupled",
     "max_stable_stiffness_coupled",
 ]
@@ -586,3 +588,13 @@ def hand_figures(
         "motion": {"amplitude_m": DEFAULT_AMPLITUDE, "frequency_hz": DEFAULT_FREQUENCY},
         "notes": felt_notes(felt),
     }
+
+
+def hand_figures_at(fig: Mapping[str, Any], K: float) -> dict[str, Any]:
+    """``fig`` (``hand_figures`` of one design) at another K [N/m]: only ``K_N_per_m`` and
+    ``coupled_stable`` depend on K; the search over the hands, the limits and the
+    transparency do not, so the verdict is taken again against the same least limit
+    (``coupled_stability``: stable iff K ≤ it)."""
+    K = float(_check_K(K))
+    return {**fig, "K_N_per_m": K,
+            "coupled_stable": bool(K <= fig["max_stable_K_all_hands_N_per_m"])}  # fmt: skip

@@ -11,7 +11,7 @@ from mrclutch.haptics.actuator import TABLE2_MR, HapticParams
 from mrclutch.haptics.hand import hand_figures
 from mrclutch.haptics.model import metrics
 from mrclutch.outputs import SWEEP_COLUMNS
-from mrclutch.pipeline import HAND_KEYS, evaluate, evaluate_batch
+from mrclutch.pipeline import HAND_KEYS, evaluate, evaluate_batch, rendered
 
 DESIGNS = [
     {},
@@ -216,3 +216,20 @@ def test_sweep_max_stable_K_column_is_the_per_design_limit():
     exact = np.array([max_stable_stiffness(hp.item(i)) for i in np.nonzero(ok)[0]])
     assert np.all(np.isfinite(exact))
     np.testing.assert_allclose(rows["max_stable_K_N_per_m"][ok], exact, rtol=1e-9)
+
+
+def test_rendered_at_another_K_reuses_the_hand_search_with_the_same_figures():
+    # issue 40: the verdict re-renders at the worst-case K; the hands' search does not
+    # depend on K, so its figures are taken to the new K, equal to a search made there
+    ev = evaluate(design_preset("paper"))
+    lim = ev.hand["mr"]["max_stable_K_all_hands_N_per_m"]
+    for K in (100.0, 0.5 * lim, 2.0 * lim):
+        again = rendered(ev, K)
+        fresh = {"mr": hand_figures(ev.mr, K), "motor": hand_figures(ev.motor, K)}
+        assert again.hand == fresh
+        assert again.hand_of[0] is ev.mr
+    assert rendered(ev, 2.0 * lim).hand["mr"]["coupled_stable"] is False
+    # a pair replaced on the evaluation is searched again, not taken from the old figures
+    heavier = replace(ev, mr=replace(ev.mr, m2=ev.mr.m2 + 0.05))
+    assert rendered(heavier, 100.0).hand["mr"] == hand_figures(heavier.mr, 100.0)
+    assert rendered(heavier, 100.0).hand["mr"] != ev.hand["mr"]
