@@ -50,17 +50,6 @@ PENDING: dict[str, set[str]] = {
     },
     # haptic and compare: the actuator and 2-DOF model built in the command
     "mrclutch.cli.commands.haptic": {"mrclutch.haptics.actuator", "mrclutch.haptics.model"},
-    # torque and field: the circuit, network, FEM and drag called in the command
-    "mrclutch.cli.commands.magnetics": {
-        "geometry.section",
-        "magnetics.circuit",
-        "magnetics.drag",
-        "magnetics.dynamics",
-        "magnetics.fem",
-        "magnetics.fem.grid",
-        "magnetics.network",
-        "magnetics.torque",
-    },
     # the 3-D view: the CAD solids to meshes
     "mrclutch.cli.view": {"geometry.cad", "geometry.section"},
     # the plots: material colours (the registry), the haptic model's frequency responses
@@ -75,9 +64,7 @@ NUMPY_OK = {
     "mrclutch.cli.view": "the 3-D view hands mesh arrays to pyvista",
 }
 #: CLI modules not yet free of numpy (issue 43 item 1): may only shrink.
-NUMPY_PENDING = {
-    "mrclutch.cli.commands.magnetics": "torque and field: currents and maps computed here",
-}
+NUMPY_PENDING: dict[str, str] = {}
 
 
 def below(module: str, source: str | None = None) -> set[str]:

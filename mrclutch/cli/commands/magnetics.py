@@ -1,26 +1,15 @@
 """``mrclutch torque`` and ``mrclutch field``: torque against current, B map of the section.
 
-Nothing heavy at module level (magnetics, scikit-fem and matplotlib load inside handlers).
+Parses, calls the application layer (mrclutch.torque_curves: the currents, curves,
+inductance and field map) and formats (issue 43: no computation under ``mrclutch/cli/``).
 """
 
 from __future__ import annotations
 
 import argparse
-import math
 from typing import Any
 
-import numpy as np
-
-from geometry.section import build_section
-from geometry.validation import ParameterError, check_choice, check_range
-from magnetics.circuit import path_from_section
-from magnetics.drag import ROOM_TEMPERATURE
-from magnetics.dynamics import flux_linkage
-from magnetics.fem import DEFAULT_SIZE, FEMConvergenceError, solve_fem
-from magnetics.fem.grid import check_memory, time_estimate
-from magnetics.network import flux_linkage as network_flux_linkage
-from magnetics.network import network_from_regions
-from magnetics.torque import torque_curve
+from geometry.validation import check_choice, check_range
 from mrclutch.cli.commands._common import (
     add_design_args,
     load_design_args,
@@ -30,29 +19,21 @@ from mrclutch.cli.commands.handoff import add_map_args, write_torque_map
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.longjobs import announce
 from mrclutch.cli.plots.magnetics import plot_field, plot_torque
+from mrclutch.operating import ROOM_TEMPERATURE
 from mrclutch.pipeline import current_notes
-from mrclutch.torque_for import current_for
-
-
-def _parse_currents(text: str):  # type: ignore[no-untyped-def]
-    """``A``, ``START:STOP:STEP`` (inclusive of STOP) or ``A,B,C`` in amperes."""
-    try:
-        if ":" in text:
-            a, b, s = (float(x) for x in text.split(":"))
-            if not (s > 0 and b >= a) or not all(np.isfinite([a, b, s])):
-                raise ValueError
-            if (b - a) / s > 10_000:
-                raise CLIError(f"--current {text}: more than 10000 points")
-            vals = np.arange(a, b + s * 1e-9, s)
-        else:
-            vals = np.array([float(x) for x in text.split(",")])
-    except ValueError:
-        raise CLIError(
-            f"--current {text!r}: give A, A,B,C or START:STOP:STEP with STEP > 0, STOP ≥ START"
-        ) from None
-    if not np.all(np.isfinite(vals)) or vals.size == 0:
-        raise CLIError(f"--current {text!r}: currents must be finite numbers (A)")
-    return vals
+from mrclutch.report_data import section_of
+from mrclutch.torque_curves import (
+    FEM_SIZE,
+    b_max,
+    currents_asked,
+    currents_for,
+    fem_seconds,
+    field_map,
+    inductance,
+    largest_difference,
+    overload_note,
+    torque_curves,
+)
 
 
 def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
@@ -101,63 +82,29 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     f.set_defaults(func=_field)
 
 
-def _currents(args: argparse.Namespace, design: Any) -> Any:
-    """The currents asked for (default 0 to the current limit), each within
-    [0, the design's current limit] unless ``--ignore-limit``."""
-    limit = design.current_limit
-    if args.current is None:
-        steps = np.arange(0.0, limit, 0.5)
-        return np.append(steps, limit) if limit - steps[-1] > 1e-9 else steps
-    currents = _parse_currents(args.current)
-    if args.ignore_limit:
-        return currents
-    if np.any(currents < 0):
-        raise CLIError(f"--current {args.current}: {currents.min():g} A is negative; the "
-                       "yield torque does not depend on the current's sign (give "
-                       "--ignore-limit to compute it anyway)")  # fmt: skip
-    if np.any(currents > limit * (1 + 1e-9)):
-        why = "; ".join(current_notes(design)) or f"max_current_A = {limit:g}"
-        raise CLIError(f"--current {args.current}: {currents.max():g} A is above the design's "
-                       f"current limit {limit:.4g} A ({why}); give --ignore-limit to compute "
-                       "it anyway")  # fmt: skip
-    return currents
-
-
 def _torque(args: argparse.Namespace) -> int:
     check_choice("--method", args.method, ("circuit", "network", "fem", "both"))
     check_range("--speed-rpm", args.speed_rpm, 0.0, 1e5, " rpm")
     design = load_design_args(args)
     if args.for_torque is not None:
         return _torque_for(args, design)
-    currents = _currents(args, design)
+    currents = currents_asked(design, args.current, args.ignore_limit)
     if args.map is not None:
         return write_torque_map(args, currents)
-    clutch = build_section(design.clutch, design.materials)
+    clutch = section_of(design)
     methods = ("network", "fem") if args.method == "both" else (args.method,)
     if "fem" in methods and currents.size > 1:  # long FEM work says how long first
-        section = clutch  # already the section, with the design's materials
-        check_memory(section, DEFAULT_SIZE)
-        seconds = time_estimate(section, DEFAULT_SIZE, int(currents.size))
-        announce("torque", f"{currents.size} FEM solves at {DEFAULT_SIZE * 1e3:g} mm", seconds,
+        seconds = fem_seconds(clutch, int(currents.size))
+        announce("torque", f"{currents.size} FEM solves at {FEM_SIZE * 1e3:g} mm", seconds,
                  "the FEM's measured rate per grid node, magnetics.fem.grid.SECONDS_PER_NODE",
                  args.yes)  # fmt: skip
-    try:
-        curves = [torque_curve(clutch, currents, method=m, speed_rpm=args.speed_rpm,
-                               temperature=args.fluid_temperature_C) for m in methods]  # fmt: skip
-    except FEMConvergenceError as exc:
-        raise CLIError(str(exc)) from None
-    except FloatingPointError as exc:  # pragma: no cover - defensive
-        raise ParameterError(str(exc)) from None
+    curves = torque_curves(clutch, currents, methods, speed_rpm=args.speed_rpm,
+                           temperature=args.fluid_temperature_C)  # fmt: skip
     if args.plot:
         plot_torque(curves, args.plot)  # through the output layer
-    # largest relative network-vs-FEM difference where the FEM torque is not ~0 (0 A)
-    err = None
-    if len(curves) == 2:
-        c, f = curves[0].torque, curves[1].torque
-        keep = f > 10 * curves[1].off_state_torque
-        err = float(np.max(np.abs(c[keep] / f[keep] - 1))) if keep.any() else 0.0
+    err = largest_difference(*curves) if len(curves) == 2 else None
     model = "circuit" if args.method == "circuit" else "network"
-    lam, ind = _inductance(clutch, curves[0].currents, model)
+    lam, ind = inductance(clutch, curves[0].currents, model)
     notes = [*current_notes(design)] if not args.ignore_limit else []
     if args.json:
         data = {**_curve_json(curves[0])}
@@ -194,11 +141,8 @@ def _torque_for(args: argparse.Namespace, design: Any) -> int:
         raise CLIError("--for: not with --current, --map or --plot (it finds the current)")
     methods = ("network", "fem") if args.method == "both" else (args.method,)
     limit = design.current_limit * (10.0 if args.ignore_limit else 1.0)
-    try:
-        rows = [current_for(design, target, m, limit, speed_rpm=args.speed_rpm,
-                            temperature=args.fluid_temperature_C) for m in methods]  # fmt: skip
-    except FEMConvergenceError as exc:
-        raise CLIError(str(exc)) from None
+    rows = currents_for(design, target, methods, limit, speed_rpm=args.speed_rpm,
+                        temperature=args.fluid_temperature_C)  # fmt: skip
     notes = [*current_notes(design)] if not args.ignore_limit else []
     if args.json:
         print_json({"torque_N_m": target, "current_limit_A": limit, "methods": rows,
@@ -209,20 +153,6 @@ def _torque_for(args: argparse.Namespace, design: Any) -> int:
     for note in notes:
         print(f"note: {note}")
     return 0
-
-
-def _inductance(clutch: Any, currents: Any, model: str = "circuit") -> tuple[Any, Any]:
-    """Flux linkage λ (Wb) and incremental inductance dλ/dI (H) at the currents, by the
-    saturating circuit (magnetics.dynamics.flux_linkage) or the reluctance network
-    (magnetics.network.flux_linkage: within 1 % of the FEM's λ on the paper preset)."""
-    section = clutch if hasattr(clutch, "regions") else build_section(clutch)
-    cur = np.asarray(currents, dtype=float)[None, :]
-    if model == "network":
-        net = network_from_regions(section.table)
-        lam, ind = network_flux_linkage(net, net.turns[:, None] * cur)
-    else:
-        lam, ind = flux_linkage(path_from_section(section), cur)
-    return lam[0], ind[0]
 
 
 def _curve_json(tc) -> dict:  # type: ignore[no-untyped-def]
@@ -245,20 +175,10 @@ def _field(args: argparse.Namespace) -> int:
     if args.size_mm is not None:
         size = check_range("--size-mm", args.size_mm, 0.02, 5.0, " mm") * 1e-3
     design = load_design_args(args)
-    section = build_section(design.clutch, design.materials)
-    try:
-        sol = solve_fem(section, args.current, size=size)
-    except FEMConvergenceError as exc:
-        raise CLIError(str(exc)) from None
+    section, sol = field_map(design, args.current, size)
     plot_field(section, sol, args.plot)  # through the output layer
-    print(f"wrote {args.plot}: |B| max {sol.b.max():.3g} T, {sol.iterations} Newton iterations")
-    limit = design.current_limit
-    if abs(args.current) > limit:  # a field the clutch cannot carry: say why it is so high
-        c = design.clutch
-        j = abs(args.current) / (math.pi * c.wire_diameter**2 / 4) * 1e-6
-        amps = abs(args.current)
-        print(f"note: {amps:g} A is {amps / limit:.3g}× the design's current limit "
-              f"({limit:.3g} A): {j:.3g} A/mm² in the copper, which the wire does not "
-              "survive; past the steel's saturation (about 2 T) the rest of |B| is the "
-              f"air-core field of {c.coil_turns * amps:.3g} ampere-turns")  # fmt: skip
+    print(f"wrote {args.plot}: |B| max {b_max(sol):.3g} T, {sol.iterations} Newton iterations")
+    note = overload_note(design, args.current)
+    if note is not None:  # a field the clutch cannot carry: say why it is so high
+        print(f"note: {note}")
     return 0
