@@ -9,8 +9,12 @@ it. Each was checked by planting the same mutant by hand and seeing the test fai
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
+import numpy as np
 import pytest
 
+from mrclutch import estimates
 from mrclutch.design import design_preset
 from mrclutch.optimize import pareto
 
@@ -35,3 +39,24 @@ def test_pareto_runs_100_generations_by_default():
     with pytest.raises(_Stop):
         pareto(design_preset("paper"), drum_counts=(2,), pop_size=4, members=1, progress=first)
     assert totals == [100]
+
+
+def test_sweep_rate_is_designs_timed_over_the_time_they_took(monkeypatch):
+    """The sweep's speed estimate (``estimates.sweep_rate``; the announced time and the
+    refusal without --yes above 10 min follow from it) on a clock that advances 0.125 s a
+    call of the evaluator: the warm-up call ends at 0.125 s (t0), then chunks of 100 designs
+    end at 0.25, 0.375 and 0.5 s, where 0.375 s ≥ 0.3 s stops the timing. Rate = 300
+    designs / 0.375 s × 2 workers = 1600 designs/s, measured on 300. The mutant
+    ``done * max(elapsed, 1e-9)`` (cli/commands/design.py:697 at d2d4f2c) gives 225."""
+    clock = [0.0]
+
+    def evaluator(fields):
+        clock[0] += 0.125
+
+    monkeypatch.setattr(estimates, "time", SimpleNamespace(perf_counter=lambda: clock[0]))
+    monkeypatch.setattr(estimates, "use_compiled", lambda: None)  # no process-wide switch
+    spec = SimpleNamespace(n_designs=10_000, chunk_size=100,
+                           design_fields=lambda i: (None, {"gap": np.zeros(10_000)}))  # fmt: skip
+    rate, done = estimates.sweep_rate(spec, evaluator, 2)
+    assert done == 300
+    assert rate == pytest.approx(1600.0, rel=1e-12)
