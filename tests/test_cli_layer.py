@@ -48,8 +48,6 @@ PENDING: dict[str, set[str]] = {
         "magnetics.export.femm",
         "magnetics.export.onelab",
     },
-    # haptic and compare: the actuator and 2-DOF model built in the command
-    "mrclutch.cli.commands.haptic": {"mrclutch.haptics.actuator", "mrclutch.haptics.model"},
     # the 3-D view: the CAD solids to meshes
     "mrclutch.cli.view": {"geometry.cad", "geometry.section"},
     # the plots: material colours (the registry), the haptic model's frequency responses

@@ -90,7 +90,7 @@ def test_drawn_k_eff_crosses_zero_on_the_bandwidth_line(caught, tmp_path):
         assert f0 == pytest.approx(verticals[0], rel=2 * step), label
         seen += 1
     assert seen == 2
-    from mrclutch.cli.commands.haptic import compare_params
+    from mrclutch.haptic_run import compare_params
 
     mr, em, K = compare_params(None, None, TABLE2_MR.workspace)
     bws = sorted(float(bandwidth(p, K)) for p in (mr, em))
@@ -108,7 +108,7 @@ def test_drawn_closed_loop_impedance_is_the_spring_at_low_frequency(caught, tmp_
     (fig,) = caught
     ax_z = _axis(fig, "|Z|")
     assert "[N·s/m]" in ax_z.get_ylabel()
-    from mrclutch.cli.commands.haptic import compare_params
+    from mrclutch.haptic_run import compare_params
 
     _, _, K = compare_params(None, None, TABLE2_MR.workspace)
     closed = [ln for ln in ax_z.get_lines() if "closed loop" in ln.get_label()]

@@ -5,7 +5,7 @@ from dataclasses import replace
 
 import pytest
 
-from mrclutch.cli.commands.haptic import compare_params, compare_result
+from mrclutch.haptic_run import compare_params, compare_result
 from mrclutch.haptics.actuator import EM_75, EM_170, TABLE2_MR, actuator, geared, reflect
 from mrclutch.haptics.model import bandwidth
 

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import argparse
 import math
-from dataclasses import replace
 from typing import Any
 
 from geometry.validation import check_choice, check_range
@@ -16,23 +15,22 @@ from mrclutch.cli.commands._common import add_design_args, load_design_args, pri
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.plots.haptic import compare_figure
 from mrclutch.design import MAX_DELAY
-from mrclutch.haptics.actuator import (
+from mrclutch.haptic_run import (
+    ACTUATOR_NAMES,
     GEARING_RANGE,
     LEVER_RANGE,
     STIFFNESS_MAX,
-    TABLE2_EM_136206,
-    TABLE2_MR,
+    TABLE2_SOURCE,
     WORKSPACE_RANGE,
-    actuator,
-    reflect,
-    transmission_for,
+    catalogue_metrics,
+    catalogue_source,
+    compare_k_source,
+    compare_params,
+    compare_result,
 )
-from mrclutch.haptics.model import bandwidth, is_stable, metrics
 from mrclutch.outputs import format_kmax
 from mrclutch.pipeline import evaluate, null_notes
 from mrclutch.verdict import judge_evaluation, verdict_lines
-
-ACTUATOR_NAMES = ("mr-paper", "maxon-118890", "maxon-136206", "maxon-136209")
 
 
 def register(sub: Any) -> None:
@@ -141,11 +139,8 @@ def run_haptic(args: argparse.Namespace) -> int:
     lo, hi = LEVER_RANGE  # Transmission's own rule, stated in the option's unit
     lever = check_range("--lever-mm", args.lever_mm, lo * 1e3, hi * 1e3, " mm") * 1e-3
     gearing = check_range("--gearing", args.gearing, *GEARING_RANGE)
-    act = actuator(check_choice("--actuator", args.actuator, ACTUATOR_NAMES))
-    if delay is not None:
-        act = replace(act, delay=delay)
-    tr = replace(transmission_for(act, lever), gearing=gearing, workspace=workspace)
-    m = metrics(reflect(act, tr), K)
+    name = check_choice("--actuator", args.actuator, ACTUATOR_NAMES)
+    act, tr, m = catalogue_metrics(name, lever, gearing, workspace, delay, K)
     src = catalogue_source(act.name)
     if args.json:
         print_json({**m, "source": src, "nulls": null_notes(m)})
@@ -153,52 +148,6 @@ def run_haptic(args: argparse.Namespace) -> int:
         print(f"{act.name} on a {lever * 1e3:g} mm lever, gearing {gearing:g}, n = {tr.ratio:.3f}")
         _print_metrics(m, src if K is None else "typed")
     return 0
-
-
-def catalogue_source(name: str) -> str:
-    """Where a catalogue actuator's figures come from, as printed beside its K_max."""
-    if name == "mr-paper":  # Table 1 torque and inertia, Table 2's identified b1
-        return "MR pair, Table 1 catalogue"
-    return f"{name}, Table 1 catalogue"
-
-
-#: The MR pair of ``compare``: Table 2's identified m1 and b1, Table 1's torque.
-TABLE2_SOURCE = "MR pair, Table 2"
-
-
-def compare_k_source(mr: Any, em: Any, K: float, typed: bool) -> str:
-    """Which K_max ``compare`` renders: the smaller of the two (the force both produce)."""
-    if typed:
-        return "typed"
-    return TABLE2_SOURCE if K == float(mr.k_max) else catalogue_source("maxon-136206")
-
-
-def compare_params(
-    K: float | None = None, delay: float | None = None, workspace: float = 0.05
-) -> tuple[Any, Any, float]:
-    """(MR params, EM params, K): Table 2 MR set vs the 136206 through the EM bench."""
-    mr = replace(TABLE2_MR, workspace=workspace)
-    em = replace(TABLE2_EM_136206, workspace=workspace)
-    if delay is not None:
-        mr = replace(mr, delay=delay)
-    if K is None:
-        K = float(min(mr.k_max, em.k_max))
-    return mr, em, K
-
-
-def compare_result(mr: Any, em: Any, K: float) -> dict[str, Any]:
-    """The ``compare --json`` object."""
-    m_mr, m_em = metrics(mr, K), metrics(em, K)
-    bw_nodelay = float(bandwidth(replace(mr, delay=0.0), K))
-    return {
-        "mr": m_mr,
-        "em": m_em,
-        "bandwidth_gain_lumped": m_mr["bandwidth_lumped_hz"] / m_em["bandwidth_lumped_hz"] - 1,
-        "bandwidth_gain": m_mr["bandwidth_hz"] / m_em["bandwidth_hz"] - 1,
-        "bandwidth_gain_mr_without_delay": bw_nodelay / m_em["bandwidth_hz"] - 1,
-        "damping_ratio_mr_over_em": m_mr["b1_N_s_per_m"] / m_em["b1_N_s_per_m"],
-        "stable": {"mr": is_stable(mr, K), "em": is_stable(em, K)},
-    }
 
 
 def run_compare(args: argparse.Namespace) -> int:
