@@ -1,6 +1,7 @@
-"""What the next tools in the chain read (docs/handoff.md): the material library as CSV
-tables, a torque map a controller loads as a lookup table, and the device description a
-haptic rendering framework clamps its commands to. Pure functions of a design; the
+"""What the next tools in the chain read (docs/handoff.md): the section as a FEMM or ONELAB
+problem, a DXF or a dimensioned drawing, the material library as CSV tables, a torque map a
+controller loads as a lookup table, and the device description a haptic rendering
+framework clamps its commands to. Pure functions of a design; the
 command line writes their results through the output layer.
 """
 
@@ -13,9 +14,12 @@ from typing import Any
 
 import numpy as np
 
+from geometry.drawing import section_drawing, section_dxf
 from geometry.materials import KIND, RECORDS
 from geometry.section import build_section
 from geometry.validation import ParameterError, check_range
+from magnetics.export.femm import problem, write_fem, write_lua
+from magnetics.export.onelab import write_geo, write_pro
 from magnetics.materials import FLUIDS, MATERIALS, BHCurve
 from magnetics.torque import torque_curve
 from mrclutch.design import ClutchDesign
@@ -29,6 +33,30 @@ TAU_H = np.linspace(0.0, 4e5, 81)
 VISCOSITY_STEP_C = 5.0
 #: the device description's schema name (docs/handoff.md); bump it when a key changes
 DEVICE_SCHEMA = "mrclutch.device/1"
+
+
+#: the solvers' hand-offs (``export --format``): each format's files, by suffix
+SOLVER_FILES = {"femm": ((".fem", write_fem), (".lua", write_lua)),
+                "onelab": ((".geo", write_geo), (".pro", write_pro))}  # fmt: skip
+
+
+def solver_files(design: ClutchDesign, fmt: str, current: float, name: str) -> dict[str, str]:
+    """File name → text of the design's FEMM 4.2 (``femm``: NAME.fem, NAME.lua) or Gmsh +
+    GetDP (``onelab``: NAME.geo, NAME.pro) problem at the coil current ``current`` (A)."""
+    p = problem(build_section(design.clutch, design.materials), current, name)
+    return {f"{name}{suffix}": write(p) for suffix, write in SOLVER_FILES[fmt]}
+
+
+def dxf_text(design: ClutchDesign) -> str:
+    """The design's r-z section as DXF text: a layer per part and material."""
+    return section_dxf(build_section(design.clutch, design.materials))
+
+
+def draw_section(design: ClutchDesign, path: str) -> None:
+    """The dimensioned section drawing (SVG) at ``path``, with the ``[process]`` tolerances;
+    the caller passes the output layer's temporary path."""
+    section = build_section(design.clutch, design.materials)
+    section_drawing(section, path, design.process.tolerance, design.process.runout)
 
 
 def _csv(header: Sequence[str], comments: Sequence[str], rows: Sequence[Sequence[Any]]) -> str:

@@ -41,13 +41,6 @@ PENDING: dict[str, set[str]] = {
         "geometry.reading",
         "geometry.section",
     },
-    # tables and device: the drawing and FEMM/ONELAB exports
-    "mrclutch.cli.commands.handoff": {
-        "geometry.drawing",
-        "geometry.section",
-        "magnetics.export.femm",
-        "magnetics.export.onelab",
-    },
     # the 3-D view: the CAD solids to meshes
     "mrclutch.cli.view": {"geometry.cad", "geometry.section"},
     # the plots: material colours (the registry), the haptic model's frequency responses

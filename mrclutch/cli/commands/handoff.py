@@ -16,15 +16,19 @@ from pathlib import Path
 from typing import Any
 
 from geometry.atomic import atomic_path, write_text
-from geometry.drawing import section_drawing, section_dxf
-from geometry.section import build_section
 from geometry.validation import check_range
-from magnetics.export.femm import problem, write_fem, write_lua
-from magnetics.export.onelab import write_geo, write_pro
 from mrclutch.cli.commands._common import add_design_args, load_design_args
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.jsonio import to_jsonable
-from mrclutch.handoff import MAP_COLUMNS, device_description, material_tables, torque_map
+from mrclutch.handoff import (
+    MAP_COLUMNS,
+    device_description,
+    draw_section,
+    dxf_text,
+    material_tables,
+    solver_files,
+    torque_map,
+)
 
 
 def register(sub: Any) -> None:
@@ -56,33 +60,23 @@ def register(sub: Any) -> None:
 def export_handoff(args: argparse.Namespace) -> int:
     """``mrclutch export --format femm|onelab|dxf|drawing``: DIR/NAME.* (module docstring)."""
     design = load_design_args(args)
-    section = build_section(design.clutch, design.materials)
     out = Path(args.out)
     name = design.name or "clutch"
     written: list[Path] = []
     if args.format in ("femm", "onelab"):
         current = design.current_limit if args.current is None else args.current
         current = check_range("--current", current, -1e4, 1e4, " A")
-        p = problem(section, current, name)
-        if args.format == "femm":
-            written += [
-                write_text(out / f"{name}.fem", write_fem(p)),
-                write_text(out / f"{name}.lua", write_lua(p)),
-            ]
-        else:
-            written += [
-                write_text(out / f"{name}.geo", write_geo(p)),
-                write_text(out / f"{name}.pro", write_pro(p)),
-            ]
-        print(f"coil: {section.clutch.coil_turns} turns at {current:g} A")
+        for fname, text in solver_files(design, args.format, current, name).items():
+            written.append(write_text(out / fname, text))
+        print(f"coil: {design.clutch.coil_turns} turns at {current:g} A")
     elif args.current is not None:
         raise CLIError("--current: applies to --format femm or onelab only")
     elif args.format == "dxf":
-        written.append(write_text(out / f"{name}.dxf", section_dxf(section)))
+        written.append(write_text(out / f"{name}.dxf", dxf_text(design)))
     else:
         path = out / f"{name}.svg"
         with atomic_path(path) as tmp:
-            section_drawing(section, str(tmp), design.process.tolerance, design.process.runout)
+            draw_section(design, str(tmp))
         written.append(path)
     for w in written:
         print(w)
