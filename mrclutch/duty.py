@@ -87,6 +87,8 @@ DUTY_NULLS: dict[str, str] = {
 DUTY_INFS: dict[str, str] = {
     "life_h": "never: the duty dissipates no power in the fluid",
     "life_off_h": "never: the off clutch dissipates no power (no slip)",
+    "time_at_duty_s": "never: no duty torque asked (give --duty NM:S), or at the duty torque "
+    "the coil and the fluid stay below their temperature limits",
 }
 
 #: design-file key → (field, factor to SI)

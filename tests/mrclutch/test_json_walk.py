@@ -8,8 +8,8 @@ slow, stiff, starved bench), through evaluate, compare, haptic, torque, inertia,
 and scale (scale, seconds, on the 20-drum design). Fast fidelity and ``--no-uncertainty``:
 the uncertain path's JSON is walked once here on the paper preset, and its extremes in
 tests/mrclutch/test_hardened_inputs.py. The presets' and examples' other designs run
-through evaluate only (the other commands read the same figures); optimize (minutes) is
-walked by hand, not here."""
+through evaluate only (the other commands read the same figures); optimize (minutes at
+full size) is walked on a tiny search in tests/mrclutch/test_optimize_json_walk.py."""
 
 from __future__ import annotations
 

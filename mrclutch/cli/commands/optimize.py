@@ -47,7 +47,7 @@ from mrclutch.optimize import (
     parse_bounds,
     robust_verdict,
 )
-from mrclutch.pipeline import FAST_BANDWIDTH_ERROR
+from mrclutch.pipeline import FAST_BANDWIDTH_ERROR, null_notes
 from mrclutch.verdict import for_workshop
 
 
@@ -344,7 +344,7 @@ def _optimize(args: argparse.Namespace) -> int:
         data["verified"] = [vars(v) | {"error": v.error} for v in verified]
         t_verify = time.perf_counter() - t2
     if args.json:
-        print_json(data)
+        print_json({**data, "nulls": null_notes(data)})  # every null with its reason
     else:
         _print_optimum(args, opt, cand, t_fast, data, wc)
         if verified is not None:

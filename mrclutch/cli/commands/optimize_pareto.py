@@ -35,6 +35,7 @@ from mrclutch.optimize import (
     parse_bounds,
     robust_verdict,
 )
+from mrclutch.pipeline import null_notes
 
 
 def _old_members(args: argparse.Namespace) -> set[Path]:
@@ -147,7 +148,7 @@ def run_pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, .
     if verified is not None:
         data["verified"] = [vars(v) | {"error": v.error} for v in verified]
     if args.json:
-        print_json(data)
+        print_json({**data, "nulls": null_notes(data)})  # every null with its reason
     else:
         _print_pareto(args, ps, rows, kept, t_fast, t_ref, base, cons, paper, wc)
         if verified is not None:
