@@ -9,6 +9,8 @@ it. Each was checked by planting the same mutant by hand and seeing the test fai
 
 from __future__ import annotations
 
+import math
+from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -60,3 +62,28 @@ def test_sweep_rate_is_designs_timed_over_the_time_they_took(monkeypatch):
     rate, done = estimates.sweep_rate(spec, evaluator, 2)
     assert done == 300
     assert rate == pytest.approx(1600.0, rel=1e-12)
+
+
+def test_threshold_takes_the_crossing_nearest_the_value_in_p(monkeypatch):
+    """``robust.threshold``: where the limit crosses K twice over its 10⁻³–10³ window, the
+    crossing nearest the value in ``p`` (in log) is the threshold. A stand-in limit
+    K·exp((u − u1)(u − u2)) of u = ln b1 crosses K at b1 = b0/2 and b1 = 100·b0, with b0 =
+    0.01 N·s/m; the nearer is b0/2 = 0.005 N·s/m (|ln 0.5| = 0.69 < ln 100 = 4.6), and
+    the limit falls through K there, so the verdict holds below it ("≤"). The mutant
+    ``abs(best[0] + u0)`` (robust.py:487 at d2d4f2c) compares with |2 ln b0 − 0.69| = 9.9
+    and takes b1 = 1.0."""
+    from mrclutch import robust
+    from mrclutch.haptics.actuator import TABLE2_MR
+
+    K, b0 = 50.0, 0.01
+    u1, u2 = math.log(b0 / 2), math.log(100 * b0)
+
+    def limit(p):
+        u = math.log(p.b1)
+        return K * math.exp((u - u1) * (u - u2))
+
+    monkeypatch.setitem(robust._LIMITS, "stable", limit)
+    t = robust.threshold(replace(TABLE2_MR, b1=b0), K, "stable", "b1")
+    assert t is not None
+    assert t["value"] == pytest.approx(b0 / 2, rel=1e-8)
+    assert t["sense"] == "≤"
