@@ -1,7 +1,7 @@
 """Fuzz the command line in process: ``mrclutch.cli.main.main([...])`` on random inputs.
 
     python benchmarks/fuzz_cli.py [--n 10000] [--seed 0] [--workers 2] [--mem-gb 4]
-                                  [--records FILE]
+                                  [--records FILE] [--classes material,sections]
 
 ``--records`` appends each input's record as it ends (a run that is stopped early still
 says how many inputs it ran and what they found); the summary prints the seconds per input
@@ -36,10 +36,13 @@ Counted, per input:
 
 * ``traceback``: an exception escaping ``main`` (anything but SystemExit 0/2, or a return
   code other than 0, 2, 3 and 130);
-* ``refused``: a valid design (``load_design`` accepts it) refused (exit 2), or a design
-  file that does not load back to the same design;
+* ``refused``: a valid design (``load_design`` accepts it) refused (exit 2), a design
+  file that does not load back to the same design, or a plausible fluid file (the
+  ``material`` class's accepted branch, ``PLAUSIBLE_FRACTION`` of its draws: a library
+  fluid with fields moved inside their physical ranges) refused;
 * ``nan``: ``nan`` printed (text or JSON) without any ``note`` in the output;
-* ``null``: a null in ``evaluate --json`` without a reason (``nulls`` or a ``note``);
+* ``null``: a null in ``evaluate --json`` (or ``torque --json`` of the ``material`` class)
+  without a reason (``nulls`` or a ``note``);
 * ``partial``: a file left behind by a refused command, or an incomplete sweep file;
 * ``memory``: MemoryError, or the worker killed; each worker runs under
   ``resource.setrlimit(RLIMIT_AS)`` so a blowup fails fast instead of swapping;
@@ -350,10 +353,112 @@ def _fuzz_number(rng: random.Random) -> str:
     return repr(rng.choice([1.0, 1.0, -1.0]) * 10 ** rng.uniform(-8, 8))
 
 
+#: The library's fluids a plausible fluid file perturbs (geometry/data/materials).
+LIBRARY_FLUIDS = tuple(FLUID_FILE.parent / f"{n}.toml" for n in ("mrf_122eg", "mrf_132dg",
+                                                                   "mrf_140cg"))  # fmt: skip
+
+
+def _toml_value(v: Any) -> str:
+    """A value of a fluid file as TOML (numbers, strings, booleans and lists of them)."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int | float):
+        return repr(v)
+    if isinstance(v, str):
+        return json.dumps(v)  # a JSON string (\uXXXX escapes) is a TOML basic string
+    return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+
+
+def _loguniform(rng: random.Random, lo: float, hi: float) -> float:
+    return math.exp(rng.uniform(math.log(lo), math.log(hi)))
+
+
+#: The fields of a fluid file a plausible draw moves (``_move``).
+FLUID_MOVES = ("density", "specific_heat", "thermal_conductivity", "phi", "carrier_c",
+               "viscosity", "viscosity_temperature", "carrier_points", "temperature_range",
+               "carrier_expansion", "lifetime_dissipated_energy", "bh", "tau_y")  # fmt: skip
+
+
+def _move(rng: random.Random, rec: dict[str, Any], key: str) -> None:
+    """Field ``key`` of fluid record ``rec`` moved inside its physical range (in place)."""
+    uniform = {"density": (2000.0, 4500.0),  # kg/m³: MR fluids' span
+               "specific_heat": (400.0, 2000.0),  # J/(kg·K)
+               "thermal_conductivity": (0.1, 3.0),  # W/(m·K)
+               "phi": (0.05, 0.5), "carrier_c": (0.8, 1.3),
+               "viscosity_temperature": (20.0, 60.0),  # °C
+               "carrier_expansion": (0.0, 2e-3)}  # 1/K  # fmt: skip
+    if key in ("carrier_expansion", "lifetime_dissipated_energy") and rng.random() < 0.3:
+        rec.pop(key, None)  # a user's file without ageing data (issue 41: no data)
+    elif key in uniform:
+        rec[key] = rng.uniform(*uniform[key])
+    elif key == "viscosity":
+        rec[key] = _loguniform(rng, 0.01, 3.0)  # Pa·s
+    elif key == "lifetime_dissipated_energy":
+        rec[key] = _loguniform(rng, 1e11, 1e14)  # J/m³
+    elif key == "carrier_points":  # the Walther line moved up or down, its slope kept
+        f = _loguniform(rng, 0.3, 3.0)
+        rec[key] = [[t, nu * f] for t, nu in rec[key]]
+    elif key == "temperature_range":
+        rec[key] = [rng.uniform(-60.0, 10.0), rng.uniform(70.0, 200.0)]
+    elif key == "bh" and "b" in rec["bh"] and rng.random() < 0.7:  # B scaled: still rising
+        f = rng.uniform(0.5, 1.5)
+        rec["bh"] = {**rec["bh"], "b": [b * f for b in rec["bh"]["b"]]}
+    elif key == "bh":
+        rec["bh"] = {"source": "Carlson's closed form [carlson]", "model": "carlson"}
+    elif key == "tau_y" and "tau_y" in rec:  # the datasheet's τy scaled: still rising
+        f = rng.uniform(0.7, 1.3)
+        rec["tau_y"] = {**rec["tau_y"], "tau": [t * f for t in rec["tau_y"]["tau"]]}
+
+
+def plausible_fluid(rng: random.Random, k: int) -> tuple[str, tuple[float, float]]:
+    """A fluid file that loads: one of the library's fluids with one to five fields moved
+    inside their physical ranges (an MR fluid's density 2–4.5 g/cm³, iron fraction 5–50 %,
+    off-state viscosity 0.01–3 Pa·s, Carlson's C 0.8–1.3, the B–H and τy tables scaled,
+    the Walther points scaled together, the optional ageing data dropped): its TOML text
+    and its temperature range (°C)."""
+    import tomllib
+
+    rec = tomllib.loads(rng.choice(LIBRARY_FLUIDS).read_text())
+    rec["name"] = f"fuzz_fluid_{k}"
+    rec["label"] = f"fuzz fluid {k}"
+    start = dict(rec)
+    for key in rng.sample(FLUID_MOVES, rng.randint(1, 5)):
+        _move(rng, rec, key)
+    if rec == start:  # the keys drawn were absent (no [tau_y]): move the viscosity
+        _move(rng, rec, "viscosity")
+    flat = [f"{k} = {_toml_value(v)}" for k, v in rec.items() if not isinstance(v, dict)]
+    tables = [f"[{k}]\n" + "\n".join(f"{a} = {_toml_value(b)}" for a, b in v.items())
+              for k, v in rec.items() if isinstance(v, dict)]  # fmt: skip
+    lo, hi = rec["temperature_range"]
+    return "\n".join(flat) + "\n\n" + "\n\n".join(tables) + "\n", (lo, hi)
+
+
+def make_plausible_material(rng: random.Random, folder: Path, k: int) -> list[str]:
+    """A design on a plausible fluid file (``plausible_fluid``), at times run at another
+    fluid temperature inside the file's range, through a fast command with ``--json``: it
+    must answer (``check_input``: exit 0, no NaN, every null with its reason)."""
+    text, (lo, hi) = plausible_fluid(rng, k)
+    mat = folder / f"mp{k}.toml"
+    mat.write_text(text)
+    design = folder / f"mpd{k}.toml"
+    body = f'[clutch]\nbase = "paper"\n[materials]\nfluid_file = "{mat}"\n'
+    if rng.random() < 0.3:  # inside the file's range and the design's own [-40, 130] °C
+        t = rng.uniform(max(lo, -40.0), min(hi, 130.0))
+        body += f"[operating]\nfluid_temperature_C = {t:.6g}\n"
+    design.write_text(body)
+    if rng.random() < 0.6:
+        return ["evaluate", str(design), "--fidelity", "fast", "--no-uncertainty", "--json"]
+    return ["torque", str(design), "--method", "circuit", "--json"]
+
+
 def make_material(rng: random.Random, folder: Path, k: int) -> list[str]:
     """A design whose ``fluid_file`` is hostile: random bytes, UTF-16, nested past the
     parser, a FIFO, a device, a directory, a huge file, or the built-in fluid with one to
-    three fields replaced by extremes (viscosity 1e300 …)."""
+    three fields replaced by extremes (viscosity 1e300 …); in a fraction
+    ``PLAUSIBLE_FRACTION`` of draws a plausible fluid file that loads and must be answered
+    (``make_plausible_material``)."""
+    if rng.random() < PLAUSIBLE_FRACTION:
+        return make_plausible_material(rng, folder, k)
     kind = rng.randrange(8)
     mat = folder / f"m{k}.toml"
     base = FLUID_FILE.read_text().replace('name = "mrf_132dg"', f'name = "fuzz_{k}"')
@@ -430,10 +535,11 @@ def make_sections(rng: random.Random, folder: Path, k: int) -> list[str]:
     return argv + (["--json"] if rng.random() < 0.5 else [])
 
 
-def make_any(rng: random.Random, keys: dict[str, list[str]], folder: Path, k: int
-             ) -> tuple[str, list[str]]:  # fmt: skip
-    """(class, argv) of input k."""
-    cls = rng.choices(list(CLASSES), weights=list(CLASSES.values()))[0]
+def make_any(rng: random.Random, keys: dict[str, list[str]], folder: Path, k: int,
+             classes: tuple[str, ...] | None = None) -> tuple[str, list[str]]:  # fmt: skip
+    """(class, argv) of input k, drawn from ``classes`` (None: all) by their weights."""
+    names = [c for c in CLASSES if classes is None or c in classes]
+    cls = rng.choices(names, weights=[CLASSES[c] for c in names])[0]
     if cls == "extremes":
         return cls, make_input(rng, keys, folder, k)
     if cls == "structure":
@@ -491,6 +597,8 @@ def check_input(cls: str, argv: list[str], code: int, text: str, folder: Path
         rows = csv.read_bytes().count(b"\n") - 1 if csv.exists() else -1
         if spec_rows is not None and rows != spec_rows:
             return "partial", f"sweep wrote {rows} rows for {spec_rows} designs"
+    if cls == "material" and Path(argv[1]).name.startswith("mpd") and code != 0:
+        return "refused", f"plausible fluid file refused (exit {code})"  # it loads: answer
     if cls in ("material", "sections") and code == 0 and "--json" in argv:
         missing = nulls_unexplained(json.loads(text))  # issue 44: every null with a reason
         return ("null", f"null without a reason: {missing[0]}") if missing else None
@@ -600,7 +708,7 @@ def child(args: argparse.Namespace) -> None:
     with tempfile.TemporaryDirectory() as tmp:
         for k in range(args.start, args.stop):
             rng = random.Random(f"{args.seed}-{k}")
-            kind, argv = make_any(rng, keys, Path(tmp), k)
+            kind, argv = make_any(rng, keys, Path(tmp), k, _classes(args.classes))
             t = time.perf_counter()
             cls, detail = run_input(kind, argv, args.timeout, Path(tmp))
             rec = {"k": k, "class": cls, "detail": detail, "argv": argv, "kind": kind,
@@ -615,7 +723,7 @@ def child(args: argparse.Namespace) -> None:
 def worker(args: argparse.Namespace, start: int, stop: int) -> subprocess.Popen:
     cmd = [sys.executable, __file__, "--child", "--start", str(start), "--stop", str(stop),
            "--seed", str(args.seed), "--mem-gb", str(args.mem_gb), "--timeout",
-           str(args.timeout)]  # fmt: skip
+           str(args.timeout), "--classes", args.classes]  # fmt: skip
     env = {**os.environ, "PYTHONPATH": str(ROOT), "OMP_NUM_THREADS": "1"}
     return subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
                             env=env)  # fmt: skip
@@ -656,6 +764,16 @@ def cost_by_class(records: list[dict]) -> str:
     )
 
 
+def _classes(spec: str) -> tuple[str, ...] | None:
+    """``--classes material,sections`` as a tuple (None: every class)."""
+    names = tuple(c.strip() for c in spec.split(",") if c.strip())
+    unknown = [c for c in names if c not in CLASSES]
+    if unknown:
+        raise SystemExit(f"fuzz_cli: --classes {','.join(unknown)}: not one of "
+                         f"{', '.join(CLASSES)}")  # fmt: skip
+    return names or None
+
+
 def parent(args: argparse.Namespace) -> int:
     from concurrent.futures import ThreadPoolExecutor
 
@@ -677,7 +795,7 @@ def parent(args: argparse.Namespace) -> int:
     total = sum(counts.values())
     dt = time.perf_counter() - t0
     print(f"{total} fuzzed inputs in {dt:.0f} s ({total / dt:.0f}/s), seed {args.seed}, "
-          f"RLIMIT_AS {args.mem_gb:g} GiB")  # fmt: skip
+          f"RLIMIT_AS {args.mem_gb:g} GiB, classes {args.classes or 'all'}")  # fmt: skip
     print("  inputs by class: " + ", ".join(f"{k} {v}" for k, v in sorted(kinds.items())))
     print("  " + cost_by_class([r for part in parts for r in part]))
     for c, n in counts.items():
@@ -702,11 +820,17 @@ def main() -> int:
     ap.add_argument("--mem-gb", type=float, default=4.0, help="RLIMIT_AS per worker, GiB")
     ap.add_argument("--timeout", type=float, default=30.0, help="seconds per input")
     ap.add_argument("--show", type=int, default=5, help="examples per class")
+    ap.add_argument(
+        "--classes",
+        default="",
+        help="comma-separated input classes to draw (default: all, by weight)",
+    )
     ap.add_argument("--records", help="append each input's record (a JSON line) to this file")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--start", type=int, default=0, help=argparse.SUPPRESS)
     ap.add_argument("--stop", type=int, default=0, help=argparse.SUPPRESS)
     args = ap.parse_args()
+    _classes(args.classes)  # an unknown class refused before any worker starts
     if args.child:
         child(args)
         return 0

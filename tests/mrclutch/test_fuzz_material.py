@@ -1,0 +1,95 @@
+"""The fuzzer's plausible fluid files (benchmarks/fuzz_cli.py, issue 44 item 6): one of
+the library's fluids with a few fields moved inside their physical ranges loads, and the
+fast commands answer it with no NaN and every null with its reason; a plausible file
+refused is counted as a failure, not as a clean refusal."""
+
+from __future__ import annotations
+
+import importlib.util
+import random
+import sys
+import tomllib
+import warnings
+from pathlib import Path
+
+import pytest
+
+import geometry.materials as gm
+import magnetics.materials as mm
+
+FUZZ = Path(__file__).resolve().parents[2] / "benchmarks" / "fuzz_cli.py"
+
+
+@pytest.fixture(scope="module")
+def fuzz():
+    spec = importlib.util.spec_from_file_location("fuzz_cli_material", FUZZ)
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules["fuzz_cli_material"] = mod
+    spec.loader.exec_module(mod)
+    yield mod
+    sys.modules.pop("fuzz_cli_material", None)
+
+
+@pytest.fixture
+def registry():
+    """The material registry as it was: the fluids these tests load are removed after."""
+    tables = (gm._RECORDS, gm._DENSITY, gm._LABEL, gm._COLOUR, gm._KIND, mm._MATERIALS,
+              mm._FLUIDS)  # fmt: skip
+    saved = [dict(t) for t in tables]
+    yield
+    for t, s in zip(tables, saved, strict=True):
+        t.clear()
+        t.update(s)
+
+
+def test_plausible_fluid_files_move_fields_inside_their_ranges(fuzz):
+    """Each draw differs from the library fluid it started from in at least one field, and
+    every moved number stays in the physical range the draw promises."""
+    library = {p.stem: tomllib.loads(p.read_text()) for p in fuzz.LIBRARY_FLUIDS}
+    for k in range(40):
+        text, (lo, hi) = fuzz.plausible_fluid(random.Random(f"range-{k}"), k)
+        rec = tomllib.loads(text)
+        assert rec["name"] == f"fuzz_fluid_{k}" and lo < hi
+        assert 2000.0 <= rec["density"] <= 4500.0 or rec["density"] in {
+            r["density"] for r in library.values()}  # fmt: skip
+        assert 1e-3 <= rec["viscosity"] <= 10.0 and 0.0 < rec["phi"] < 0.64
+        changed = [
+            key for key in fuzz.FLUID_MOVES
+            if all(rec.get(key) != r.get(key) for r in library.values())
+        ]  # fmt: skip
+        assert changed, k
+
+
+def test_about_a_third_of_material_draws_are_plausible(fuzz, tmp_path):
+    """PLAUSIBLE_FRACTION (0.3) of 200 draws: 60 expected, σ = √(200·0.3·0.7) ≈ 6.5."""
+    n = sum(
+        Path(fuzz.make_material(random.Random(f"frac-{k}"), tmp_path, k)[1]).name.startswith(
+            "mpd")
+        for k in range(200)
+    )  # fmt: skip
+    assert 35 <= n <= 85
+
+
+def test_plausible_fluid_files_are_answered_without_nan_or_unexplained_null(
+    fuzz, tmp_path, registry
+):
+    """Six draws (evaluate --fidelity fast --no-uncertainty --json, or torque --json), each
+    through the fuzzer's own checks: exit 0, no NaN, every null with its reason."""
+    bad = []
+    for k in range(6):
+        argv = fuzz.make_plausible_material(random.Random(f"answer-{k}"), tmp_path, k)
+        assert argv[0] in ("evaluate", "torque") and "--json" in argv
+        with warnings.catch_warnings():
+            warnings.simplefilter("default")
+            result = fuzz.run_input("material", argv, 120.0, tmp_path)
+        if result != ("ok", "0"):
+            bad.append((result, argv, Path(argv[1]).read_text()))
+    assert not bad, bad
+
+
+def test_a_plausible_fluid_file_refused_is_a_failure(fuzz, tmp_path):
+    argv = ["evaluate", str(tmp_path / "mpd3.toml"), "--fidelity", "fast", "--json"]
+    cls, detail = fuzz.check_input("material", argv, 2, "", tmp_path)
+    assert cls == "refused" and "plausible fluid file refused" in detail
+    hostile = ["evaluate", str(tmp_path / "md3.toml"), "--fidelity", "fast"]
+    assert fuzz.check_input("material", hostile, 2, "", tmp_path) is None
