@@ -400,9 +400,12 @@ def _move(rng: random.Random, rec: dict[str, Any], key: str) -> None:
         rec[key] = [[t, nu * f] for t, nu in rec[key]]
     elif key == "temperature_range":
         rec[key] = [rng.uniform(-60.0, 10.0), rng.uniform(70.0, 200.0)]
-    elif key == "bh" and "b" in rec["bh"] and rng.random() < 0.7:  # B scaled: still rising
-        f = rng.uniform(0.5, 1.5)
-        rec["bh"] = {**rec["bh"], "b": [b * f for b in rec["bh"]["b"]]}
+    elif key == "bh" and "b" in rec["bh"] and rng.random() < 0.7:
+        # the magnetisation scaled, B = μ0 (H + f M): the slope stays >= μ0 (a B scaled
+        # down would fall below μ0 near saturation, which the loader rightly refuses)
+        f, mu0 = rng.uniform(0.5, 1.5), 4e-7 * math.pi
+        bh = zip(rec["bh"]["b"], rec["bh"]["h"], strict=True)
+        rec["bh"] = {**rec["bh"], "b": [mu0 * h + f * (b - mu0 * h) for b, h in bh]}
     elif key == "bh":
         rec["bh"] = {"source": "Carlson's closed form [carlson]", "model": "carlson"}
     elif key == "tau_y" and "tau_y" in rec:  # the datasheet's τy scaled: still rising
