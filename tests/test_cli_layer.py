@@ -32,17 +32,6 @@ ALLOWED = {
 #: CLI modules not yet thin (issue 43 item 1, other parts of the CLI): the lower-layer
 #: modules each imports directly today. The list may only shrink.
 PENDING: dict[str, set[str]] = {
-    # the geometry commands (export, inertia, view): the CAD, mass and section calls
-    "mrclutch.cli.commands.geometry": {
-        "geometry.cad",
-        "geometry.export",
-        "geometry.mass",
-        "geometry.materials",
-        "geometry.reading",
-        "geometry.section",
-    },
-    # the 3-D view: the CAD solids to meshes
-    "mrclutch.cli.view": {"geometry.cad", "geometry.section"},
     # the plots: material colours (the registry), the haptic model's frequency responses
     "mrclutch.cli.plots.design": {"geometry.materials"},
     "mrclutch.cli.plots.haptic": {"mrclutch.haptics.model"},
@@ -52,7 +41,6 @@ PENDING: dict[str, set[str]] = {
 NUMPY_OK = {
     "mrclutch.cli.jsonio": "numpy scalars and arrays to JSON (to_jsonable)",
     "mrclutch.cli.plots": "the figures draw arrays (every module of the package)",
-    "mrclutch.cli.view": "the 3-D view hands mesh arrays to pyvista",
 }
 #: CLI modules not yet free of numpy (issue 43 item 1): may only shrink.
 NUMPY_PENDING: dict[str, str] = {}

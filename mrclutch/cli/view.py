@@ -12,13 +12,10 @@ import os
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from geometry.cad import MATERIAL_COLOURS, material_solids, tessellate
 from geometry.params import DrumClutch
-from geometry.section import build_section
-from geometry.validation import ParameterError, check_positive
+from geometry.validation import ParameterError
 from mrclutch.cli.plots import save_png
+from mrclutch.solids import legend_entries, material_colour, view_tolerance, view_triangles
 
 #: Default window of the view and screenshots (pixels).
 WINDOW_SIZE = (1024, 768)
@@ -38,32 +35,17 @@ def _prepare_offscreen() -> None:
         os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
 
 
-def view_tolerance(clutch: DrumClutch, window_size: tuple[int, int] = WINDOW_SIZE) -> float:
-    """Chord height [m] the view needs: one pixel when the whole clutch fills the window
-    (its larger envelope side over the window's smaller side). A finer tessellation adds
-    triangles no one can see; a coarser one shows facets."""
-    if min(window_size) < 1:
-        raise ParameterError(f"window_size = {window_size!r}: need positive pixel counts")
-    return max(build_section(clutch).envelope) / min(window_size)
-
-
 def scene_meshes(
     clutch: DrumClutch, tolerance: float | None = None, cut: bool = True
 ) -> list[tuple[str, str, Any]]:
     """(part, material, pyvista.PolyData in mm) for every solid; half of each if ``cut``.
-    ``tolerance`` [m] defaults to :func:`view_tolerance` of the default window."""
+    ``tolerance`` [m] defaults to :func:`mrclutch.solids.view_tolerance` of the default
+    window."""
     import pyvista as pv
 
-    tolerance = view_tolerance(clutch) if tolerance is None else tolerance
-    check_positive("tolerance", tolerance, " m")
-    out = []
-    for (part, material), shape in material_solids(
-        clutch, angle_deg=180.0 if cut else 360.0
-    ).items():
-        v, f = tessellate(shape, tolerance * 1e3, 0.3)
-        faces = np.hstack([np.full((len(f), 1), 3), f]).ravel()
-        out.append((part, material, pv.PolyData(v, faces)))
-    return out
+    tolerance = view_tolerance(clutch, WINDOW_SIZE) if tolerance is None else tolerance
+    return [(part, material, pv.PolyData(v, faces))
+            for part, material, v, faces in view_triangles(clutch, tolerance, cut)]  # fmt: skip
 
 
 def build_plotter(
@@ -88,7 +70,7 @@ def build_plotter(
     for part, material, mesh in scene_meshes(clutch, tolerance, cut):
         plotter.add_mesh(
             mesh,
-            color=MATERIAL_COLOURS[material],
+            color=material_colour(material),
             opacity=FLUID_OPACITY if part == "fluid" else 1.0,
             smooth_shading=False,
             label=f"{part} ({material})",
@@ -125,22 +107,12 @@ def screenshot(
         img = plotter.screenshot(return_img=True)
     finally:
         plotter.close()
-    _compose(img, _legend_entries(clutch), (w, h), dest)
+    _compose(img, legend_entries(clutch), (w, h), dest)
     return dest
 
 
 #: Share of the screenshot's width given to the model; the legend takes the rest.
 LEGEND_SPLIT = 0.66
-
-
-def _legend_entries(clutch: DrumClutch) -> list[tuple[str, tuple[float, float, float]]]:
-    """(label, colour) of every (part, material) in the view, in the section's order."""
-    seen: list[tuple[str, tuple[float, float, float]]] = []
-    for reg in build_section(clutch).regions:
-        entry = (f"{reg.part} ({reg.material})", MATERIAL_COLOURS[reg.material])
-        if entry not in seen:
-            seen.append(entry)
-    return seen
 
 
 def _compose(img: Any, labels: list, size: tuple[int, int], dest: Path) -> None:

@@ -37,7 +37,8 @@ def test_scene_is_cut_in_half_and_coarse():
 
 def test_view_tessellates_as_finely_as_the_screen_shows():
     from geometry.section import build_section
-    from mrclutch.cli.view import scene_meshes, view_tolerance
+    from mrclutch.cli.view import scene_meshes
+    from mrclutch.solids import view_tolerance
 
     c = preset("paper")
     side = max(build_section(c).envelope)

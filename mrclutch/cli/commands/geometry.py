@@ -11,33 +11,24 @@ import math
 from pathlib import Path
 from typing import Any
 
-from geometry.cad import brep_volume_mm3, check_tolerance, material_solids
-from geometry.export import (
-    export_clutch,
-    read_materials,
-    read_step_parts,
-    sidecar_path,
-    step_solids,
-)
-from geometry.mass import (
-    analytic_mass,
-    brep_mass,
-    check_mesh,
-    check_shells,
-    mesh_mass,
-    weigh_mesh,
-    weigh_shape,
-)
-from geometry.materials import DENSITY_RANGE
 from geometry.params import DrumClutch
-from geometry.reading import check_regular
-from geometry.section import OUTPUT_PARTS, build_section
-from geometry.validation import ParameterError, check_choice, check_positive, check_range
+from geometry.validation import ParameterError, check_choice, check_range
 from mrclutch.cli.commands._common import add_design_args, load_clutch, load_design_args, print_json
 from mrclutch.cli.commands.handoff import export_handoff
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.progress import bar
 from mrclutch.cli.view import screenshot, show
+from mrclutch.inertia import (
+    DENSITY_RANGE,
+    design_inertia,
+    load_stl,
+    output_rotor,
+    read_step,
+    stl_hint,
+    weigh_step,
+    weigh_stl,
+)
+from mrclutch.solids import chord_height_mm, export_cad
 
 CAD_SUFFIXES = (".step", ".stp", ".stl")
 DEFAULT_TOLERANCE_MM = 0.01
@@ -121,8 +112,7 @@ def _tol(p: argparse.ArgumentParser) -> None:
 
 def _tolerance(args: argparse.Namespace, clutch: DrumClutch) -> float:
     """``--tolerance-mm`` in metres, bounded below relative to the clutch (memory)."""
-    tol = check_positive("--tolerance-mm", args.tolerance_mm, " mm") * 1e-3
-    return check_tolerance("--tolerance-mm", tol, clutch, scale=1e3)
+    return chord_height_mm("--tolerance-mm", args.tolerance_mm, clutch)
 
 
 EXPORT_FORMATS = ("step", "femm", "onelab", "dxf", "drawing")
@@ -134,8 +124,7 @@ def cmd_export(args: argparse.Namespace) -> int:
     if args.format != "step":
         return export_handoff(args)
     design = load_design_args(args)
-    clutch = design.clutch
-    res = export_clutch(clutch, args.out, _tolerance(args, clutch), materials=design.materials)
+    res = export_cad(design, args.out, _tolerance(args, design.clutch))
     print(f"{res.step}")
     print(f"{res.materials}  (material and density of every solid: mrclutch inertia reads it)")
     for name, path in res.stl.items():
@@ -169,26 +158,15 @@ def cmd_inertia(args: argparse.Namespace) -> int:
     wanted = INERTIA_METHODS[1:] if args.method == "all" else (args.method,)
     # the chord height bounds the mesh only: --method analytic|brep never reads it
     tol = _tolerance(args, clutch) if "mesh" in wanted else None
-    s = build_section(clutch, design.materials)
     cad = bool(set(wanted) - {"analytic"})
-    reps = {}
     # the CAD solids (build123d, seconds) only for the methods that weigh them, under a bar
     # of the steps with its estimate (issue 40: a wait over ~2 s says how long)
     with bar(1 + len(wanted), "inertia", "step", enabled=cad) as done:
-        solids = material_solids(clutch, s) if cad else None
-        done(1, "inertia: CAD solids built" if cad else None)
-        for k, m in enumerate(wanted, 2):
-            if m == "analytic":
-                reps[m] = analytic_mass(s)
-            elif m == "mesh":
-                reps[m] = mesh_mass(clutch, tol, solids=solids, materials=design.materials)
-            else:
-                reps[m] = brep_mass(clutch, solids, materials=design.materials)
-            done(k)
+        reps, envelope = design_inertia(design, wanted, tol, done)
     out: dict[str, Any] = {k: _method(r) for k, r in reps.items()}
     # the clutch's mass by the most exact method run (the B-rep, else the first)
     out["clutch_mass_kg"] = reps.get("brep", reps[wanted[0]]).clutch_mass
-    out["envelope_m"] = list(s.envelope)
+    out["envelope_m"] = list(envelope)
     out["tolerance_mm"] = args.tolerance_mm
     if args.json:
         print_json(out)
@@ -201,7 +179,7 @@ def cmd_inertia(args: argparse.Namespace) -> int:
         )
         for note in r.notes:
             print(f"          note: {note}")
-    d, length = s.envelope
+    d, length = envelope
     print(f"envelope: Ø {d * 1e3:.2f} mm × {length * 1e3:.2f} mm (rotor = output drums + shaft)")
     return 0
 
@@ -243,86 +221,21 @@ def _densities(
     return out
 
 
-def _weigh_step(args: argparse.Namespace, path: Path) -> dict[str, dict[str, Any]]:
-    """Every part of a STEP weighed: densities given on the command line win; the others
-    come from the sidecar (``geometry.export.read_materials``) solid by solid."""
-    shapes = read_step_parts(path)
-    side = read_materials(path)
-    dens = _densities(args, list(shapes), optional=side is not None)
-    results: dict[str, dict[str, Any]] = {}
-    for part, shape in shapes.items():
-        if part in dens:
-            pm = weigh_shape(shape, dens[part], args.axis)
-            results[part] = {"mass_kg": pm.mass, "inertia_kg_m2": pm.inertia,
-                             "density_kg_m3": dens[part], "density_from": "option"}  # fmt: skip
-            continue
-        mass = inertia = 0.0
-        materials = []
-        for _, name, solid in step_solids({part: shape}):
-            entry = (side or {}).get(name)
-            if entry is None:
-                raise ParameterError(
-                    f"{sidecar_path(path)}: no entry for solid {name!r} of {path.name}; "
-                    "give --density or --part-density"
-                )
-            vol = brep_volume_mm3(solid)
-            if abs(vol / entry["volume_mm3"] - 1) > 1e-5:
-                raise ParameterError(
-                    f"{sidecar_path(path)}: solid {name} is {vol:.6g} mm³ in {path.name}, "
-                    f"{entry['volume_mm3']:.6g} mm³ in the sidecar (written for another file?)"
-                )
-            pm = weigh_shape(solid, entry["density_kg_m3"], args.axis)
-            mass, inertia = mass + pm.mass, inertia + pm.inertia
-            materials.append(str(entry.get("material", name)))
-        vol_m3 = brep_volume_mm3(shape) * 1e-9
-        results[part] = {"mass_kg": mass, "inertia_kg_m2": inertia,
-                         "density_kg_m3": mass / vol_m3, "density_from": "sidecar",
-                         "materials": materials}  # fmt: skip
-    return results
-
-
-def _stl_hint(stl: Path) -> str:
-    """What the export's materials file beside an STL says about its part (an STL has no
-    material): the densities to give, or the STEP that weighs the exact mix."""
-    suffix = ".materials.json"
-    for side in sorted(stl.parent.glob(f"*{suffix}")):
-        step = side.name[: -len(suffix)] + ".step"
-        try:
-            info = read_materials(side.with_name(step)) or {}
-        except ParameterError:
-            continue
-        mats = sorted({(v["material"], v["density_kg_m3"]) for v in info.values()
-                       if v.get("part") == stl.stem})  # fmt: skip
-        if mats:
-            listed = ", ".join(f"{m} {rho:g} kg/m³" for m, rho in mats)
-            mixed = (f"; it mixes materials, so one density is approximate: "
-                     f"`mrclutch inertia {step}` weighs each" if len(mats) > 1 else "")  # fmt: skip
-            return f"({side.name} beside it lists {stl.stem}: {listed}{mixed})"
-    return "(an STL carries no material; the export's <stem>.materials.json lists each part's)"
-
-
 def _weigh_file(args: argparse.Namespace) -> int:
     path = Path(args.design)
     if args.preset is not None:
         raise CLIError("give either a CAD file or --preset, not both")
-    check_regular(path, "CAD file")  # a FIFO, device or directory refused by name; size cap
     results: dict[str, dict[str, Any]] = {}
     if path.suffix.lower() == ".stl":
-        import trimesh
-
-        try:
-            mesh = trimesh.load_mesh(path, file_type="stl")
-        except Exception as exc:  # trimesh raises assorted errors on bad files
-            raise ParameterError(f"{path}: not a readable STL ({exc})") from None
+        mesh = load_stl(path)
         name = path.stem
-        rho = _densities(args, [name], hint=_stl_hint(path))[name]
-        check_mesh(mesh, name)
-        check_shells(mesh, name)
-        pm = weigh_mesh(mesh, rho, args.axis)
-        results[name] = {"mass_kg": pm.mass, "inertia_kg_m2": pm.inertia, "density_kg_m3": rho}
+        rho = _densities(args, [name], hint=stl_hint(path))[name]
+        results[name] = weigh_stl(mesh, name, rho, args.axis)
         method = "mesh"
     else:
-        results = _weigh_step(args, path)
+        shapes, side = read_step(path)
+        dens = _densities(args, list(shapes), optional=side is not None)
+        results = weigh_step(path, shapes, side, dens, args.axis)
         method = "brep"
     total = {
         "mass_kg": sum(r["mass_kg"] for r in results.values()),
@@ -330,9 +243,10 @@ def _weigh_file(args: argparse.Namespace) -> int:
     }
     out = {"file": str(path), "method": method, "axis": args.axis, "parts": results, "total": total}
     rows = [*results.items(), ("total", total)]
-    if set(OUTPUT_PARTS) <= set(results):  # the tool's own part names: the output rotor too
-        out["output_rotor"] = {k: sum(results[p][k] for p in OUTPUT_PARTS) for k in total}
-        rows.append(("+".join(OUTPUT_PARTS), out["output_rotor"]))
+    label, rotor = output_rotor(results, list(total))
+    if rotor:  # the tool's own part names: the output rotor too
+        out["output_rotor"] = rotor
+        rows.append((label, rotor))
     if args.json:
         print_json(out)
         return 0
