@@ -22,7 +22,7 @@ from mrclutch.haptics.hand import (
     HandRange,
     _chi_h,
     _crossings_h,
-    _limits_hands,
+    _hand_rows,
     _p_hand,
     backdrive_force,
     coupled_stability,
@@ -31,6 +31,7 @@ from mrclutch.haptics.hand import (
     is_stable_coupled,
     max_stable_stiffness_coupled,
 )
+from mrclutch.haptics.hand_scan import _limits_hands
 from mrclutch.haptics.impedance import passive_impedance
 from mrclutch.haptics.limits import _chi, is_stable, max_passive_stiffness, max_stable_stiffness
 from mrclutch.pipeline import evaluate
@@ -348,7 +349,7 @@ def test_batched_limits_equal_one_hand_at_a_time() -> None:
     # scan's tolerance (Illinois rtol 1e-13 on ω)
     hands = [*HAND_RANGE.grid(3), Hand(), Hand(m=0.3), Hand(b=5.0), Hand(k=100.0)]
     for p in _designs_for_batch():
-        together = _limits_hands(p, hands)
+        together = _limits_hands(p, _hand_rows(hands))
         alone = np.array([max_stable_stiffness_coupled(p, h) for h in hands])
         assert together.shape == (len(hands),)
         np.testing.assert_array_equal(np.isfinite(together), np.isfinite(alone))
@@ -360,7 +361,7 @@ def test_batched_limits_against_the_model_limit() -> None:
     # independent code (limits.max_stable_stiffness, the scan without a hand): hands off it
     # is the model's limit, and a mass-only hand is the lever with m2 -> m2 + m_h
     for p in _designs_for_batch():
-        lims = _limits_hands(p, [Hand(), Hand(m=0.2), Hand(m=0.02)])
+        lims = _limits_hands(p, _hand_rows([Hand(), Hand(m=0.2), Hand(m=0.02)]))
         ref = [max_stable_stiffness(replace(p, m2=p.m2 + m)) for m in (0.0, 0.2, 0.02)]
         np.testing.assert_allclose(lims, ref, rtol=1e-9)
 
