@@ -38,6 +38,8 @@ increasing lower bound |lead|(ω − ω_a)⁴/(k + bω) ≤ |X(ω)| (ω_a the la
 |E| ≤ 1) exceeds the gains sought. The stable K form (0, K_lim]: K_lim is the first K_c
 where the count 2 Σ sign turns positive. A hand changes only P_h, so hands off the crossings
 are ``limits._crossings``' (same grid) and K_lim is ``limits.max_stable_stiffness``.
+The scan runs every hand of a search at once (``mrclutch.haptics.hand_scan``: the same
+grid per hand, one pass).
 
 **Coupled-stability invariant** ([colgate-hogan1988]): if the device at K is passive
 (Re Z_cl ≥ 0, ``limits.max_passive_stiffness``) then Z_cl + Z_h is positive real for every
