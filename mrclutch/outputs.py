@@ -126,7 +126,8 @@ _ALL = (
     Output("bandwidth_hz", "Hz", "rendering bandwidth: first frequency where the "
            "effective stiffness turns negative (full 2-DOF response)",
            "bandwidth, full response"),
-    Output("resonance_hz", "Hz", "system (transmission) resonance", "system resonance"),
+    Output("resonance_hz", "Hz", "system (transmission) resonance (empty/NaN: none, the "
+           "free lever is overdamped: every zero of Eq. 2 is real)", "system resonance"),
     Output("rendering_area_dB_decade", "dB·decade", "area between the rendered and the "
            "ideal impedance over 1–1000 Hz (Fig. 7)", "rendering area"),
     Output("passive", "", "passive at the rendered K (delay included)", "passive at K"),
