@@ -1,6 +1,7 @@
 """The clutch's solids as the commands use them: the chord height a mesh is cut to (checked
 against the clutch's size, or the one a view's pixel needs), the STEP + STL export, the
-tessellated (half-cut) solids the 3-D view draws, and the colour and order of its legend.
+tessellated (half-cut) solids the 3-D view draws, and how a material is drawn (its colour,
+its label) and in what order the view's legend lists them.
 
 The CLI (``mrclutch export``, ``inertia``, ``view``; mrclutch/cli/view.py draws with
 pyvista) parses, calls these and formats. build123d loads with geometry.cad's functions.
@@ -15,6 +16,7 @@ import numpy as np
 
 from geometry.cad import MATERIAL_COLOURS, check_tolerance, material_solids, tessellate
 from geometry.export import ExportResult, export_clutch
+from geometry.materials import LABEL
 from geometry.params import DrumClutch
 from geometry.section import build_section
 from geometry.validation import ParameterError, check_positive
@@ -64,6 +66,11 @@ def view_triangles(clutch: DrumClutch, tolerance: float,
 def material_colour(material: str) -> tuple[float, float, float]:
     """The RGB colour (0…1) a material is drawn in (geometry.cad.MATERIAL_COLOURS)."""
     return MATERIAL_COLOURS[material]
+
+
+def material_label(material: str) -> str:
+    """A material's name as a legend prints it (geometry.materials.LABEL)."""
+    return LABEL[material]
 
 
 def legend_entries(clutch: DrumClutch) -> list[tuple[str, tuple[float, float, float]]]:

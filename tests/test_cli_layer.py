@@ -5,8 +5,10 @@ numpy-level computation (no ``import numpy`` outside the plotting and JSON modul
 
 Read from the source (AST) with the import graph of ``tests/test_architecture.py``, lazy
 imports included. Two lists, each entry with its reason: the few lower-layer modules any CLI
-module may use (validation, the output layer, plain data), and the modules still to be made
-thin (their direct imports today, which may only shrink: a new one fails here).
+module may use (validation, the output layer, plain data), and the CLI modules that may
+import numpy to draw or write arrays. No CLI module is exempt (issue 43 item 1: the last
+ones moved their computation to mrclutch.torque_curves, haptic_run, handoff, inertia,
+solids and impedance).
 """
 
 from __future__ import annotations
@@ -29,21 +31,11 @@ ALLOWED = {
     "geometry.params": "DrumClutch, the design's dimensions: a frozen dataclass (data)",
 }
 
-#: CLI modules not yet thin (issue 43 item 1, other parts of the CLI): the lower-layer
-#: modules each imports directly today. The list may only shrink.
-PENDING: dict[str, set[str]] = {
-    # the plots: material colours (the registry), the haptic model's frequency responses
-    "mrclutch.cli.plots.design": {"geometry.materials"},
-    "mrclutch.cli.plots.haptic": {"mrclutch.haptics.model"},
-}
-
 #: CLI modules that may import numpy, and why: arrays drawn or written, never computed.
 NUMPY_OK = {
     "mrclutch.cli.jsonio": "numpy scalars and arrays to JSON (to_jsonable)",
     "mrclutch.cli.plots": "the figures draw arrays (every module of the package)",
 }
-#: CLI modules not yet free of numpy (issue 43 item 1): may only shrink.
-NUMPY_PENDING: dict[str, str] = {}
 
 
 def below(module: str, source: str | None = None) -> set[str]:
@@ -72,7 +64,7 @@ def imports_numpy(module: str, source: str | None = None) -> list[int]:
 
 
 def _numpy_ok(module: str) -> bool:
-    return any(module == m or module.startswith(m + ".") for m in (*NUMPY_OK, *NUMPY_PENDING))
+    return any(module == m or module.startswith(m + ".") for m in NUMPY_OK)
 
 
 def test_the_cli_modules_are_found() -> None:
@@ -82,7 +74,7 @@ def test_the_cli_modules_are_found() -> None:
 
 @pytest.mark.parametrize("module", CLI)
 def test_cli_reaches_the_lower_layers_only_through_the_application(module: str) -> None:
-    extra = below(module) - set(ALLOWED) - PENDING.get(module, set())
+    extra = below(module) - set(ALLOWED)
     assert not extra, (
         f"{module} imports {sorted(extra)} directly: call the application layer "
         "(mrclutch.*) instead, and move the computation or decision there"
@@ -100,9 +92,9 @@ def test_cli_does_no_numpy_computation(module: str) -> None:
 
 def test_the_lists_name_real_modules_and_stay_small() -> None:
     """Every entry names a module that exists; the allow-list stays tiny."""
-    listed = {*PENDING, *NUMPY_PENDING, *(m for m in NUMPY_OK if m in MODULES)}
+    listed = {m for m in NUMPY_OK if m in MODULES}
     assert listed <= set(CLI)
-    assert set(ALLOWED) | {t for ts in PENDING.values() for t in ts} <= set(MODULES)
+    assert set(ALLOWED) <= set(MODULES)
     assert len(ALLOWED) <= 3
 
 

@@ -8,9 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from geometry.materials import COLOUR as REGISTRY_COLOUR
-from geometry.materials import LABEL
 from mrclutch.cli.plots import save_png
+from mrclutch.solids import material_colour, material_label
 from mrclutch.sweep import is_parquet, pareto_front, read_results
 
 __all__ = ["pareto_plot", "pareto_set_plot", "read_results"]
@@ -207,7 +206,7 @@ def section_figure(section: object, out: str | Path) -> Path:
 
     fig, ax = plt.subplots(figsize=(6, 6), constrained_layout=True)
     for reg in section.regions:  # type: ignore[attr-defined]
-        colour = MATERIAL_COLOURS.get(reg.material, REGISTRY_COLOUR[reg.material])
+        colour = MATERIAL_COLOURS.get(reg.material, material_colour(reg.material))
         ax.add_patch(
             Rectangle((reg.r0 * 1e3, reg.z0 * 1e3), (reg.r1 - reg.r0) * 1e3,
                       (reg.z1 - reg.z0) * 1e3, facecolor=colour, edgecolor="white", lw=0.3)
@@ -228,7 +227,8 @@ def section_figure(section: object, out: str | Path) -> Path:
         fontsize=10,
     )
     present = dict.fromkeys(reg.material for reg in section.regions)  # type: ignore[attr-defined]
-    ax.legend(handles=[Patch(color=MATERIAL_COLOURS.get(m, REGISTRY_COLOUR[m]), label=LABEL[m])
+    ax.legend(handles=[Patch(color=MATERIAL_COLOURS.get(m, material_colour(m)),
+                             label=material_label(m))
                        for m in present], loc="lower right", fontsize=9)  # fmt: skip
     save_png(fig, out, dpi=130)
     return Path(out)

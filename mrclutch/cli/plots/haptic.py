@@ -9,14 +9,7 @@ from typing import Any
 import numpy as np
 
 from mrclutch.cli.plots import save_png
-from mrclutch.haptics.model import (
-    BAND_HZ,
-    bandwidth,
-    closed_loop_impedance,
-    effective_impedance,
-    passive_impedance,
-    rendering_area,
-)
+from mrclutch.impedance import band_frequencies, impedance_curves
 
 
 def compare_figure(
@@ -36,17 +29,13 @@ def compare_figure(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    band = BAND_HZ if band is None else band
-    f = np.logspace(np.log10(band[0]), np.log10(band[1]), 1500)
-    w = 2 * np.pi * f
+    f = band_frequencies(band)
     fig, axes = plt.subplots(3, 1, figsize=(6, 8.4), sharex=True, constrained_layout=True)
     ax_z, ax_k, ax_b = axes
     colors = ("tab:blue", "tab:red", "tab:green")
     for j, ((label, p), color) in enumerate(zip(sides.items(), colors, strict=False)):
-        zc = np.abs(closed_loop_impedance(p, K, w))
-        zp = np.abs(passive_impedance(p, w))
-        area = rendering_area(p, K, band)
-        bw = float(bandwidth(p, K))
+        c = impedance_curves(p, K, f, band)
+        zc, zp, area, bw = c["closed"], c["passive"], c["area"], c["bandwidth"]
         ax_z.loglog(f, zc, color=color, label=f"{label}: closed loop, area {area:.1f} dB·dec")
         ax_z.loglog(f, zp, "--", color=color, label=f"{label}: passive (Eq. 2)")
         ax_z.fill_between(f, zp, zc, where=zc > zp, color=color, alpha=0.15)
@@ -56,9 +45,8 @@ def compare_figure(
             # each design's label on its own height (bandwidths close together stay legible)
             ax_z.annotate(f" {bw:.1f} Hz", (bw, 0.03 + 0.08 * j), color=color, fontsize=9,
                           xycoords=ax_z.get_xaxis_transform())  # fmt: skip
-        eff = effective_impedance(p, K, w)
-        ax_k.semilogx(f, eff.stiffness, color=color, label=label)
-        ax_b.semilogx(f, eff.damping, color=color, label=label)
+        ax_k.semilogx(f, c["stiffness"], color=color, label=label)
+        ax_b.semilogx(f, c["damping"], color=color, label=label)
     ax_k.axhline(K, color="0.5", lw=0.8, label=f"K = {K:.0f} N/m")
     ax_k.axhline(0.0, color="k", lw=0.5)
     ax_z.set_ylabel("|Z| = |F/ẋ| [N·s/m]")
