@@ -149,15 +149,22 @@ def time_estimate(section: Section, size: float, solves: int, mesh: str = "unifo
     return solves * SECONDS_PER_NODE * memory_estimate(section, size, mesh)[0]
 
 
+#: GiB the whole process may hold while one FEM solve runs (``MRCLUTCH_FEM_MEMORY_GB``):
+#: issue 44's limit for any accepted single-design command
+DEFAULT_MEMORY_GB = 1.0
+
+
 def memory_budget() -> float:
-    """Bytes one FEM solve may use: ``MRCLUTCH_FEM_MEMORY_GB`` (default 4 GiB), never more
+    """Bytes the process may hold while one FEM solve runs, what it already holds included
+    (``check_memory``): ``MRCLUTCH_FEM_MEMORY_GB`` (default DEFAULT_MEMORY_GB), never more
     than half the machine's memory nor more than an address-space limit (RLIMIT_AS) allows."""
+    default = DEFAULT_MEMORY_GB * 2**30
     try:
-        budget = float(os.environ.get("MRCLUTCH_FEM_MEMORY_GB", "4")) * 2**30
+        budget = float(os.environ.get("MRCLUTCH_FEM_MEMORY_GB", str(DEFAULT_MEMORY_GB))) * 2**30
     except ValueError:
-        budget = 4.0 * 2**30
+        budget = default
     if not math.isfinite(budget) or budget <= 0:
-        budget = 4.0 * 2**30
+        budget = default
     try:
         budget = min(budget, 0.5 * os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
     except (ValueError, OSError, AttributeError):
@@ -168,6 +175,24 @@ def memory_budget() -> float:
     return budget
 
 
+def held_memory() -> float:
+    """Bytes this process holds now: its resident set (``/proc/self/statm``; shared
+    libraries' pages included, as the peak RSS a user measures counts them) once the C
+    heap's free pages went back to the system (glibc ``malloc_trim``: what an earlier step
+    freed is not counted as held), 0 where the system does not say."""
+    try:
+        import ctypes
+
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):
+        pass  # not glibc: the resident set as it is
+    try:
+        with open("/proc/self/statm", encoding="ascii") as f:
+            return float(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+    except (OSError, ValueError, IndexError, AttributeError):
+        return 0.0
+
+
 def memory_estimate(section: Section, size: float, mesh: str = "uniform") -> tuple[int, float]:
     """(grid nodes, bytes) of one FEM solve of ``section`` at element ``size`` (m)."""
     rs, zs = _lines(section, size, mesh)
@@ -175,25 +200,34 @@ def memory_estimate(section: Section, size: float, mesh: str = "uniform") -> tup
     return nodes, BYTES_FIXED + BYTES_PER_NODE * nodes
 
 
-def check_memory(section: Section, size: float, mesh: str = "uniform") -> None:
+def check_memory(
+    section: Section, size: float, mesh: str = "uniform", held: float | None = None
+) -> None:
     """Refuse, before any mesh is built, a size whose solve would not fit the budget
-    (``memory_budget``), naming the smallest size that fits."""
+    (``memory_budget``) beside the ``held`` bytes the process holds already (default: its
+    resident set now, ``held_memory``), naming the smallest size that fits."""
     budget = memory_budget()
+    held = held_memory() if held is None else float(held)
+    room = budget - held
     if not (math.isfinite(size) and size > 0):
         raise ParameterError(f"FEM element size = {size!r} m: must be finite and > 0")
     nodes, need = memory_estimate(section, size, mesh)
-    if need <= budget:
+    if need <= room:
         return
+    beside = f" beside the {held / 2**30:.2g} GiB this process holds" if held > 0 else ""
     lo, hi = size, max(size, 5e-3)  # bisection in log size: fits at hi, not at lo
-    if memory_estimate(section, hi, mesh)[1] > budget:
-        raise ParameterError(f"the FEM needs {need / 2**30:.2g} GiB at any element size here, "
-                             f"above the {budget / 2**30:.2g} GiB budget")  # fmt: skip
+    if memory_estimate(section, hi, mesh)[1] > room:
+        raise ParameterError(
+            f"the FEM needs {memory_estimate(section, hi, mesh)[1] / 2**30:.2g} GiB at any "
+            f"element size here{beside}, above the {budget / 2**30:.2g} GiB budget "
+            f"(MRCLUTCH_FEM_MEMORY_GB)"
+        )
     for _ in range(30):
         mid = math.sqrt(lo * hi)
-        lo, hi = (lo, mid) if memory_estimate(section, mid, mesh)[1] <= budget else (mid, hi)
+        lo, hi = (lo, mid) if memory_estimate(section, mid, mesh)[1] <= room else (mid, hi)
     raise ParameterError(
         f"FEM element size {size * 1e3:g} mm: {nodes:.3g} grid nodes need about "
-        f"{need / 2**30:.2g} GiB, above the {budget / 2**30:.2g} GiB budget "
+        f"{need / 2**30:.2g} GiB{beside}, above the {budget / 2**30:.2g} GiB budget "
         f"(MRCLUTCH_FEM_MEMORY_GB); the smallest size that fits is "
         f"{math.ceil(hi * 1e6) / 1e3:g} mm"
     )
@@ -254,9 +288,8 @@ class Assembly:
         grads = np.stack([np.asarray(b[0].grad) for b in basis.basis])  # (4, 2, E, Q)
         self.grads = grads
         wr = np.asarray(basis.dx) / grid.r_qp  # dx/r, (E, Q)
-        self.wr = wr
-        #: ∫ (∇φ_i·∇φ_j)/r per quadrature point, (4, 4, E, Q): the ν term's fixed part
-        self.gg_wr = np.einsum("ikeq,jkeq,eq->ijeq", grads, grads, wr)
+        self.wr = wr  # (the ν term's ∇φ_i·∇φ_j/r is summed per step, not stored: a
+        # (4, 4, E, Q) array was 0.5 kB a grid node, 11 % of a solve's peak, issue 44)
         #: ∫ φ_i dr dz per element, (4, E): the load of a unit current density
         self.phi_dx = np.stack([(np.asarray(b[0]) * basis.dx).sum(1) for b in basis.basis])
         free = np.ones(self.n, dtype=bool)
@@ -315,7 +348,7 @@ class Assembly:
     def jacobian(self, g: FloatArray, nu: FloatArray, dnu: FloatArray) -> Any:
         """The Jacobian's free–free block (CSR), ``forms.forms()[0]`` condensed."""
         gi = np.einsum("keq,ikeq->ieq", g, self.grads)
-        k = np.einsum("ijeq,eq->ije", self.gg_wr, nu)
+        k = np.einsum("ikeq,jkeq,eq->ije", self.grads, self.grads, nu * self.wr)
         k += np.einsum("ieq,jeq,eq->ije", gi, gi, dnu * self.wr)
         data = np.bincount(self._slot, k[self._keep], self._nnz)
         return self._csr((data, *self._pattern[:2]), shape=self._pattern[2])

@@ -142,14 +142,17 @@ def _build_in(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[st
     tick("evaluating the design")
     ev = evaluate(design, fidelity)
     data = judge_evaluation(ev)  # the design's `[render]` rule, its one verdict
+    # the FEM before CAD and the 3D view: their libraries (OpenCascade, VTK: ~0.4 GiB
+    # resident) would otherwise sit beside its grid and factors (issue 44: ≤ 1 GiB); what
+    # evaluate's FEM fitted beside, this one fits beside too (magnetics.fem.grid.check_memory)
+    tick("torque–current curve (network, circuit and FEM)")
+    curve = _torque(design, tmp / "torque.png")
     tick("CAD: STEP and STL")
     cad = _cad(design, tmp)
     tick("3D view")
     _view(design, tmp / "view.png")
     tick("section drawing")
     section_figure(section_of(design), tmp / "section.png")
-    tick("torque–current curve (network, circuit and FEM)")
-    curve = _torque(design, tmp / "torque.png")
     tick("haptic plots")
 
     k = float(data["haptic"]["K_N_per_m"])  # the K rendered (the design's `[render]` rule)
