@@ -26,6 +26,7 @@ once and reused by every Newton step and every current.
 
 from __future__ import annotations
 
+import ctypes
 import functools
 import itertools
 import math
@@ -181,8 +182,6 @@ def held_memory() -> float:
     heap's free pages went back to the system (glibc ``malloc_trim``: what an earlier step
     freed is not counted as held), 0 where the system does not say."""
     try:
-        import ctypes
-
         ctypes.CDLL("libc.so.6").malloc_trim(0)
     except (OSError, AttributeError):
         pass  # not glibc: the resident set as it is
