@@ -40,6 +40,16 @@ def pytest_unconfigure(config: pytest.Config) -> None:
     _ENV_SAVED.clear()
 
 
+@pytest.fixture(autouse=True)
+def _fem_memory_budget(monkeypatch):
+    """A test worker holds the libraries and caches of every test it ran (0.8 GiB seen), not
+    one command's: the FEM's budget counts what the process holds (1 GiB in all by default,
+    magnetics.fem.grid.memory_budget), so the tests get the old 4 GiB unless the environment
+    sets one (tests/mrclutch/test_memory_limit.py tests the default). Undone after each."""
+    if "MRCLUTCH_FEM_MEMORY_GB" not in os.environ:
+        monkeypatch.setenv("MRCLUTCH_FEM_MEMORY_GB", "4")
+
+
 @pytest.fixture(scope="session")
 def figures_runner(tmp_path_factory):
     """One docs_figures.Runner for the session (each command the docs' figures quote runs
