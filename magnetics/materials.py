@@ -264,6 +264,10 @@ def _bh_of(rec: Mapping[str, Any], where: str) -> BHCurve:
 #: Pa·s a fluid's off-state viscosity may take: our plausibility bound, a decade and more
 #: around MRF-132DG's 0.112 Pa·s [lord-mrf132dg]; a fluid outside it is refused.
 VISCOSITY_RANGE = (1e-3, 10.0)
+#: The least iron volume fraction a fluid file may give: our plausibility bound (below 1 %
+#: the fluid is no MR fluid; a phi of 1e-300 gave a yield torque of 0 and a division by
+#: zero in the feel figures, found by benchmarks/fuzz_cli.py seed 45, input 980).
+PHI_MIN = 0.01
 #: °C any temperature of a material file may name (absolute zero to 1000 °C).
 TEMPERATURE_RANGE = (-273.15, 1000.0)
 #: Most points of a B–H table, and the largest B [T] and H [A/m] in one (our bounds: the
@@ -283,9 +287,10 @@ def _fluid_of(rec: Mapping[str, Any], where: str) -> MRFluid:
         return float(v)
 
     phi = num("phi")
-    if not 0.0 < phi < 0.64:  # random close packing of spheres bounds it
+    lo_phi = PHI_MIN
+    if not lo_phi <= phi < 0.64:  # random close packing of spheres bounds it
         raise ParameterError(
-            f"{where}: phi = {phi:g}: the iron volume fraction must be in (0, 0.64)"
+            f"{where}: phi = {phi:g}: the iron volume fraction must be in [{lo_phi:g}, 0.64)"
         )
     visc = num("viscosity")
     lo_v, hi_v = VISCOSITY_RANGE

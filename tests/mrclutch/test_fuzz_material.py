@@ -98,3 +98,21 @@ def test_a_plausible_fluid_file_refused_is_a_failure(fuzz, tmp_path):
     assert cls == "refused" and "plausible fluid file refused" in detail
     hostile = ["evaluate", str(tmp_path / "md3.toml"), "--fidelity", "fast"]
     assert fuzz.check_input("material", hostile, 2, "", tmp_path) is None
+
+
+def test_a_fluid_with_almost_no_iron_is_refused_by_name(fuzz, tmp_path, capsys, registry):
+    """Found by the fuzzer (seed 45, input 980): phi = 1e-300 loaded, its yield torque
+    underflowed to 0 and the feel figures divided by it (ZeroDivisionError). phi below
+    magnetics.materials.PHI_MIN (1 %) is refused: one line naming phi, exit 2."""
+    from mrclutch.cli.main import main
+
+    text = fuzz.FLUID_FILE.read_text().replace('name = "mrf_132dg"', 'name = "no_iron"')
+    mat = tmp_path / "f.toml"
+    mat.write_text(text.replace("phi = 0.32", "phi = 1e-300"))
+    design = tmp_path / "d.toml"
+    design.write_text(f'[clutch]\nbase = "paper"\n[materials]\nfluid_file = "{mat}"\n')
+    assert main(["evaluate", str(design), "--fidelity", "fast", "--json"]) == 2
+    err = capsys.readouterr().err
+    assert "phi = 1e-300" in err and "[0.01, 0.64)" in err and len(err.splitlines()) == 1
+    mat.write_text(text.replace("phi = 0.32", "phi = 0.01"))  # the bound itself loads
+    assert main(["torque", str(design), "--method", "circuit", "--json"]) == 0
