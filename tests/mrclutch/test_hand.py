@@ -15,6 +15,7 @@ import pytest
 
 from geometry.validation import ParameterError
 from mrclutch.design import design_preset
+from mrclutch.haptics import hand_scan
 from mrclutch.haptics.actuator import TABLE2_MR, HapticParams
 from mrclutch.haptics.hand import (
     HAND_RANGE,
@@ -414,3 +415,17 @@ def test_batched_compass_search_takes_the_same_steps(n: int) -> None:
             assert r.hands_off_max_stable_K == pytest.approx(
                 max_stable_stiffness_coupled(p), rel=1e-12
             )
+
+
+def test_the_scan_over_hands_in_row_chunks_finds_what_one_whole_scan_finds(monkeypatch) -> None:
+    """The hands are scanned in chunks of rows under MAX_CELLS grid values (a 0.01 gearing
+    took 1.7 GB scanning all hands at once): chunks of one row, or of all, give the same
+    crossings in the same order, so the same limits."""
+    p = replace(TABLE2_MR, delay=1e-3)
+    hands = np.array([[0.1, 2.0, 100.0], [0.5, 5.0, 400.0], [0.0, 0.0, 0.0], [1.0, 1.0, 1e3]])
+    whole = hand_scan._crossings_hands(p, hands)
+    monkeypatch.setattr(hand_scan, "MAX_CELLS", 1)  # one row a chunk
+    rows = hand_scan._crossings_hands(p, hands)
+    for a, b in zip(whole, rows, strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert whole[0].size > 0 and set(whole[0]) <= {0, 1, 2, 3}
