@@ -40,14 +40,18 @@ def pytest_unconfigure(config: pytest.Config) -> None:
     _ENV_SAVED.clear()
 
 
-@pytest.fixture(autouse=True)
-def _fem_memory_budget(monkeypatch):
+@pytest.fixture(autouse=True, scope="session")
+def _fem_memory_budget():
     """A test worker holds the libraries and caches of every test it ran (0.8 GiB seen), not
     one command's: the FEM's budget counts what the process holds (1 GiB in all by default,
     magnetics.fem.grid.memory_budget), so the tests get the old 4 GiB unless the environment
-    sets one (tests/mrclutch/test_memory_limit.py tests the default). Undone after each."""
-    if "MRCLUTCH_FEM_MEMORY_GB" not in os.environ:
-        monkeypatch.setenv("MRCLUTCH_FEM_MEMORY_GB", "4")
+    sets one (tests/mrclutch/test_memory_limit.py tests the default). Session-wide, so the
+    module-scoped fixtures that run a report or an optimiser in process get it too (a
+    function-scoped one came after them); undone at the session's end."""
+    with pytest.MonkeyPatch.context() as mp:
+        if "MRCLUTCH_FEM_MEMORY_GB" not in os.environ:
+            mp.setenv("MRCLUTCH_FEM_MEMORY_GB", "4")
+        yield
 
 
 @pytest.fixture(scope="session")
