@@ -5,9 +5,7 @@ refused is counted as a failure, not as a clean refusal."""
 
 from __future__ import annotations
 
-import importlib.util
 import random
-import sys
 import tomllib
 import warnings
 from pathlib import Path
@@ -17,18 +15,6 @@ import pytest
 
 import geometry.materials as gm
 import magnetics.materials as mm
-
-FUZZ = Path(__file__).resolve().parents[2] / "benchmarks" / "fuzz_cli.py"
-
-
-@pytest.fixture(scope="module")
-def fuzz():
-    spec = importlib.util.spec_from_file_location("fuzz_cli_material", FUZZ)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["fuzz_cli_material"] = mod
-    spec.loader.exec_module(mod)
-    yield mod
-    sys.modules.pop("fuzz_cli_material", None)
 
 
 @pytest.fixture

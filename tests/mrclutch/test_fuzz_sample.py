@@ -5,24 +5,8 @@ refused, no null without a reason and no partial file."""
 
 from __future__ import annotations
 
-import importlib.util
 import random
-import sys
 import warnings
-from pathlib import Path
-
-import pytest
-
-FUZZ = Path(__file__).resolve().parents[2] / "benchmarks" / "fuzz_cli.py"
-
-
-@pytest.fixture(scope="module")
-def fuzz():
-    spec = importlib.util.spec_from_file_location("fuzz_cli", FUZZ)
-    mod = importlib.util.module_from_spec(spec)
-    sys.modules["fuzz_cli"] = mod
-    spec.loader.exec_module(mod)
-    return mod
 
 
 def test_a_sample_of_every_input_class_is_answered_or_refused_cleanly(fuzz, tmp_path):
