@@ -31,6 +31,7 @@ import copy
 import json
 import os
 import random
+import re
 import shutil
 import subprocess
 import sys
@@ -51,28 +52,32 @@ PHYSICS = ("geometry", "magnetics", "mrclutch/haptics")
 #: and sees), run against tests/mrclutch and the thermal tests, with the doc-figure check
 #: (tests/test_doc_figures.py) left out: it compares printed numbers with the docs' quoted
 #: ones, so it catches a change, not an error.
-ROUND_MODULES = (
-    "mrclutch/robust.py",
-    "mrclutch/uncertainty.py",
-    "mrclutch/process.py",
-    "mrclutch/pipeline.py",
-    "mrclutch/optimize/single.py",
-    "mrclutch/optimize/pareto.py",
-    "mrclutch/optimize/limits.py",
-    "mrclutch/optimize/box.py",
-    "mrclutch/optimize/worst_case.py",
-    "mrclutch/design.py",
-    "magnetics/thermal.py",
-    "mrclutch/cli/formatting.py",
-    "mrclutch/cli/commands/evaluate.py",
-    "mrclutch/cli/commands/sweep.py",
-    "mrclutch/cli/commands/optimize.py",
-    "mrclutch/cli/commands/optimize_pareto.py",
-    "mrclutch/cli/commands/report_command.py",
-    "mrclutch/cli/commands/haptic.py",
-    "mrclutch/cli/plots/haptic.py",
+ROUND_MODULES_D2D4F2C = (
+    "mrclutch/robust.py", "mrclutch/uncertainty.py", "mrclutch/process.py",
+    "mrclutch/pipeline.py", "mrclutch/optimize.py", "mrclutch/design.py",
+    "magnetics/thermal.py", "mrclutch/cli/commands/design.py",
+    "mrclutch/cli/commands/haptic.py", "mrclutch/cli/plots/haptic.py",
     "mrclutch/cli/plots/magnetics.py",
-)
+)  # fmt: skip
+#: The same code where it is today (issue 43 split the modules above): robust.py into
+#: robust_search, robust_columns and hand_box; pipeline.py into clutch, at_hand and
+#: fast_batch; optimize.py into the optimize/ package, members and estimates; design.py's
+#: operating point into operating.py; cli/commands/design.py into one module per command
+#: and cli/formatting.py; haptic's run and the plots' responses into haptic_run, impedance.
+ROUND_MODULES = (
+    "mrclutch/robust.py", "mrclutch/robust_search.py", "mrclutch/robust_columns.py",
+    "mrclutch/hand_box.py", "mrclutch/uncertainty.py", "mrclutch/process.py",
+    "mrclutch/pipeline.py", "mrclutch/clutch.py", "mrclutch/at_hand.py",
+    "mrclutch/fast_batch.py", "mrclutch/optimize/__init__.py", "mrclutch/optimize/single.py",
+    "mrclutch/optimize/pareto.py", "mrclutch/optimize/limits.py", "mrclutch/optimize/box.py",
+    "mrclutch/optimize/worst_case.py", "mrclutch/members.py", "mrclutch/estimates.py",
+    "mrclutch/design.py", "mrclutch/operating.py", "magnetics/thermal.py",
+    "mrclutch/cli/formatting.py", "mrclutch/cli/commands/evaluate.py",
+    "mrclutch/cli/commands/sweep.py", "mrclutch/cli/commands/optimize.py",
+    "mrclutch/cli/commands/optimize_pareto.py", "mrclutch/cli/commands/report_command.py",
+    "mrclutch/cli/commands/haptic.py", "mrclutch/haptic_run.py",
+    "mrclutch/cli/plots/haptic.py", "mrclutch/impedance.py", "mrclutch/cli/plots/magnetics.py",
+)  # fmt: skip
 ROUND_TESTS = ("tests/mrclutch", "tests/magnetics/test_thermal.py",
                "tests/magnetics/test_thermal_hand.py")  # fmt: skip
 #: Tests no run may count a kill by (deselected): the doc-figure check.
@@ -83,9 +88,12 @@ RUNS: dict[str, dict] = {
     "physics": {"modules": None, "tests": tuple(sorted({PACKAGES[p] for p in PHYSICS})),
                 "out": "benchmarks/data/mutation.json",
                 "coverage": "benchmarks/data/mutation.coverage", "verdicts": ""},
-    "round": {"modules": ROUND_MODULES, "tests": ROUND_TESTS,
+    "round": {"modules": ROUND_MODULES_D2D4F2C, "tests": ROUND_TESTS,
               "out": "benchmarks/data/mutation_round.json",
               "coverage": "benchmarks/data/mutation_round.coverage", "verdicts": "round"},
+    "round2": {"modules": ROUND_MODULES, "tests": ROUND_TESTS, "select": "static",
+               "out": "benchmarks/data/mutation_round2.json", "coverage": "",
+               "verdicts": "round2"},
 }  # fmt: skip
 _RUN: dict = dict(RUNS["physics"])  # the run in hand (main sets it)
 
@@ -283,6 +291,93 @@ def covering_tests(coverage_file: Path) -> dict[tuple[str, int], list[str]]:
     return out
 
 
+#: ``select = "static"`` (run round2): the test files a mutant runs are ranked by what they
+#: name, not by a coverage map (a map of the round's tests took a whole session on the shared
+#: 2-core machine). Left out of the ranking: files that take minutes and reach the round's
+#: modules only through paths other files take faster (CAD, fidelity, fuzzing, help texts).
+SLOW_FILES = ("test_fidelity", "test_batch_fuzz", "test_fuzz_", "test_view",
+              "test_cli_geometry", "test_help_files", "test_cli_lazy", "test_output_faults",
+              "test_sweep_scaleout", "test_sweep_interrupts", "test_memory_limit")  # fmt: skip
+#: The CLI words that run a module of cli/ (a test that calls ``main(["evaluate", ...])``
+#: runs formatting.py without naming it).
+CLI_WORDS = {"mrclutch/cli/formatting.py": ("evaluate", "report"),
+             "mrclutch/cli/commands/evaluate.py": ("evaluate",),
+             "mrclutch/cli/commands/sweep.py": ("sweep",),
+             "mrclutch/cli/commands/optimize.py": ("optimize",),
+             "mrclutch/cli/commands/optimize_pareto.py": ("optimize",),
+             "mrclutch/cli/commands/report_command.py": ("report",),
+             "mrclutch/cli/commands/haptic.py": ("haptic", "compare"),
+             "mrclutch/cli/plots/haptic.py": ("haptic", "compare", "--plot"),
+             "mrclutch/cli/plots/magnetics.py": ("torque",)}  # fmt: skip
+#: How many test files a mutant runs (the best ranked; ``--files``).
+_K = [4]
+
+
+def _names(src: str) -> set[str]:
+    """The module's top-level names (functions, classes, assigned names) of 4+ letters."""
+    out: set[str] = set()
+    for node in ast.parse(src).body:
+        if isinstance(node, ast.FunctionDef | ast.ClassDef | ast.AsyncFunctionDef):
+            out.add(node.name)
+        elif isinstance(node, ast.Assign | ast.AnnAssign):
+            for t in node.targets if isinstance(node, ast.Assign) else [node.target]:
+                if isinstance(t, ast.Name):
+                    out.add(t.id)
+    return {n for n in out if len(n.strip("_")) >= 4}
+
+
+def _mentions(text: str, names: set[str]) -> int:
+    return sum(len(re.findall(rf"\b{re.escape(n)}\b", text)) for n in names)
+
+
+def _dotted(module: str) -> str:
+    return module[:-3].replace("/", ".").removesuffix(".__init__")
+
+
+def _imports_it(text: str, module: str) -> bool:
+    """Whether a file's text imports the module: by dotted name, ``from pkg import stem``
+    or (inside the package) ``from .stem import`` / ``from . import stem``."""
+    pkg, _, stem = _dotted(module).rpartition(".")
+    pattern = (rf"\b{re.escape(_dotted(module))}\b"
+               rf"|from {re.escape(pkg)} import [^\n]*\b{stem}\b"
+               rf"|from \.+{stem} import|from \.+ import [^\n]*\b{stem}\b")  # fmt: skip
+    return bool(re.search(pattern, text))
+
+
+def ranked_tests(tree: Path, module: str, k: int | None = None) -> list[str]:
+    """The test files of the run a mutant of ``module`` runs, best first, at most k: a file
+    scores 20 for importing the module, 1 per mention of one of its top-level names (or
+    3 per quoted CLI word of it, ``CLI_WORDS``), and 0.3 per mention of a name of a module of the
+    package that imports it (the split modules are reached through pipeline, robust …);
+    files scoring 0 are not run."""
+    src = (tree / module).read_text()
+    own, words = _names(src), set(CLI_WORDS.get(module, ()))
+    up: set[str] = set()
+    for pkg in {m.split("/")[0] for m in _RUN["modules"]}:
+        for p in (tree / pkg).rglob("*.py"):
+            rel = str(p.relative_to(tree))
+            if rel != module and _imports_it(p.read_text(), module):
+                up |= _names(p.read_text())
+    up -= own | words
+    files: list[Path] = []
+    for t in _RUN["tests"]:
+        files += [tree / t] if t.endswith(".py") else sorted((tree / t).rglob("test_*.py"))
+    scored = []
+    for f in files:
+        if any(f.name.startswith(s) for s in SLOW_FILES) or str(f.relative_to(tree)) in IGNORED:
+            continue
+        text = f.read_text()
+        score = (
+            20 * _imports_it(text, module)
+            + _mentions(text, own)
+            + 3 * sum(text.count(f'"{w}"') for w in words)
+            + 0.3 * _mentions(text, up)
+        )
+        if score > 0:
+            scored.append((-score, f.name, str(f.relative_to(tree))))
+    return [rel for _, _, rel in sorted(scored)[: k or _K[0]]]
+
+
 _FAILING: list[str] = []  # tests that fail on the unmutated tree (build_coverage)
 #: A line covered by this many tests or fewer also runs its package's importers: coverage
 #: records a module-level line (a constant, a default) under the one test that first
@@ -290,7 +385,7 @@ _FAILING: list[str] = []  # tests that fail on the unmutated tree (build_coverag
 _FEW = 2
 
 
-def _pytest(tree: Path, targets: list[str], timeout: float) -> tuple[str, str]:
+def _pytest(tree: Path, targets: list[str], timeout: float, module: str = "") -> tuple[str, str]:
     env = dict(os.environ, PYTHONPATH=str(tree), PYTHONDONTWRITEBYTECODE="1",
                NUMBA_CACHE_DIR=str(tree / ".numba"), OPENBLAS_NUM_THREADS="1")  # fmt: skip
     cmd = [sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider",
@@ -304,8 +399,14 @@ def _pytest(tree: Path, targets: list[str], timeout: float) -> tuple[str, str]:
     if r.returncode == 0:
         return "survived", ""
     failed = [ln.split(" ")[1] for ln in r.stdout.splitlines() if ln.startswith("FAILED ")]
-    if r.returncode in (1, 2) and (failed or "Error" in r.stdout):
-        return "killed", failed[0] if failed else "collection error"
+    if r.returncode == 1 and failed:
+        return "killed", failed[0]
+    errored = [ln.split(" ")[1] for ln in r.stdout.splitlines() if ln.startswith("ERROR ")]
+    if r.returncode == 1 and errored:  # a fixture of the test raised on the mutant
+        return "killed", "setup error: " + errored[0]
+    if r.returncode in (1, 2) and module and f"{module}:" in r.stdout + r.stderr:
+        # the mutated module itself raised while the tests were collected (at import)
+        return "killed", f"collection error raised in {module}"
     # pytest itself did not run (exit 3–5: internal error, usage, no tests): no verdict,
     # not a kill; the output's tail says why
     return "error", f"exit {r.returncode}: " + " | ".join((r.stdout + r.stderr).splitlines()[-6:])
@@ -334,7 +435,9 @@ _TREE: Path | None = None
 
 def run_one(m: Mutant, timeout: float, tests: list[str], failing: list[str]) -> Mutant:
     """Run one mutant: ``tests`` (node ids covering its line) first, then the importers;
-    ``failing``: tests that fail unmutated, deselected."""
+    ``failing``: tests that fail unmutated, deselected. With ``select = "static"`` (run
+    round2): the ranked test files (``ranked_tests``) in one pytest call, ``-x``, within
+    ``timeout``; a run cut by it is a survivor (``killed_by`` says "budget"), not a kill."""
     global _TREE
     _FAILING[:] = failing
     tests = [t for t in tests if t not in failing]
@@ -345,10 +448,16 @@ def run_one(m: Mutant, timeout: float, tests: list[str], failing: list[str]) -> 
     t0 = time.perf_counter()
     try:
         target.write_text(mutated_source(m))
-        status, by = _pytest(_TREE, tests, timeout) if tests else ("survived", "")
-        if status == "survived" and len(tests) <= _FEW:
-            files = _importers(_TREE, m.module) or [_package_tests(m.module)]
-            status, by = _pytest(_TREE, files, timeout * 4)
+        if _RUN.get("select") == "static":
+            files = ranked_tests(_TREE, m.module)
+            status, by = _pytest(_TREE, files, timeout, m.module) if files else ("survived", "")
+            if by == "timeout":
+                status, by = "survived", f"budget: {timeout:.0f} s cut {len(files)} files"
+        else:
+            status, by = _pytest(_TREE, tests, timeout, m.module) if tests else ("survived", "")
+            if status == "survived" and len(tests) <= _FEW:
+                files = _importers(_TREE, m.module) or [_package_tests(m.module)]
+                status, by = _pytest(_TREE, files, timeout * 4, m.module)
     finally:
         target.write_text(original)
     m.status, m.killed_by, m.seconds = status, by, time.perf_counter() - t0
@@ -427,7 +536,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--run", choices=sorted(RUNS), default="physics",
                     help="physics: geometry/, magnetics/, mrclutch/haptics/ (the default); "
                     "round: the last two rounds' modules and the CLI's formatting and "
-                    "plots, without the doc-figure tests")  # fmt: skip
+                    "plots, without the doc-figure tests, as at d2d4f2c; round2: the "
+                    "same code where it is today, each mutant's test files ranked "
+                    "statically")  # fmt: skip
     ap.add_argument(
         "--tree",
         choices=("work", "head"),
@@ -442,6 +553,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--timeout", type=float, default=240.0, help="s per stage-1 run")
     ap.add_argument("--out", type=Path, default=None, help="default: the run's")
+    ap.add_argument("--files", type=int, default=4, help="round2: test files a mutant runs")
     ap.add_argument("--list", action="store_true", help="print the sample, run nothing")
     ap.add_argument("--report", action="store_true", help="print the table of --out")
     ap.add_argument("--summary", action="store_true", help="print --out's counts as JSON")
@@ -459,7 +571,7 @@ def main(argv: list[str] | None = None) -> int:
     _RUN.clear()
     _RUN.update(RUNS[args.run])
     args.out = args.out or ROOT / _RUN["out"]
-    args.coverage = args.coverage or ROOT / _RUN["coverage"]
+    args.coverage = args.coverage or ROOT / (_RUN["coverage"] or os.devnull)
     IGNORED.extend(args.without)
     if args.map_tests:
         _RUN["tests"] = tuple(args.map_tests)
@@ -483,13 +595,17 @@ def main(argv: list[str] | None = None) -> int:
     t0 = time.perf_counter()
     if args.tree == "work":
         commit += " + working tree"
-    if not args.coverage.exists():  # the unmutated suite once: the baseline and the map
+    _K[0] = args.files
+    if _RUN.get("select") == "static":  # no map: each mutant ranks its own test files
+        args.coverage = Path(os.devnull)
+    elif not args.coverage.exists():  # the unmutated suite once: the baseline and the map
         base = _worker_tree()
         build_coverage(base, args.coverage)
         shutil.rmtree(base.parent)
         print(f"coverage map in {time.perf_counter() - t0:.0f} s", flush=True)
-    cover = covering_tests(args.coverage)
-    failing = json.loads(args.coverage.with_suffix(".failing.json").read_text())
+    static = _RUN.get("select") == "static"
+    cover = {} if static else covering_tests(args.coverage)
+    failing = [] if static else json.loads(args.coverage.with_suffix(".failing.json").read_text())
     if failing:
         print(f"{len(failing)} tests fail unmutated, left out: {failing}", flush=True)
     done: list[Mutant] = []
