@@ -238,16 +238,19 @@ def build_grid(
     materials: Mapping[str, Magnetic] | None = None,
     *,
     mesh: str = "uniform",
+    lines: tuple[FloatArray, FloatArray] | None = None,
 ) -> Grid:
     """The grid of ``section`` at target element ``size`` (m) inside the clutch, ``mesh``
-    "uniform" (cells ≤ size everywhere inside) or "graded" (module docstring)."""
+    "uniform" (cells ≤ size everywhere inside) or "graded" (module docstring).
+    ``lines``: the (r, z) grid lines to use instead (each must include every region edge;
+    ``magnetics.fem.gap_shape`` moves a grid's lines with the edges for a shape derivative)."""
     check_choice("mesh", mesh, MESHES)
     mats = MATERIALS if materials is None else materials
     h = DEFAULT_SIZE if size is None else float(size)
     check_memory(section, h, mesh)
     import skfem
 
-    rs, zs = _lines(section, h, mesh)
+    rs, zs = _lines(section, h, mesh) if lines is None else lines
     quads = skfem.MeshQuad.init_tensor(rs, zs)
     basis = skfem.Basis(quads, skfem.ElementQuad1(), intorder=2)
 

@@ -1,10 +1,19 @@
-"""magnetics.ripple: the runout ripple's closed form against the sector model simulated."""
+"""magnetics.ripple: the runout ripple's closed form against the sector model simulated,
+and the network's dT/dg against the FEM's (magnetics/fem/gap_shape.py)."""
 
 from __future__ import annotations
+
+import importlib.util
+from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+from geometry.section import build_section
+from geometry.validation import ParameterError
+from magnetics.fem.gap_shape import fem_gap_derivatives, moved_lines
+from magnetics.fem.grid import _lines
 from magnetics.ripple import (
     derivatives,
     eccentric_torque,
@@ -65,3 +74,69 @@ def test_paper_gap_curvature_converges() -> None:
     assert a.first < 0 and a.second > 0
     assert b.second == pytest.approx(a.second, rel=0.02)
     assert a.fd_check < 0.02
+
+
+# ---- the FEM's check of the network's dT/dg (magnetics/fem/gap_shape.py) ---------------
+
+
+def _fem_ripple():  # type: ignore[no-untyped-def]
+    """benchmarks/measure_fem_ripple.py as a module (its designs, currents, tolerance)."""
+    spec = importlib.util.spec_from_file_location("measure_fem_ripple", FEM_RIPPLE)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+FEM_RIPPLE = Path(__file__).resolve().parents[2] / "benchmarks" / "measure_fem_ripple.py"
+FEM_SIZE = 0.5e-3  # m: the test's mesh (~2–4 s a design); the benchmark's table is at 0.25 mm
+
+
+def test_moved_lines_keep_the_cells_and_hit_every_edge() -> None:
+    """The nominal grid moved to g + 7 µm: the same number of lines, in order, and every
+    region edge of the moved section is one of them (no element straddles two materials);
+    a fresh grid there has 4 more r lines at 0.35 mm (why the difference is taken on moved
+    grids). A section of another drum count is refused in one line."""
+    c = design_preset("paper").clutch
+    nominal = build_section(c)
+    moved = build_section(replace(c, gap=c.gap + 7e-6))
+    rs, zs = moved_lines(nominal, moved, 0.35e-3)
+    r0, z0 = _lines(nominal, 0.35e-3, "uniform")
+    assert rs.size == r0.size and zs.size == z0.size
+    assert np.all(np.diff(rs) > 0) and np.all(np.diff(zs) > 0)
+    for g in moved.regions:
+        for x, ln in ((g.r0, rs), (g.r1, rs), (g.z0, zs), (g.z1, zs)):
+            assert np.min(np.abs(ln - x)) < 1e-12
+    assert _lines(moved, 0.35e-3, "uniform")[0].size == r0.size + 4
+    with pytest.raises(ParameterError, match="edges do not match"):
+        moved_lines(nominal, build_section(replace(c, n_drums=3)), 0.35e-3)
+
+
+@pytest.mark.slow
+def test_fem_derivative_is_smooth_in_the_step() -> None:
+    """On moved grids the FEM's dT/dg of the paper preset at 2 A with h = 7 µm and 3.5 µm
+    agree to 0.5 % (one discretisation, differentiated: O(h²)); fresh grids at 0.35 mm
+    give 10 % apart at 7 A (measured while building this)."""
+    c = design_preset("paper").clutch
+    a = fem_gap_derivatives(c, [2.0], size=FEM_SIZE, step=7e-6)
+    b = fem_gap_derivatives(c, [2.0], size=FEM_SIZE, step=3.5e-6)
+    assert a.first[0] < 0
+    assert b.first[0] == pytest.approx(a.first[0], rel=5e-3)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["paper", "one_drum", "five_drums"])
+def test_network_dT_dg_against_the_fem(name: str) -> None:
+    """The network's log-sensitivity S = (g/T)·dT/dg against the FEM's (moved grids at
+    0.5 mm) at 2 A and 7 A, within 2B/0.435: B the network's torque error bound at the
+    design (magnetics.network_bound), 0.435 the change of ln g over which that error swings
+    through its band (benchmarks/measure_fem_ripple.py DELTA_LN_GAP). Also the sign of
+    dT/dg (the 5-drum clutch's saturated core makes it rise with the gap at 7 A) and the
+    torques themselves within 2B + 1.5 % (the FEM's own error at 0.5 mm)."""
+    bench = _fem_ripple()
+    rows = bench.compare(name, FEM_SIZE)
+    for current, r in rows.items():
+        assert np.sign(r["network_dT_dg_N_m_per_m"]) == np.sign(r["fem_dT_dg_N_m_per_m"]), current
+        assert abs(r["S_difference"]) <= r["S_tolerance"], (current, r)
+        assert r["network_T_N_m"] == pytest.approx(
+            r["fem_T_N_m"], rel=2 * r["network_bound"] + 0.015
+        ), current
