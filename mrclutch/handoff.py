@@ -18,10 +18,13 @@ from geometry.drawing import section_drawing, section_dxf
 from geometry.materials import KIND, RECORDS
 from geometry.section import build_section
 from geometry.validation import ParameterError, check_range
+from magnetics.drag import clutch_drag
 from magnetics.export.femm import problem, write_fem, write_lua
 from magnetics.export.onelab import write_geo, write_pro
+from magnetics.hot import phi_at, tau_y_coefficient, tau_y_factor
+from magnetics.hysteresis import HYSTERESIS
 from magnetics.materials import FLUIDS, MATERIALS, BHCurve
-from magnetics.torque import torque_curve
+from magnetics.torque import rpm_to_rad_s, torque_curve
 from mrclutch.design import ClutchDesign
 from mrclutch.haptics.model import bandwidth
 from mrclutch.haptics.zwidth import is_stable_spring_damper
@@ -70,15 +73,73 @@ def _csv(header: Sequence[str], comments: Sequence[str], rows: Sequence[Sequence
     return buf.getvalue()
 
 
+def _unverified(rec: Any, *fields: str) -> str:
+    """The ``fields`` the record lists as unverified, space-separated ("-" if none)."""
+    bad = [f for f in fields if f in rec.get("unverified", ())]
+    return " ".join(bad) or "-"
+
+
+def _fluid_tables(name: str, rec: Any) -> dict[str, str]:
+    """A fluid's tables (``material_tables``): τy(H), its datasheet points, η(T), τy(T)."""
+    fl = FLUIDS[name]
+    out = {
+        f"{name}_tau_y.csv": _csv(
+            ["H_A_per_m", "tau_y_Pa"],
+            [f"{rec['label']}: yield stress", f"source: {fl.source}"],
+            list(zip(TAU_H.tolist(), fl.tau_y(TAU_H).tolist(), strict=True)),
+        )
+    }
+    ds = rec.get("tau_y")
+    if isinstance(ds, dict) and "h" in ds:
+        out[f"{name}_tau_y_datasheet.csv"] = _csv(
+            ["H_A_per_m", "tau_y_Pa"],
+            [
+                f"{rec['label']}: datasheet yield stress (comparison only)",
+                f"source: {ds.get('source', '')}",
+            ],
+            [(float(h), float(t)) for h, t in zip(ds["h"], ds["tau"], strict=True)],
+        )
+    lo, hi = fl.temperature_range
+    temps = np.arange(lo, hi + 1e-9, VISCOSITY_STEP_C)
+    out[f"{name}_viscosity.csv"] = _csv(
+        ["T_C", "eta_Pa_s"],
+        [
+            f"{rec['label']}: off-state viscosity",
+            f"source: {rec.get('viscosity_source', '')}; temperature law: the "
+            f"carrier's Walther line ({fl.carrier}) [astm-d341]",
+        ],
+        list(zip(temps.tolist(), np.atleast_1d(fl.viscosity_at(temps)).tolist(), strict=True)),
+    )
+    if fl.carrier_expansion is not None:
+        phi = np.atleast_1d(phi_at(fl.phi, fl.carrier_expansion, temps))
+        ratio = np.atleast_1d(tau_y_factor(fl, temps))
+        out[f"{name}_tau_y_temperature.csv"] = _csv(
+            ["T_C", "iron_fraction", "tau_y_ratio"],
+            [
+                f"{rec['label']}: yield stress against temperature, tau_y(T)/tau_y(20 C) at "
+                f"any field (magnetics.hot: the carrier expands by "
+                f"{fl.carrier_expansion:g} 1/K, the iron not)",
+                f"source: {rec.get('tau_y_temperature_source', '')}; carrier expansion: "
+                f"{rec.get('carrier_expansion_source', '')}",
+            ],
+            list(zip(temps.tolist(), phi.tolist(), ratio.tolist(), strict=True)),
+        )
+    return out
+
+
 def material_tables() -> dict[str, str]:
     """File name → CSV text of every material of the library (``geometry.materials``):
     ``<name>_bh.csv`` (the B–H table points as the data file holds them, before the
-    tool's monotone interpolation), for fluids ``<name>_tau_y.csv`` (Carlson's τy(H), the
+    tool's monotone interpolation); for fluids ``<name>_tau_y.csv`` (Carlson's τy(H), the
     model the tool uses, on ``TAU_H``), ``<name>_tau_y_datasheet.csv`` where the file has
-    datasheet points, ``<name>_viscosity.csv`` (η(T) over the fluid's range), and
-    ``materials.csv``, the index. Each file's ``# `` lines name its source."""
+    datasheet points, ``<name>_viscosity.csv`` (η(T) over the fluid's range) and
+    ``<name>_tau_y_temperature.csv`` (τy(T)/τy(20 °C), magnetics.hot); ``hysteresis.csv``
+    (each steel's coercivity, remanence and saturation polarisation, magnetics.hysteresis),
+    ``fluids.csv`` (each fluid's τy(T) coefficient and lifetime dissipated energy,
+    magnetics.life) and ``materials.csv``, the index. Each file's ``# `` lines name its
+    source; a row's ``unverified`` column names its fields not read in a source."""
     out: dict[str, str] = {}
-    index = []
+    index, steels, fluids = [], [], []
     for name in sorted(RECORDS):
         rec, kind = RECORDS[name], KIND[name]
         mag = MATERIALS.get(name)
@@ -91,42 +152,24 @@ def material_tables() -> dict[str, str]:
                 list(zip(mag.b_table, mag.h_table, strict=True)),
             )
             files.append(f)
+        hy = HYSTERESIS.get(name)
+        if hy is not None:
+            steels.append((name, hy.coercivity, hy.remanence, hy.saturation,
+                           _unverified(rec, "hysteresis.coercivity_A_per_m",
+                                       "hysteresis.remanence_T"), hy.source))  # fmt: skip
+            files.append("hysteresis.csv")
         fl = FLUIDS.get(name)
         if fl is not None:
-            f = f"{name}_tau_y.csv"
-            out[f] = _csv(
-                ["H_A_per_m", "tau_y_Pa"],
-                [f"{rec['label']}: yield stress", f"source: {fl.source}"],
-                list(zip(TAU_H.tolist(), fl.tau_y(TAU_H).tolist(), strict=True)),
-            )
-            files.append(f)
-            ds = rec.get("tau_y")
-            if isinstance(ds, dict) and "h" in ds:
-                f = f"{name}_tau_y_datasheet.csv"
-                out[f] = _csv(
-                    ["H_A_per_m", "tau_y_Pa"],
-                    [
-                        f"{rec['label']}: datasheet yield stress (comparison only)",
-                        f"source: {ds.get('source', '')}",
-                    ],
-                    [(float(h), float(t)) for h, t in zip(ds["h"], ds["tau"], strict=True)],
-                )
-                files.append(f)
-            lo, hi = fl.temperature_range
-            temps = np.arange(lo, hi + 1e-9, VISCOSITY_STEP_C)
-            f = f"{name}_viscosity.csv"
-            out[f] = _csv(
-                ["T_C", "eta_Pa_s"],
-                [
-                    f"{rec['label']}: off-state viscosity",
-                    f"source: {rec.get('viscosity_source', '')}; temperature law: the "
-                    f"carrier's Walther line ({fl.carrier}) [astm-d341]",
-                ],
-                list(
-                    zip(temps.tolist(), np.atleast_1d(fl.viscosity_at(temps)).tolist(), strict=True)
-                ),
-            )
-            files.append(f)
+            tables = _fluid_tables(name, rec)
+            out.update(tables)
+            files += [*tables, "fluids.csv"]
+            coef = tau_y_coefficient(fl)
+            fluids.append((name, fl.phi, fl.tau_y_max, "" if fl.carrier_expansion is None
+                           else fl.carrier_expansion, "" if coef is None else coef,
+                           "" if fl.lifetime_energy is None else fl.lifetime_energy,
+                           _unverified(rec, "carrier_expansion", "lifetime_dissipated_energy"),
+                           rec.get("tau_y_temperature_source", ""),
+                           rec.get("lifetime_dissipated_energy_source", "")))  # fmt: skip
         index.append(
             (
                 name,
@@ -138,6 +181,23 @@ def material_tables() -> dict[str, str]:
                 " ".join(rec.get("unverified", [])) or "-",
             )
         )
+    out["hysteresis.csv"] = _csv(
+        ["name", "coercivity_A_per_m", "remanence_T", "saturation_polarisation_T",
+         "unverified", "source"],
+        ["each steel's major loop (magnetics.hysteresis): coercivity and remanence from its "
+         "data file's [hysteresis], the saturation polarisation B - mu0 H at its B-H table's "
+         "last point"],
+        steels,
+    )  # fmt: skip
+    out["fluids.csv"] = _csv(
+        ["name", "iron_fraction", "tau_y_max_Pa", "carrier_expansion_per_K",
+         "tau_y_temperature_coefficient_per_K", "lifetime_dissipated_energy_J_per_m3",
+         "unverified", "tau_y_temperature_source", "lifetime_dissipated_energy_source"],
+        ["each MR fluid: Carlson's saturated yield stress [carlson], the d(tau_y/tau_y0)/dT "
+         "at 20 C of the dilution law (magnetics.hot; empty: no carrier expansion given) and "
+         "the lifetime dissipated energy (magnetics.life; empty: no data)"],
+        fluids,
+    )  # fmt: skip
     out["materials.csv"] = _csv(
         [
             "name",
@@ -176,25 +236,31 @@ def torque_map(
     method: str = "network",
 ) -> dict[str, np.ndarray]:
     """Torque over current × slip speed × fluid temperature (``MAP_COLUMNS``, one row per
-    point, current fastest): the yield torque by ``method`` (magnetics.torque) plus every
-    drag term at that speed and temperature (magnetics.drag); ``off_state_torque_N_m`` is
-    the drag alone, the torque at 0 A. The yield stress does not depend on temperature in
-    the library's fluid model (Carlson's law), so only the drag varies with it."""
+    point, current fastest): the yield torque by ``method`` (magnetics.torque) at 20 °C,
+    solved once, times τy(T)/τy(20 °C) (magnetics.hot.tau_y_factor: the carrier's dilution,
+    the tool's hot torque as in mrclutch.duty.torque_at), plus every drag term at that
+    speed and temperature (magnetics.drag.clutch_drag); ``off_state_torque_N_m`` is the
+    drag alone, the torque at 0 A with no remanence (the residual torque after a peak
+    current depends on the history: ``evaluate`` reports it)."""
     cur = np.asarray(currents, dtype=float)
     if cur.ndim != 1 or cur.size == 0 or not np.all(np.isfinite(cur)):
         raise ParameterError("currents: give finite values (A)")
-    section = build_section(design.clutch, design.materials)
-    lo, hi = FLUIDS[design.materials.fluid].temperature_range
-    cols: dict[str, list[float]] = {c: [] for c in MAP_COLUMNS}
+    fluid = FLUIDS[design.materials.fluid]
+    lo, hi = fluid.temperature_range
     for t in temperatures_c:
         check_range("fluid temperature", t, lo, hi, " °C")
+    for s in speeds_rpm:
+        check_range("slip speed", s, 0.0, 1e5, " rpm")
+    section = build_section(design.clutch, design.materials)
+    assert section.table is not None  # built from a design: it has its region table
+    cold = torque_curve(section, cur, method=method, support=design.support).yield_torque
+    cols: dict[str, list[float]] = {c: [] for c in MAP_COLUMNS}
+    for t in temperatures_c:
+        hot = cold * float(tau_y_factor(fluid, t))
         for s in speeds_rpm:
-            check_range("slip speed", s, 0.0, 1e5, " rpm")
-            tc = torque_curve(
-                section, cur, method=method, speed_rpm=s, temperature=t, support=design.support
-            )
-            for i, ty, tt in zip(cur, tc.yield_torque, tc.torque, strict=True):
-                for k, v in zip(MAP_COLUMNS, (i, s, t, ty, tc.off_state_torque, tt), strict=True):
+            off = clutch_drag(section.table, rpm_to_rad_s(s), t, design.support, fluid).torque
+            for i, ty in zip(cur, hot, strict=True):
+                for k, v in zip(MAP_COLUMNS, (i, s, t, ty, off, ty + off), strict=True):
                     cols[k].append(float(v))
     return {k: np.array(v) for k, v in cols.items()}
 

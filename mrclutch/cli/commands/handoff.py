@@ -20,6 +20,7 @@ from geometry.validation import check_range
 from mrclutch.cli.commands._common import add_design_args, load_design_args
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.jsonio import to_jsonable
+from mrclutch.cli.longjobs import announce
 from mrclutch.handoff import (
     MAP_COLUMNS,
     device_description,
@@ -29,17 +30,24 @@ from mrclutch.handoff import (
     solver_files,
     torque_map,
 )
+from mrclutch.report_data import section_of
+from mrclutch.torque_curves import FEM_SIZE, fem_seconds
 
 
 def register(sub: Any) -> None:
     p = sub.add_parser(
         "tables",
-        help="the material library as CSV tables (B-H, yield stress, viscosity)",
+        help="the material library as CSV tables (B-H, yield stress, viscosity, "
+        "hysteresis, fluid life)",
         description="Write DIR/<material>_bh.csv (B-H of every magnetic material), "
         "DIR/<fluid>_tau_y.csv (Carlson's yield stress against H), DIR/<fluid>_viscosity.csv "
-        "(off-state viscosity against temperature) and DIR/materials.csv (the index: kind, "
-        "density, the source of each table). Units are in the column names; each file "
-        "starts with '# ' lines naming its source (docs/handoff.md).",
+        "(off-state viscosity against temperature), DIR/<fluid>_tau_y_temperature.csv "
+        "(yield stress against temperature), DIR/hysteresis.csv (each steel's coercivity and "
+        "remanence), DIR/fluids.csv (each fluid's tau_y(T) coefficient and lifetime "
+        "dissipated energy) and DIR/materials.csv (the index: kind, density, the tables of "
+        "each). Units are in the column names; each file starts with '# ' lines naming its "
+        "source, and an 'unverified' column names the values not read in a source "
+        "(docs/handoff.md).",
     )
     p.add_argument("--export", required=True, metavar="DIR", help="output directory")
     p.set_defaults(func=cmd_materials)
@@ -104,8 +112,9 @@ def add_map_args(p: argparse.ArgumentParser) -> None:
         "--map",
         metavar="FILE.csv|.parquet",
         help="write a torque map over current (--current) x slip speed (--map-speeds-rpm) x "
-        "fluid temperature (--map-temperatures-C), with the off-state torque: a controller's "
-        "lookup table (docs/handoff.md)",
+        "fluid temperature (--map-temperatures-C): the yield torque by --method (network, "
+        "circuit or fem) with the fluid's tau_y(T), the off-state torque (the drag) and "
+        "their sum; a controller's lookup table (docs/handoff.md)",
     )
     p.add_argument(
         "--map-speeds-rpm",
@@ -140,9 +149,16 @@ def write_torque_map(args: argparse.Namespace, currents: Any) -> int:
         raise CLIError(f"--map {args.map}: the file must end in .csv or .parquet")
     if args.method not in ("network", "circuit", "fem"):
         raise CLIError(f"--map: --method {args.method!r}: give network, circuit or fem")
+    if args.json or args.plot:
+        raise CLIError("--map: not with --json or --plot (the map is the output)")
     speeds = _floats("--map-speeds-rpm", args.map_speeds_rpm)
     temps = _floats("--map-temperatures-C", args.map_temperatures_C)
     design = load_design_args(args)
+    if args.method == "fem" and len(currents) > 1:  # the yield is solved once per current
+        announce("torque", f"{len(currents)} FEM solves at {FEM_SIZE * 1e3:g} mm",
+                 fem_seconds(section_of(design), len(currents)),
+                 "the FEM's measured rate per grid node, magnetics.fem.grid.SECONDS_PER_NODE",
+                 args.yes)  # fmt: skip
     cols = torque_map(design, currents, speeds, temps, method=args.method)
     if suffix == ".csv":
         rows = zip(*(cols[c] for c in MAP_COLUMNS), strict=True)
