@@ -344,12 +344,38 @@ def _imports_it(text: str, module: str) -> bool:
     return bool(re.search(pattern, text))
 
 
+def _test_functions(path: Path) -> list[tuple[str, str]]:
+    """(node id suffix, text) of each test function of a file: its own source and that of
+    the same file's fixtures it takes by name (a module fixture runs the command it
+    checks)."""
+    src = path.read_text()
+    tree = ast.parse(src)
+    defs: dict[str, str] = {}
+    tests: list[tuple[str, ast.FunctionDef]] = []
+    for node in tree.body:
+        if isinstance(node, ast.FunctionDef):
+            defs[node.name] = ast.get_source_segment(src, node) or ""
+            if node.name.startswith("test_"):
+                tests.append((node.name, node))
+        elif isinstance(node, ast.ClassDef) and node.name.startswith("Test"):
+            for f in node.body:
+                if isinstance(f, ast.FunctionDef) and f.name.startswith("test_"):
+                    tests.append((f"{node.name}::{f.name}", f))
+    out = []
+    for name, fn in tests:
+        text = ast.get_source_segment(src, fn) or ""
+        text += "".join(defs.get(a.arg, "") for a in fn.args.args)
+        out.append((name, text))
+    return out
+
+
 def ranked_tests(tree: Path, module: str, k: int | None = None) -> list[str]:
-    """The test files of the run a mutant of ``module`` runs, best first, at most k: a file
-    scores 20 for importing the module, 1 per mention of one of its top-level names (or
-    3 per quoted CLI word of it, ``CLI_WORDS``), and 0.3 per mention of a name of a module of the
-    package that imports it (the split modules are reached through pipeline, robust …);
-    files scoring 0 are not run."""
+    """The tests a mutant of ``module`` runs, best first, at most k: each test function of
+    the run's files (with its fixtures of the same file) scores 1 per mention of one of the
+    module's top-level names, 3 per quoted CLI word of it (``CLI_WORDS``), 0.3 per mention
+    of a name of a module of the package that imports it (the split modules are reached
+    through pipeline, robust …) and 2 if its file imports the module; tests scoring 0 are
+    not run."""
     src = (tree / module).read_text()
     own, words = _names(src), set(CLI_WORDS.get(module, ()))
     up: set[str] = set()
@@ -366,16 +392,17 @@ def ranked_tests(tree: Path, module: str, k: int | None = None) -> list[str]:
     for f in files:
         if any(f.name.startswith(s) for s in SLOW_FILES) or str(f.relative_to(tree)) in IGNORED:
             continue
-        text = f.read_text()
-        score = (
-            20 * _imports_it(text, module)
-            + _mentions(text, own)
-            + 3 * sum(text.count(f'"{w}"') for w in words)
-            + 0.3 * _mentions(text, up)
-        )
-        if score > 0:
-            scored.append((-score, f.name, str(f.relative_to(tree))))
-    return [rel for _, _, rel in sorted(scored)[: k or _K[0]]]
+        bonus = 2 * _imports_it(f.read_text(), module)
+        for name, text in _test_functions(f):
+            score = (
+                bonus
+                + _mentions(text, own)
+                + 3 * sum(text.count(f'"{w}"') for w in words)
+                + 0.3 * _mentions(text, up)
+            )
+            if score > bonus:
+                scored.append((-score, f.name, name, f"{f.relative_to(tree)}::{name}"))
+    return [node for *_, node in sorted(scored)[: k or _K[0]]]
 
 
 _FAILING: list[str] = []  # tests that fail on the unmutated tree (build_coverage)
@@ -553,7 +580,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--timeout", type=float, default=240.0, help="s per stage-1 run")
     ap.add_argument("--out", type=Path, default=None, help="default: the run's")
-    ap.add_argument("--files", type=int, default=4, help="round2: test files a mutant runs")
+    ap.add_argument("--files", type=int, default=5, help="round2: tests a mutant runs")
     ap.add_argument("--list", action="store_true", help="print the sample, run nothing")
     ap.add_argument("--report", action="store_true", help="print the table of --out")
     ap.add_argument("--summary", action="store_true", help="print --out's counts as JSON")
