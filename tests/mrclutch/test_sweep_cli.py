@@ -11,10 +11,10 @@ import pytest
 SPEC = """
 [sweep]
 mode = "random"
-samples = 60000
+samples = 20000
 seed = 7
 base = "paper"
-chunk_size = 2000
+chunk_size = 1000
 
 [parameters]
 gap_mm = {min = 0.3, max = 0.9}
@@ -40,12 +40,15 @@ def uninterrupted(tmp_path_factory):
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
 def test_killed_sweep_resumes_to_the_same_rows(tmp_path, sig, uninterrupted):
+    """Killed once two of its 20 chunks are on disk (20 000 rows: the 18 left take far
+    longer than the 20 ms poll, so the signal lands mid-run; 60 000 cost three times the
+    time for the same claim)."""
     spec, whole = uninterrupted
     part = tmp_path / "part.csv"
     proc = subprocess.Popen(_sweep(spec, part), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline:  # wait until a few chunks are on disk
-        if part.exists() and part.read_text().count("\n") > 4001:
+        if part.exists() and part.read_text().count("\n") > 2001:
             break
         time.sleep(0.02)
     proc.send_signal(sig)
@@ -55,12 +58,20 @@ def test_killed_sweep_resumes_to_the_same_rows(tmp_path, sig, uninterrupted):
         pytest.skip("the sweep finished before it could be interrupted")
     assert proc.returncode == 130, err
     assert b"--resume" in err and b"Traceback" not in err
-    assert 0 < rows < 60000 and rows % 2000 == 0  # whole chunks only
+    assert 0 < rows < 20000 and rows % 1000 == 0  # whole chunks only
     subprocess.run(_sweep(spec, part, "--resume"), check=True, capture_output=True)
     assert part.read_text() == whole
 
 
 HEAVY = ("build123d", "OCP", "skfem", "pyvista", "vtk", "trimesh")
+
+#: Python that shrinks the Pareto search of ``optimize`` in the process it runs in.
+SMALL_SEARCH = (
+    "import mrclutch.cli.commands.optimize_pareto as _op\n"
+    "_real = _op.pareto\n"
+    "_op.pareto = lambda *a, **k: _real(*a, **{**k, 'pop_size': 16, 'generations': 4,"
+    " 'members': 2})\n"
+)
 
 
 @pytest.mark.parametrize(
@@ -73,13 +84,16 @@ HEAVY = ("build123d", "OCP", "skfem", "pyvista", "vtk", "trimesh")
 )
 def test_sweeps_and_the_optimiser_never_build_cad(tmp_path, argv):
     """Issue 6: a sweep (and the optimiser's search) uses the closed forms and the circuit
-    only — no CAD kernel, FEM or 3-D view is even imported."""
+    only — no CAD kernel, FEM or 3-D view is even imported. The search is a small one (a
+    population of 16 for 4 generations, 2 members): what it imports does not depend on how
+    long it runs, and the default (100 × 100) took a minute here."""
     spec = tmp_path / "spec.toml"
-    spec.write_text(SPEC.replace("samples = 60000", "samples = 3000"))
+    spec.write_text(SPEC.replace("samples = 20000", "samples = 3000"))
     args = [a.format(spec=spec, out=tmp_path / "rows.csv") for a in argv]
     code = (
         "import sys, io, contextlib\n"
         "from mrclutch.cli.main import main\n"
+        f"{SMALL_SEARCH}"
         "with contextlib.redirect_stdout(io.StringIO()):\n"
         f"    rc = main({args!r})\n"
         f"print(rc, [m for m in {HEAVY!r} if m in sys.modules])\n"
@@ -98,7 +112,7 @@ def test_sweep_with_optional_columns_writes_them_after_the_default_ones(tmp_path
     from mrclutch.pipeline import evaluate
 
     spec = tmp_path / "s.toml"
-    spec.write_text(SPEC.replace("samples = 60000", "samples = 6"))
+    spec.write_text(SPEC.replace("samples = 20000", "samples = 6"))
     out = tmp_path / "r.csv"
     cmd = _sweep(spec, out, "--with", "zwidth_area_N2_s_per_m2", "--with",
                  "max_passive_K_N_per_m")  # fmt: skip
