@@ -16,6 +16,7 @@ import numpy as np
 from geometry.section import Section, build_section
 from geometry.validation import ParameterError
 from magnetics.circuit import path_from_section
+from magnetics.drag import Support
 from magnetics.dynamics import flux_linkage
 from magnetics.fem import DEFAULT_SIZE, FEMConvergenceError, solve_fem
 from magnetics.fem.grid import check_memory, time_estimate
@@ -85,12 +86,15 @@ def fem_seconds(section: Section, n: int) -> float:
 
 
 def torque_curves(section: Section, currents: Any, methods: tuple[str, ...], *,
-                  speed_rpm: float, temperature: float) -> list[TorqueCurve]:  # fmt: skip
+                  speed_rpm: float, temperature: float,
+                  support: Support | None = None) -> list[TorqueCurve]:  # fmt: skip
     """The torque curve (magnetics.torque.torque_curve) of each method at the currents (A),
-    the slip speed (rpm) and the fluid temperature (°C)."""
+    the slip speed (rpm) and the fluid temperature (°C), with ``support``'s bearing and
+    seal drag (a design's ``[support]``; None: magnetics.drag's default)."""
     try:
         return [torque_curve(section, currents, method=m, speed_rpm=speed_rpm,
-                             temperature=temperature) for m in methods]  # fmt: skip
+                             temperature=temperature, support=support)
+                for m in methods]  # fmt: skip
     except FEMConvergenceError as exc:
         raise ParameterError(str(exc)) from None
     except FloatingPointError as exc:  # pragma: no cover - defensive

@@ -50,10 +50,13 @@ def current_for(design: ClutchDesign, torque: float, method: str = "network",
     out: dict[str, Any] = {"method": method, "torque_N_m": torque, "limit_A": limit,
                            "torque_at_0A_N_m": t0, "torque_at_limit_N_m": t_lim}  # fmt: skip
     label = METHOD_LABELS[method]
+    cap = design.current_limit
+    end = ("the current limit" if limit == cap else
+           f"the search's end, past the design's current limit {cap:.4g} A")  # fmt: skip
     if torque > t_lim:
         out["current_A"] = None
         out["text"] = (f"{label}: {torque:.4g} N·m is out of reach: the most is {t_lim:.4g} N·m "
-                       f"at {limit:.4g} A (the current limit)")  # fmt: skip
+                       f"at {limit:.4g} A ({end})")  # fmt: skip
     elif torque <= t0:
         out["current_A"] = 0.0
         out["text"] = (f"{label}: 0 A — the off-state torque {t0:.4g} N·m (drag at "
@@ -62,5 +65,5 @@ def current_for(design: ClutchDesign, torque: float, method: str = "network",
         i = float(brentq(lambda x: T(x) - torque, 0.0, limit, xtol=CURRENT_TOL))
         out["current_A"] = i
         out["text"] = (f"{label}: {i:.4g} A for {torque:.4g} N·m (at {speed:g} rpm, fluid "
-                       f"{temp:g} °C; the limit {limit:.4g} A gives {t_lim:.4g} N·m)")  # fmt: skip
+                       f"{temp:g} °C; {limit:.4g} A, {end}, gives {t_lim:.4g} N·m)")  # fmt: skip
     return out

@@ -284,6 +284,53 @@ def test_torque_applies_the_designs_current_limit(capsys):
     assert _json(capsys, ["torque", f, "--current", "7", "--ignore-limit"])["points"]
 
 
+OFF_PAPER = """name = "off-paper"
+[clutch]
+base = "paper"
+[operating]
+input_speed_rpm = 1500
+fluid_temperature_C = 60
+[support]
+seal_torque_mN_m = 5
+"""
+
+
+def test_torque_is_the_designs_at_its_own_speed_temperature_and_support(tmp_path, capsys):
+    """One design, one torque: `torque` at the current limit is `evaluate`'s max torque (fast:
+    the network) and its 0 A torque the off-state torque, at the design's input speed, fluid
+    temperature and [support] drag. It was taken at 530 rpm, 20 °C and the default bearings
+    whatever the file said (0.4272 against evaluate's 0.4309 N·m on this design)."""
+    f = tmp_path / "d.toml"
+    f.write_text(OFF_PAPER)
+    clutch = _json(capsys, ["evaluate", str(f), "--no-uncertainty"])["clutch"]
+    data = _json(capsys, ["torque", str(f), "--current", "0,7"])
+    t0, t7 = (p["torque_N_m"] for p in data["points"])
+    assert data["speed_rpm"] == 1500 and data["drag"]["fluid_temperature_C"] == 60
+    assert t7 == pytest.approx(clutch["max_torque_N_m"], rel=1e-9)
+    assert t0 == pytest.approx(clutch["off_state_torque_N_m"], rel=1e-9)
+    row = _json(capsys, ["torque", str(f), "--for", "0.3"])["methods"][0]
+    assert row["torque_at_limit_N_m"] == pytest.approx(clutch["max_torque_N_m"], rel=1e-9)
+    # the options still override it, and then the torque differs
+    other = _json(capsys, ["torque", str(f), "--current", "0", "--speed-rpm", "530",
+                           "--fluid-temperature-C", "20"])["points"][0]["torque_N_m"]  # fmt: skip
+    assert abs(other / t0 - 1) > 0.05
+
+
+def test_torque_past_the_limit_says_so_when_asked_for(capsys):
+    """--ignore-limit computes what is asked, and says it lies past the design's limit;
+    --for's search then ends at 10× the limit, not called "the current limit"."""
+    f = str(EXAMPLES / "thin_drums.toml")
+    code, cap = _run(capsys, ["torque", f, "--current", "7", "--ignore-limit"])
+    assert code == 0 and "7 A outside the design's current range [0, 4.856] A" in cap.out
+    assert "--ignore-limit" in cap.out.splitlines()[0]
+    assert _json(capsys, ["torque", f, "--current", "2", "--ignore-limit"])["notes"] == []
+    code, cap = _run(capsys, ["torque", "--preset", "paper", "--for", "5", "--ignore-limit"])
+    assert code == 0
+    assert "at 70 A (the search's end, past the design's current limit 7 A)" in cap.out
+    code, cap = _run(capsys, ["torque", "--preset", "paper", "--for", "5"])
+    assert "at 7 A (the current limit)" in cap.out
+
+
 @pytest.mark.parametrize("argv", [
     ["compare", "--preset", "paper", "--fidelity", "bogus"],
     ["compare", "--preset", "paper", "--stiffness", "100"],

@@ -19,7 +19,6 @@ from mrclutch.cli.commands.handoff import add_map_args, write_torque_map
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.longjobs import announce
 from mrclutch.cli.plots.magnetics import plot_field, plot_torque
-from mrclutch.operating import ROOM_TEMPERATURE
 from mrclutch.pipeline import current_notes
 from mrclutch.report_data import section_of
 from mrclutch.torque_curves import (
@@ -59,16 +58,15 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
         "fem, or both (the network checked against the FEM: both curves, and the largest relative "
         "difference)",
     )
-    p.add_argument("--speed-rpm", type=float, default=530.0, help="slip speed (rpm)")
+    p.add_argument("--speed-rpm", type=float, default=None,
+                   help="slip speed (rpm; default: the design's [operating] input_speed_rpm, "
+                   "as evaluate)")  # fmt: skip
     p.add_argument("--yes", action="store_true",
                    help="run FEM solves estimated above 10 min (refused without it; above "
                    "30 s the estimate is said first: mrclutch/cli/longjobs.py)")  # fmt: skip
-    p.add_argument(
-        "--fluid-temperature-C",
-        type=float,
-        default=ROOM_TEMPERATURE,
-        help="fluid temperature for its viscosity (°C, default room)",
-    )
+    p.add_argument("--fluid-temperature-C", type=float, default=None,
+                   help="fluid temperature for its viscosity (°C; default: the design's "
+                   "[operating] fluid_temperature_C, as evaluate)")  # fmt: skip
     p.add_argument("--json", action="store_true", help="JSON on stdout")
     p.add_argument("--plot", metavar="FILE.png", help="write a torque-current chart")
     add_map_args(p)
@@ -82,10 +80,22 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     f.set_defaults(func=_field)
 
 
+def _operating_point(args: argparse.Namespace, design: Any) -> None:
+    """The slip speed and fluid temperature not given take the design's own (``evaluate``'s
+    max torque is at them, with the design's ``[support]`` drag): one design, one torque."""
+    op = design.operating
+    if args.speed_rpm is None:
+        args.speed_rpm = op.input_speed_rpm
+    if args.fluid_temperature_C is None:
+        args.fluid_temperature_C = op.fluid_temperature
+
+
 def _torque(args: argparse.Namespace) -> int:
     check_choice("--method", args.method, ("circuit", "network", "fem", "both"))
-    check_range("--speed-rpm", args.speed_rpm, 0.0, 1e5, " rpm")
+    if args.speed_rpm is not None:
+        check_range("--speed-rpm", args.speed_rpm, 0.0, 1e5, " rpm")
     design = load_design_args(args)
+    _operating_point(args, design)
     if args.for_torque is not None:
         return _torque_for(args, design)
     currents = currents_asked(design, args.current, args.ignore_limit)
@@ -99,13 +109,14 @@ def _torque(args: argparse.Namespace) -> int:
                  "the FEM's measured rate per grid node, magnetics.fem.grid.SECONDS_PER_NODE",
                  args.yes)  # fmt: skip
     curves = torque_curves(clutch, currents, methods, speed_rpm=args.speed_rpm,
-                           temperature=args.fluid_temperature_C)  # fmt: skip
+                           temperature=args.fluid_temperature_C,
+                           support=design.support)  # fmt: skip
     if args.plot:
         plot_torque(curves, args.plot)  # through the output layer
     err = largest_difference(*curves) if len(curves) == 2 else None
     model = "circuit" if args.method == "circuit" else "network"
     lam, ind = inductance(clutch, curves[0].currents, model)
-    notes = [*current_notes(design)] if not args.ignore_limit else []
+    notes = [*current_notes(design)] if not args.ignore_limit else _past_limit(design, currents)
     if args.json:
         data = {**_curve_json(curves[0])}
         if err is not None:
@@ -131,6 +142,19 @@ def _torque(args: argparse.Namespace) -> int:
     if err is not None:
         print(f"largest network-vs-FEM difference: {err * 100:.2f} %")
     return 0
+
+
+def _past_limit(design: Any, currents: Any) -> list[str]:
+    """With ``--ignore-limit``: say which currents asked lie past the design's limit (the
+    figures there are computed as asked, not what the design can carry)."""
+    cap = design.current_limit
+    past = [float(i) for i in currents if i < 0 or i > cap * (1 + 1e-9)]
+    if not past:
+        return []
+    why = "; ".join(current_notes(design)) or f"max_current_A = {cap:g}"
+    return [f"{', '.join(f'{i:g}' for i in past[:5])}{' …' if len(past) > 5 else ''} A outside "
+            f"the design's current range [0, {cap:.4g}] A ({why}): computed as asked "
+            "(--ignore-limit)"]  # fmt: skip
 
 
 def _torque_for(args: argparse.Namespace, design: Any) -> int:
