@@ -181,7 +181,7 @@ def test_drawing_carries_the_process_tolerance(tmp_path: Path) -> None:
 
 
 def test_drawing_reads_the_design_files_process(tmp_path: Path) -> None:
-    """A design file's [process] band 0.05 mm and runout 0.1 mm: ±0.025 mm on every
+    """A design file's ``[process]`` band 0.05 mm and runout 0.1 mm: ±0.025 mm on every
     diameter, 0.1 mm TIR, and not the defaults'."""
     f = tmp_path / "shop.toml"
     f.write_text('name = "shop"\n[clutch]\nbase = "paper"\n'
