@@ -128,3 +128,29 @@ def test_read_fem_refuses_a_short_section() -> None:
     text = write_fem(p).replace("[NumPoints] = ", "[NumPoints] = 9999", 1)
     with pytest.raises(ValueError, match="fewer lines follow"):
         read_fem(text)
+
+
+def test_fem_rows_have_femm_42s_fields(paper) -> None:  # type: ignore[no-untyped-def]
+    """Each row as FEMM 4.2's reader takes it [femm42]: a point `x y property group`, a
+    segment `n0 n1 max-side boundary hidden group` (-1: automatic), a block label
+    `x y block mesh-size circuit magdir group turns external` (mesh size in mm, -1 for the
+    automatic mesh in air); a B-H line `B H`."""
+    _s, p, _f = paper
+    text = write_fem(p).splitlines()
+
+    def rows(key: str) -> list[list[str]]:
+        i = next(k for k, line in enumerate(text) if line.startswith(f"[{key}]"))
+        n = int(text[i].split("=")[1])
+        return [text[i + 1 + j].split() for j in range(n)]
+
+    assert {len(r) for r in rows("NumPoints")} == {4}
+    segs = rows("NumSegments")
+    assert {len(r) for r in segs} == {6} and {r[2] for r in segs} == {"-1"}
+    labels = rows("NumBlockLabels")
+    assert {len(r) for r in labels} == {9}
+    air = [r for r in labels if r[2] == "1"]  # block 1 is air
+    assert air and all(r[3] == "-1" for r in air)
+    assert all(0 < float(r[3]) <= 0.25 for r in labels if r[2] != "1")
+    assert all(r[8] == "0" and r[5] == "0" for r in labels)  # not external, no magnet
+    bh = [line.split() for line in text if line.startswith("      ")]
+    assert bh and {len(r) for r in bh} == {2}
