@@ -152,6 +152,25 @@ def test_device_description_schema(tmp_path: Path) -> None:
     assert d["damping_N_s_per_m"]["intrinsic_b1"] > 0
 
 
+def test_device_schema_is_documented_key_for_key(tmp_path: Path) -> None:
+    """docs/handoff.md's table names every key of the device JSON (nested ones as
+    ``outer.inner``) and no key it does not hold: the schema a framework codes against."""
+    import re
+
+    from mrclutch.handoff import device_description
+
+    d = device_description(design_preset("paper"), n_k=3)
+    keys = set()
+    for k, v in d.items():
+        keys |= {f"{k}.{kk}" for kk in v} if isinstance(v, dict) else {k}
+    doc = (Path(__file__).resolve().parents[2] / "docs/handoff.md").read_text()
+    section = doc.split("## The device description", 1)[1].split("\n## ", 1)[0]
+    rows = [line.split("|")[1] for line in section.splitlines() if line.startswith("| `")]
+    documented = {k for cell in rows for k in re.findall(r"`([\w.]+)`", cell)}
+    assert documented == keys
+    assert len(d["bandwidth_hz"]) == 2  # n_k stiffnesses, 0 left out
+
+
 def test_dxf_has_a_layer_per_part_and_material(tmp_path: Path) -> None:
     import ezdxf
 
