@@ -1,12 +1,15 @@
 """Issue 45 (and issue 39 item 6): a categorical axis (a part's material) goes through every
-path a numeric axis takes. The matrix: 4 axis kinds (a length range, an integer range, a list
-of values, a material) × 6 paths run per kind (the speed estimate of a sweep above 1000
-designs; the rows in CSV and Parquet, read back; a nominal ``--with`` column; a worst-case
-``--with`` column; ``--verify-top``'s design rebuilt from its id; ``--pareto`` drawn from
-the file) = 24 cases, plus the paths run once on a spec holding all four kinds: a process
-pool, a Dask cluster (a user's fluid file shipped to its workers), ``--verify-top`` by the
-FEM through the CLI, and the optimiser with and without ``--nominal``."""
+path a numeric axis takes. The matrix ``test_an_axis_kind_on_a_path``: 5 axis kinds (a
+length range, an integer range, a list of values, a material from the library, a fluid
+file of the user's) × 9 paths (a sweep above 1000 designs through the CLI, its speed
+estimate first; the rows in CSV; in Parquet; a nominal ``--with`` column; a worst-case
+``--with`` column; ``--verify-top`` by the FEM; ``--pareto``; a process pool; Dask workers)
+= 45 cases, each row checked against its design's single ``evaluate``. Then, once: the
+optimiser with and without ``--nominal`` (2 cases), and the acceptance sweep in small on a
+spec holding four kinds through the CLI (a three-fluid axis on ``--workers 2`` and
+``--dask-local 2``, ``--verify-top``), a fluid file of ``[materials]`` on Dask workers."""
 
+import multiprocessing
 import subprocess
 import sys
 from concurrent.futures import ProcessPoolExecutor
@@ -15,12 +18,14 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from test_sweep_inputs import FLUID as FLUID_TEMPLATE
+from test_sweep_inputs import _registry  # noqa: F401 (autouse: the fluids loaded here undone)
 
+from mrclutch.cli.main import main
 from mrclutch.design import design_from_mapping, design_preset
 from mrclutch.pipeline import BatchEvaluator, evaluate
 from mrclutch.robust import RobustBatchEvaluator
 from mrclutch.sweep import load_spec, read_results, run_sweep
-from mrclutch.verify import design_of
+from mrclutch.verify import TORQUE, design_of, verify_top
 
 #: axis kind → (its `[parameters]` line, the DrumClutch field or part it sets, the values a
 #: two-design grid takes, in the file's unit: mm, count, or registry name)
@@ -30,19 +35,24 @@ KINDS = {
     "values": ("drum_thickness_mm = {values = [0.25, 0.3]}", "drum_thickness", [0.25, 0.3]),
     "material": ('fluid = {values = ["MRF-122EG", "MRF-140CG"]}', "fluid",
                  ["mrf_122eg", "mrf_140cg"]),
+    "fluid file": ('fluid = {values = ["MRF-122EG", "axis.toml"]}', "fluid",
+                   ["mrf_122eg", "cat_axis_fluid"]),
 }  # fmt: skip
 COLUMN = {"length": "gap_mm", "integer": "n_drums", "values": "drum_thickness_mm",
-          "material": "fluid"}  # fmt: skip
+          "material": "fluid", "fluid file": "fluid"}  # fmt: skip
+CATEGORICAL = ("material", "fluid file")
 RANDOM = {  # the same axes in a random sweep (a list of values and a material draw from it)
     "length": "gap_mm = {min = 0.3, max = 0.5}",
-    "integer": KINDS["integer"][0],
-    "values": KINDS["values"][0],
-    "material": KINDS["material"][0],
+    **{k: KINDS[k][0] for k in ("integer", "values", "material", "fluid file")},
 }
 BASE = design_preset("paper")
+FLUID = FLUID_TEMPLATE.replace("{viscosity}", "0.1")  # a user's fluid file
+AXIS_FLUID = FLUID.format(name="cat_axis_fluid").replace("phi = 0.3", "phi = 0.25")
 
 
 def spec_file(folder, params, sweep='mode = "grid"\nchunk_size = 1', extra=""):
+    """The spec, with the user's fluid file a "fluid file" axis names beside it."""
+    (folder / "axis.toml").write_text(AXIS_FLUID)
     path = folder / "spec.toml"
     path.write_text(f'[sweep]\nbase = "paper"\n{sweep}\n\n[parameters]\n{params}\n{extra}')
     return path
@@ -55,79 +65,209 @@ def base_of(path):
 
 def single(design):
     """The design's own evaluation (evaluate, fast): what a row must equal."""
-    return evaluate(design).clutch
+    return evaluate(design)
 
 
-@pytest.mark.parametrize("kind", sorted(KINDS))
-def test_the_speed_estimate_of_a_large_sweep(tmp_path, kind):
-    """Above 1000 designs the CLI times its first designs (a material axis was passed as raw
-    category numbers: 'materials.fluid = 2: unknown fluid')."""
+def _value(design, kind):
+    name = KINDS[kind][1]
+    return getattr(design.materials if kind in CATEGORICAL else design.clutch, name)
+
+
+def check_rows(spec, base, res, kind, ids=None):
+    """The rows ``ids`` of ``res``: the axis' column holds the value each design was given
+    (its SI field ×1e3 for lengths, the registry name for a material), and the figures
+    equal the design's single evaluation."""
+    ids = range(len(res["design_id"])) if ids is None else ids
+    for i in ids:
+        assert res["design_id"][i] == i
+        d = design_of(spec, base, i)
+        got, want = res[COLUMN[kind]][i], _value(d, kind)
+        if kind in CATEGORICAL or kind == "integer":
+            assert got == want
+        else:
+            assert got == pytest.approx(want * 1e3, rel=1e-8)
+        one = single(d)
+        assert res["valid"][i] == 1
+        assert res["max_torque_N_m"][i] == pytest.approx(one.clutch.max_torque, rel=1e-6)
+        assert res["clutch_mass_kg"][i] == pytest.approx(one.clutch.clutch_mass, rel=1e-6)
+        if "max_passive_K_N_per_m" in res:
+            assert res["max_passive_K_N_per_m"][i] == pytest.approx(
+                one.haptic["max_passive_K_N_per_m"], rel=1e-6)  # fmt: skip
+
+
+def two_designs(tmp_path, kind, out, evaluator=BatchEvaluator, columns=(), executor=None):
+    """The two-design grid over the axis of ``kind`` (a chunk a design) written to
+    ``out``: (spec, base, its rows read back)."""
+    spec, base = base_of(spec_file(tmp_path, KINDS[kind][0]))
+    ev = evaluator(base, columns)
+    res = run_sweep(spec, tmp_path / out, ev, ev.columns, executor=executor, progress=False)
+    assert res.complete and res.rows == 2
+    rows = read_results(tmp_path / out)
+    got = rows[COLUMN[kind]].tolist()
+    values = KINDS[kind][2]
+    assert got == values if kind in CATEGORICAL or kind == "integer" else np.allclose(got, values)
+    return spec, base, rows
+
+
+def path_above_1000_designs(tmp_path, kind, executors):
+    """``mrclutch sweep`` of 1001 random designs: the speed estimate times the first designs
+    (a material axis was passed as raw category numbers: 'materials.fluid = 2: unknown
+    fluid'), the rows written, every value of the axis drawn, a sample of rows equal to
+    single evaluations."""
     from mrclutch.cli.commands.sweep import _say_estimate
 
-    path = spec_file(tmp_path, RANDOM[kind], 'mode = "random"\nsamples = 1001\nchunk_size = 8')
+    path = spec_file(tmp_path, RANDOM[kind], 'mode = "random"\nsamples = 1001\nchunk_size = 400')
     spec, base = base_of(path)
     seconds = _say_estimate(spec, BatchEvaluator(base), 1)
     assert seconds is not None and np.isfinite(seconds) and seconds > 0
+    out = tmp_path / "r.csv"
+    assert main(["sweep", str(path), "--out", str(out), "--no-progress"]) == 0
+    res = read_results(out)
+    assert res["design_id"].tolist() == list(range(1001))
+    col = res[COLUMN[kind]]
+    if kind == "length":
+        assert np.all((col >= 0.3) & (col <= 0.5)) and np.unique(col).size > 900
+    else:
+        assert sorted(set(col.tolist())) == sorted(KINDS[kind][2])
+    check_rows(spec, base, res, kind, (0, 399, 400, 1000))
 
 
-@pytest.mark.parametrize("kind", sorted(KINDS))
-def test_rows_csv_parquet_with_and_pareto(tmp_path, kind):
-    """A two-design grid over one axis of each kind, with a nominal --with column, in CSV and
-    Parquet: read back, the axis' column holds its values (a material's names: text in the
-    CSV, a dictionary column in Parquet), every row equals its design's single evaluation,
-    the two files agree, and --pareto draws from both."""
+def path_csv(tmp_path, kind, executors):
+    spec, base, res = two_designs(tmp_path, kind, "r.csv")
+    check_rows(spec, base, res, kind)
+    second = (tmp_path / "r.csv").read_text().splitlines()[2].split(",")[1]
+    if kind in CATEGORICAL:  # the name itself in the file, not an index
+        assert second == KINDS[kind][2][1]
+    else:
+        assert float(second) == pytest.approx(KINDS[kind][2][1])
+
+
+def path_parquet(tmp_path, kind, executors):
     import pyarrow.parquet as pq
 
+    spec, base, res = two_designs(tmp_path, kind, "r.parquet")
+    check_rows(spec, base, res, kind)
+    kinds = {"integer": "int64", "length": "double", "values": "double"}
+    field = pq.read_table(tmp_path / "r.parquet").schema.field(COLUMN[kind])
+    want = kinds.get(kind, "dictionary<values=string, indices=int32, ordered=0>")
+    assert str(field.type) == want
+
+
+def path_nominal_with(tmp_path, kind, executors):
+    """A nominal --with column: equal to evaluate's largest passive K of the design."""
+    spec, base, res = two_designs(tmp_path, kind, "r.csv", columns=("max_passive_K_N_per_m",))
+    assert np.all(res["max_passive_K_N_per_m"] > 0)
+    check_rows(spec, base, res, kind)
+
+
+def path_worst_with(tmp_path, kind, executors):
+    """The worst case over the uncertainty ranges (--with max_stable_K_worst_N_per_m, the
+    evaluator the CLI picks for it) written by a sweep (it failed with a material axis and
+    left a header-only file): finite, and no larger than the nominal largest stable K (the
+    ranges contain the nominal)."""
+    cols = ("max_stable_K_N_per_m", "max_stable_K_worst_N_per_m")
+    spec, base, res = two_designs(tmp_path, kind, "r.csv", RobustBatchEvaluator, cols)
+    worst, nominal = res["max_stable_K_worst_N_per_m"], res["max_stable_K_N_per_m"]
+    assert np.all(np.isfinite(worst)) and np.all(worst > 0)
+    assert np.all(worst <= nominal * (1 + 1e-9))
+    check_rows(spec, base, res, kind)
+
+
+def path_verify_top(tmp_path, kind, executors):
+    """--verify-top 1 (the FEM, coarse: 1 mm): the best row's design rebuilt from its id,
+    with its material (a TypeError traceback with a material axis before), re-solved."""
+    spec, base, res = two_designs(tmp_path, kind, "r.csv")
+    rows = verify_top(spec, base, tmp_path / "r.csv", 1, TORQUE, True, 1e-3)
+    best = int(res["design_id"][np.argmax(res[TORQUE])])
+    assert [r.design_id for r in rows] == [best]
+    assert rows[0].fast_torque == pytest.approx(res[TORQUE][best], rel=1e-8)
+    assert np.isfinite(rows[0].fem_torque) and abs(rows[0].error) < 0.2
+
+
+def path_pareto(tmp_path, kind, executors):
     from mrclutch.cli.plots.design import pareto_plot
 
-    line, name, values = KINDS[kind]
-    spec, base = base_of(spec_file(tmp_path, line))
-    ev = BatchEvaluator(base, ("max_passive_K_N_per_m",))
-    res = {}
     for out in ("r.csv", "r.parquet"):
-        assert run_sweep(spec, tmp_path / out, ev, ev.columns, progress=False).complete
-        res[out] = read_results(tmp_path / out)
-    col = COLUMN[kind]
-    for r in res.values():
-        got = r[col].tolist()
-        assert got == values if kind in ("material", "integer") else np.allclose(got, values)
-        assert np.all(np.isfinite(r["max_passive_K_N_per_m"])) and np.all(r["valid"] == 1)
-    assert np.allclose(res["r.csv"]["max_torque_N_m"], res["r.parquet"]["max_torque_N_m"],
-                       rtol=1e-8)  # fmt: skip
-    if kind == "material":
-        assert (tmp_path / "r.csv").read_text().splitlines()[1].split(",")[1] == "mrf_122eg"
-        field = pq.read_table(tmp_path / "r.parquet").schema.field("fluid")
-        assert str(field.type) == "dictionary<values=string, indices=int32, ordered=0>"
-    for i in range(2):
-        d = design_of(spec, base, i)
-        got = getattr(d.materials if kind == "material" else d.clutch, name)
-        want = values[i] if kind in ("material", "integer") else values[i] * 1e-3
-        assert got == pytest.approx(want, rel=1e-12) if kind != "material" else got == want
-    one = single(d)  # the last row's design (its values differ from the base's)
-    assert res["r.parquet"]["max_torque_N_m"][1] == pytest.approx(one.max_torque, rel=1e-6)
-    assert res["r.parquet"]["clutch_mass_kg"][1] == pytest.approx(one.clutch_mass, rel=1e-6)
-    for out in ("r.csv", "r.parquet"):
-        png = tmp_path / f"{out}.png"
-        pareto_plot(tmp_path / out, png)
+        two_designs(tmp_path, kind, out)
+        png = pareto_plot(tmp_path / out, tmp_path / f"{out}.png")
         assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
-@pytest.mark.parametrize("kind", sorted(KINDS))
-def test_a_worst_case_with_column(tmp_path, kind):
-    """The worst case over the uncertainty ranges (--with max_stable_K_worst_N_per_m) on a
-    chunk of each kind: finite, and no larger than the nominal largest stable K (the worst
-    case over ranges that contain the nominal)."""
-    spec, base = base_of(spec_file(tmp_path, KINDS[kind][0], 'mode = "grid"\nchunk_size = 2'))
-    cols = ("max_stable_K_N_per_m", "max_stable_K_worst_N_per_m")
-    rows = RobustBatchEvaluator(base, cols)(spec.design_fields(0)[1])
-    worst, nominal = rows["max_stable_K_worst_N_per_m"], rows["max_stable_K_N_per_m"]
-    assert worst.shape == (2,) and np.all(np.isfinite(worst)) and np.all(worst > 0)
-    assert np.all(worst <= nominal * (1 + 1e-9))
+def path_process_pool(tmp_path, kind, executors):
+    """Spawned processes (they never read the user's fluid file): the in-process bytes."""
+    for out in ("r.csv", "r.parquet"):
+        two_designs(tmp_path, kind, out)
+        spec, base, res = two_designs(tmp_path, kind, f"pool-{out}", executor=executors("pool"))
+        assert _files(tmp_path / f"pool-{out}") == _files(tmp_path / out)
+    check_rows(spec, base, res, kind)
 
 
-# ---- paths run once, on a spec holding all four kinds -------------------------------------
+def path_dask_workers(tmp_path, kind, executors):
+    """A Dask cluster's workers (the user's fluid file registered only from the bytes the
+    spec carries: a KeyError in the workers before): the in-process bytes."""
+    two_designs(tmp_path, kind, "r.csv")
+    spec, base, res = two_designs(tmp_path, kind, "dask.csv", executor=executors("dask"))
+    assert (tmp_path / "dask.csv").read_bytes() == (tmp_path / "r.csv").read_bytes()
+    check_rows(spec, base, res, kind)
 
-FLUID = FLUID_TEMPLATE.replace("{viscosity}", "0.1")  # a user's fluid file
+
+def _files(p):
+    return {f.name: f.read_bytes() for f in p.iterdir()} if p.is_dir() else p.read_bytes()
+
+
+PATHS = {
+    "above 1000 designs": path_above_1000_designs,
+    "csv": path_csv,
+    "parquet": path_parquet,
+    "nominal --with": path_nominal_with,
+    "worst-case --with": path_worst_with,
+    "--verify-top": path_verify_top,
+    "--pareto": path_pareto,
+    "process pool": path_process_pool,
+    "dask workers": path_dask_workers,
+}
+
+
+@pytest.fixture(scope="module")
+def executors():
+    """A process pool of 2 spawned processes and a Dask LocalCluster of 2 worker processes
+    (what --dask-local 2 starts), each started once for the module, on first use."""
+    from mrclutch.cli.executors import local_cluster
+
+    made = {}
+    closers = []
+
+    def get(which):
+        if which not in made:
+            if which == "pool":
+                pool = ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("spawn"))
+                made[which] = pool
+                closers.append(pool.shutdown)
+            else:
+                distributed = pytest.importorskip("distributed")
+                try:
+                    cluster = local_cluster(2)
+                except OSError as exc:  # pragma: no cover - a sandbox without local sockets
+                    pytest.skip(f"distributed cannot start a cluster here: {exc}")
+                client = distributed.Client(cluster)
+                made[which] = client.get_executor()
+                closers.extend([cluster.close, client.close,
+                                lambda: made[which].shutdown(wait=False)])  # fmt: skip
+        return made[which]
+
+    yield get
+    for close in reversed(closers):
+        close()
+
+
+@pytest.mark.parametrize("path", list(PATHS))
+@pytest.mark.parametrize("kind", list(KINDS))
+def test_an_axis_kind_on_a_path(tmp_path, kind, path, executors):
+    """One case of the matrix: the axis of ``kind`` through ``path`` (``PATHS``)."""
+    PATHS[path](tmp_path, kind, executors)
+
+
+# ---- paths run once, on a spec holding four kinds at once ---------------------------------
 
 #: every kind at once; the material axis: the three LORD fluids
 ALL = "\n".join([RANDOM["length"], RANDOM["integer"], RANDOM["values"],
@@ -176,34 +316,17 @@ def test_three_fluid_rows_on_a_pool_and_dask_equal_single_evaluations(three_flui
         assert d.materials.fluid == fluid
         assert d.clutch.gap * 1e3 == pytest.approx(res["gap_mm"][i], rel=1e-8)
         assert d.clutch.n_drums == res["n_drums"][i]
-        one_ev = single(d)
+        one_ev = single(d).clutch
         assert res["max_torque_N_m"][i] == pytest.approx(one_ev.max_torque, rel=1e-6)
         assert res["off_state_torque_N_m"][i] == pytest.approx(one_ev.drag.torque, rel=1e-6)
 
 
-def test_a_process_pool_parquet_run_equals_the_in_process_one(tmp_path):
-    """Parquet parts (the dictionary column) from a pool equal those written here."""
-    path = spec_file(tmp_path, ALL, ALL_SWEEP.replace("samples = 30", "samples = 12"))
-    spec, base = base_of(path)
-    ev = BatchEvaluator(base)
-    run_sweep(spec, tmp_path / "a.parquet", ev, ev.columns, progress=False)
-    with ProcessPoolExecutor(2) as pool:
-        run_sweep(spec, tmp_path / "b.parquet", ev, ev.columns, executor=pool, progress=False)
-    parts = sorted(p.name for p in (tmp_path / "a.parquet").iterdir())
-    assert len(parts) == 2
-    for p in parts:
-        assert (tmp_path / "a.parquet" / p).read_bytes() == (
-            tmp_path / "b.parquet" / p
-        ).read_bytes()
-
-
 def test_a_users_fluid_files_reach_dask_workers(tmp_path):
-    """A fluid file named by [materials] and one on the axis: Dask workers never read them
-    (a KeyError in the workers before); the spec carries their bytes. Rows equal the
-    in-process run's, and the user's fluid gives other rows than MRF-122EG."""
+    """``--dask-local 2`` through the CLI with a fluid file named by [materials] and one on
+    the axis: Dask workers never read them (a KeyError in the workers before); the spec
+    carries their bytes. Rows equal the in-process run's, and the user's fluid gives other
+    rows than MRF-122EG."""
     (tmp_path / "base.toml").write_text(FLUID.format(name="cat_base_fluid"))
-    (tmp_path / "axis.toml").write_text(FLUID.format(name="cat_axis_fluid").replace(
-        "phi = 0.3", "phi = 0.25"))  # fmt: skip
     path = spec_file(tmp_path, 'fluid = {values = ["MRF-122EG", "axis.toml"]}\n'
                      "gap_mm = {values = [0.3, 0.4]}", 'mode = "grid"\nchunk_size = 2',
                      '\n[materials]\nfluid_file = "base.toml"\n')  # fmt: skip
@@ -236,21 +359,23 @@ def test_verify_top_by_the_fem_with_every_kind(three_fluids, tmp_path, capsys):
     assert np.isfinite(fem) and fem > 0
 
 
-def test_the_optimiser_with_a_material_axis_with_and_without_nominal():
+@pytest.mark.parametrize("verdict", ["--nominal", "worst case"])
+def test_the_optimiser_with_a_material_axis(verdict):
     """``optimize --material fluid=…`` without --nominal failed ('core: unknown DrumClutch
-    field': the worst case took no material column). Both verdicts now give members made
-    of the offered fluids, each row its own design's evaluation."""
+    field': the worst case took no material column). Both verdicts (``--nominal``: no
+    ``robust``, as the CLI passes it) give members made of the offered fluids, each row its
+    own design's evaluation."""
     from mrclutch.optimize import pareto, robust_verdict
 
     offered = ("mrf_122eg", "mrf_140cg")
-    for robust in (None, robust_verdict(BASE)):
-        ps = pareto(BASE, members=2, materials={"fluid": list(offered)}, robust=robust,
-                    pop_size=16, generations=4, seed=1)  # fmt: skip
-        assert ps.members, robust
-        for m in ps.members:
-            assert m.design.materials.fluid in offered
-            one = single(m.design)
-            assert m.row["max_torque_N_m"] == pytest.approx(one.max_torque, rel=1e-6)
+    robust = None if verdict == "--nominal" else robust_verdict(BASE)
+    ps = pareto(BASE, members=2, materials={"fluid": list(offered)}, robust=robust,
+                pop_size=16, generations=4, seed=1)  # fmt: skip
+    assert ps.members
+    for m in ps.members:
+        assert m.design.materials.fluid in offered
+        one = single(m.design).clutch
+        assert m.row["max_torque_N_m"] == pytest.approx(one.max_torque, rel=1e-6)
 
 
 def test_verify_rebuilds_a_design_of_every_kind_at_once(three_fluids):
