@@ -214,6 +214,8 @@ def test_drawing_reads_the_design_files_process(tmp_path: Path) -> None:
 @pytest.mark.parametrize("argv", [
     ["export", "--format", "iges", "--out", "X"],
     ["export", "--format", "dxf", "--current", "3", "--out", "X"],
+    ["export", "--format", "step", "--current", "3", "--out", "X"],
+    ["export", "--format", "femm", "--tolerance-mm", "0.1", "--out", "X"],
     ["torque", "--map", "X.xlsx"],
     ["torque", "--map", "X.csv", "--map-speeds-rpm", "fast"],
     ["torque", "--map", "X.csv", "--map-temperatures-C", "20,500"],

@@ -121,8 +121,12 @@ INERTIA_METHODS = ("all", "analytic", "mesh", "brep")
 
 def cmd_export(args: argparse.Namespace) -> int:
     check_choice("--format", args.format, EXPORT_FORMATS)
-    if args.format != "step":
+    if args.format != "step":  # each option applies to its formats only, never ignored
+        if args.tolerance_mm != DEFAULT_TOLERANCE_MM:
+            raise CLIError("--tolerance-mm: applies to --format step only (the STL chord)")
         return export_handoff(args)
+    if args.current is not None:
+        raise CLIError("--current: applies to --format femm or onelab only")
     design = load_design_args(args)
     res = export_cad(design, args.out, _tolerance(args, design.clutch))
     print(f"{res.step}")
