@@ -220,6 +220,8 @@ def test_drawing_reads_the_design_files_process(tmp_path: Path) -> None:
     ["torque", "--map", "X.csv", "--map-speeds-rpm", "fast"],
     ["torque", "--map", "X.csv", "--map-temperatures-C", "20,500"],
     ["torque", "--map", "X.csv", "--json"],
+    ["torque", "--map", "X.csv", "--speed-rpm", "100"],
+    ["torque", "--map", "X.csv", "--fluid-temperature-C", "60"],
     ["torque", "--map", "X.csv", "--method", "both"],
     ["export", "--format", "femm", "--current", "nan", "--out", "X"],
     ["device", "--preset", "nope", "--out", "X.json"],

@@ -94,6 +94,12 @@ def _torque(args: argparse.Namespace) -> int:
     check_choice("--method", args.method, ("circuit", "network", "fem", "both"))
     if args.speed_rpm is not None:
         check_range("--speed-rpm", args.speed_rpm, 0.0, 1e5, " rpm")
+    given = [o for o, v in (("--speed-rpm", args.speed_rpm),
+                            ("--fluid-temperature-C", args.fluid_temperature_C))
+             if v is not None]  # fmt: skip
+    if args.map is not None and given:
+        raise CLIError(f"--map: not with {given[0]} (give --map-speeds-rpm and "
+                       "--map-temperatures-C)")  # fmt: skip
     design = load_design_args(args)
     _operating_point(args, design)
     if args.for_torque is not None:
