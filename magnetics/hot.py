@@ -135,6 +135,48 @@ def march(
                  np.array(pw))  # fmt: skip
 
 
+def march_batch(
+    net: Network,
+    load: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
+    duration: float,
+    steps: int = 300,
+) -> March:
+    """``march`` of S designs at once (``net`` of S designs: capacities (S, 3), conductances
+    (S, 3, 3)): ``load`` maps the node temperatures (S, 3) to the currents (S,) [A] and
+    slip powers (S,) [W] of the step. The same steps as ``march``, each design's 3×3 solve
+    and eigendecomposition stacked; the March's temperatures are (N+1, S, 3)."""
+    check_positive("duration", duration, " s")
+    if not (isinstance(steps, int) and steps >= 1):
+        raise ParameterError(f"steps = {steps!r}: must be a whole number ≥ 1")
+    cap = np.asarray(net.capacity, dtype=float).reshape(-1, 3)
+    n = cap.shape[0]
+    g0 = np.asarray(net.conductance, dtype=float).reshape(n, 3, 3)
+    r20 = np.broadcast_to(np.asarray(net.r20, dtype=float).reshape(-1), (n,))
+    to_air = np.broadcast_to(np.asarray(net.to_air, dtype=float).reshape(-1), (n,))
+    a, c = r20 * ALPHA_CU, r20 * (1 - 20 * ALPHA_CU)  # R = a T + c (thermal.steady)
+    h = duration / steps
+    s = np.sqrt(cap)  # C^½, as in ``march``
+    s_inv = 1 / s
+    ss = s[:, :, None] * s[:, None, :]
+    t = np.full((n, 3), float(net.ambient))
+    temps, cur, pw = [t.copy()], [], []
+    g = g0.copy()
+    for _ in range(steps):
+        i, p = (np.broadcast_to(np.asarray(v, dtype=float), (n,)) for v in load(t))
+        x = i**2
+        g[:, 0, 0] = g0[:, 0, 0] - x * a  # the coil's R(T), as in ``march``
+        q = np.stack([x * c, p, to_air * net.ambient], axis=1)
+        t_star = np.linalg.solve(g, q[..., None])[..., 0]
+        lam, v = np.linalg.eigh(g / ss)
+        e = (v * np.exp(-lam * h)[:, None, :]) @ np.swapaxes(v, 1, 2)
+        t = t_star + s_inv * (e @ (s * (t - t_star))[..., None])[..., 0]
+        temps.append(t.copy())
+        cur.append(i.copy())
+        pw.append(p.copy())
+    return March(np.linspace(0.0, duration, steps + 1), np.array(temps), np.array(cur),
+                 np.array(pw))  # fmt: skip
+
+
 def _expm_sym(g: np.ndarray, s: np.ndarray, h: float) -> np.ndarray:
     """e^{−M h} of M = C^-½ G C^-½ (symmetric, ``s`` = C^½) by its eigenvectors, so that
     e^{−C⁻¹G h} = C^-½ e^{−M h} C^½."""

@@ -410,7 +410,9 @@ def hot_batch(fields: Mapping[str, Any], base: Any, r: Mapping[str, np.ndarray],
     its duty hold (NaN without one), as ``evaluation_duty`` gives them. ``r``:
     ``evaluate_batch``'s rows; ``mr``: the pair at the hand of its valid rows
     (``at_hand.mr_at_hand``). Design by design: the thermal march feeds each design's
-    temperatures back into its own load at every step (``magnetics.hot.march``)."""
+    temperatures back into its own load at every step (``magnetics.hot.march``). The
+    reference of ``mrclutch.hot_rows.hot_batch``, which the sweep runs (the same figures,
+    every design of a fluid marched at once)."""
     p, mats = batch_fields(fields, base)
     ok = np.nonzero(valid(p) & (np.asarray(r["valid"]) == 1))[0]
     out = {k: np.full(np.shape(r["valid"]), np.nan) for k in HOT_COLUMNS}

@@ -32,7 +32,7 @@ from mrclutch.at_hand import mr_at_hand
 from mrclutch.batch import batch_fields
 from mrclutch.clutch import dynamic_range_db, fluid_limit
 from mrclutch.design import ClutchDesign, current_limit
-from mrclutch.duty import DUTY_COLUMNS, HOT_COLUMNS, duty_batch, hot_batch
+from mrclutch.duty import DUTY_COLUMNS, HOT_COLUMNS, duty_batch
 from mrclutch.feel import FEEL_COLUMNS, feel_batch
 from mrclutch.haptics.hand import backdrive_force
 from mrclutch.haptics.model import (
@@ -40,6 +40,7 @@ from mrclutch.haptics.model import (
     metrics_batch,
 )
 from mrclutch.haptics.zwidth import zwidth as zwidth_of
+from mrclutch.hot_rows import hot_batch
 from mrclutch.outputs import SWEEP_COLUMNS, SWEEP_OPTIONAL
 from mrclutch.robust_search import stable_stiffness_batch
 from mrclutch.trust import material_set
@@ -105,7 +106,7 @@ class BatchEvaluator:
             out.update(feel_batch(fields, self.base, feel))
         if on & set(DUTY_COLUMNS):  # the fluid's volume and life (mrclutch.duty)
             out.update(duty_batch(fields, self.base, out))
-        if on & set(HOT_COLUMNS):  # the torque and b1 after the holds (mrclutch.duty)
+        if on & set(HOT_COLUMNS):  # the torque and b1 after the holds (mrclutch.hot_rows)
             ok = out["valid"] > 0
             inertia = out["rotor_inertia_kg_m2"][ok] + out["fluid_inertia_kg_m2"][ok]
             mr = mr_at_hand(self.base, inertia, out["drag_damping_N_m_s"][ok],

@@ -20,6 +20,7 @@ from mrclutch.batch import batch_fields
 from mrclutch.design import ClutchDesign
 from mrclutch.fast_batch import evaluate_batch
 from mrclutch.haptics.actuator import HapticParams
+from mrclutch.hot_rows import duty_hot_ends
 from mrclutch.uncertainty import Uncertainty, default_uncertainty
 
 # ---- from the uncertain inputs to a box of the haptic parameters -----------------------
@@ -66,17 +67,19 @@ def _hand_of(rows: Mapping[str, np.ndarray], base: Any) -> tuple[np.ndarray, ...
 
 
 def _temperature_factors(p: Mapping[str, np.ndarray], ok: np.ndarray, base: Any,
-                         temps: tuple[float, float],
+                         temps: tuple[Any, Any],
                          mats: MaterialChoice | np.ndarray | None = None,
                          ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """(low, high) of the drag damping over the fluid temperature range, relative to its
-    value at the operating temperature (η(T) monotone: the range's ends bound it);
-    ``mats``: the rows' materials (None: the base design's)."""
+    value at the operating temperature (η(T) monotone: the range's ends bound it; each end
+    a float, or S of them: one a row); ``mats``: the rows' materials (None: the base
+    design's)."""
     op = base.operating
 
     def fn(rg: Any, rows: np.ndarray) -> dict[str, Any]:
+        at = [t if np.ndim(t) == 0 else np.asarray(t)[rows] for t in temps]  # per row: "duty"
         d = [totals(drag_terms(rg, op.input_speed, t, base.support))[1]
-             for t in (op.fluid_temperature, *temps)]  # fmt: skip
+             for t in (op.fluid_temperature, *at)]  # fmt: skip
         return {"lo": d[1] / d[0], "hi": d[2] / d[0]}
 
     f = regions.per_topology(p, ok, fn, base.materials if mats is None else mats)
@@ -96,9 +99,10 @@ def hand_box_batch(
       × drum thickness ± tolerance besides the nominal; m1, b1, F_max and τ_eq take the
       hull of the five (interior points lie inside it: tested);
     * b1 × (1 ± viscosity spread) × the drag's range over the fluid temperatures
-      (``_temperature_factors``); its top × g/√(g² − e²) for a runout e (the mean of
-      1/(g − e cos θ) around the drum: (1/2π)∫dθ/(g − e cos θ) = 1/√(g² − e²), by residues),
-      then + bench damping;
+      (``_temperature_factors``; a ``"duty"`` range's hot end is each row's own, the end
+      of its duty hold: ``mrclutch.hot_rows.duty_hot_ends``); its top × g/√(g² − e²) for a
+      runout e (the mean of 1/(g − e cos θ) around the drum: (1/2π)∫dθ/(g − e cos θ) =
+      1/√(g² − e²), by residues), then + bench damping;
     * τ: the declared range, or the typed delay to the geometry's τ_eq (all corners);
     * K = F_max/d × the torque factor (yield stress and B–H lot spreads).
 
@@ -131,6 +135,8 @@ def hand_box_batch(
     op = base.operating
     t_lo, t_hi = unc.fluid_temperature if unc.fluid_temperature is not None else (
         op.fluid_temperature, op.fluid_temperature)  # fmt: skip
+    if unc.fluid_temperature_from == "duty":  # each row's own duty hold (mrclutch.hot_rows)
+        t_hi = duty_hot_ends({**p, **names}, base, ok)
     ft_lo, ft_hi = _temperature_factors(p, ok, base, (t_lo, t_hi), mats)
     g = p["gap"]
     runout = g / np.sqrt(np.maximum(g * g - unc.runout**2, 1e-30))  # e < g: the drums clear

@@ -16,8 +16,10 @@ what every design without ``"duty"`` uses); ``evaluate`` says which one it used
 
 What it assumes (docs/hot.md): the clutch starts the duty at ambient temperature and the
 hold's end is its hottest point (a repeated duty that never cools between holds is hotter:
-type the range then); a sweep or an optimiser run takes the base design's range for every
-candidate (one thermal march for the run, not one a row).
+type the range then). A sweep's or an optimiser's hand box (``mrclutch.hand_box``) takes
+each row's own hot end, the end of that design's duty hold (``mrclutch.hot_rows.
+duty_hot_ends``: every row marched at once, the same figure as ``duty_end_temperature`` of
+the row's design); the base design's resolved range is what ``design.ranges`` reports.
 """
 
 from __future__ import annotations

@@ -263,8 +263,8 @@ SWEEP_OPTIONAL: tuple[str, ...] = (
     # issue 41 (mrclutch.duty.duty_batch): the fluid's volume and life, no solve
     "fluid_volume_m3",
     "fluid_life_h",
-    # issue 41 item 3 (mrclutch.duty.hot_batch): the hot peak and duty holds, design by
-    # design (two thermal marches of 300 steps each)
+    # issue 41 item 3 (mrclutch.hot_rows.hot_batch): the hot peak and duty holds (two
+    # thermal marches of 300 steps, every design of a fluid at once)
     "hot_peak_torque_N_m",
     "hot_peak_b1_N_s_per_m",
     "duty_end_torque_N_m",

@@ -251,3 +251,79 @@ def test_sweep_hot_columns_are_evaluate_json_of_the_same_design() -> None:
     none = BatchEvaluator(PAPER, optional=D.HOT_COLUMNS)({"gap": np.array([gap])})
     assert np.isnan(none["duty_end_torque_N_m"][0]) and np.isnan(none["duty_end_b1_N_s_per_m"][0])
     assert none["hot_peak_torque_N_m"][0] == pytest.approx(rows["hot_peak_torque_N_m"][0])
+
+
+def test_batched_hot_columns_are_the_per_design_figures() -> None:
+    """``mrclutch.hot_rows.hot_batch`` (what the sweep runs: every design of a fluid marched
+    at once) gives ``duty.hot_batch``'s figures (design by design) to 1e-9 on varied rows:
+    1, 2 and 5 drums, two gaps, two fluids (two marches), an invalid row (NaN in both), a
+    1-drum row whose duty current is capped (min(limit, V/R(T)): the 0.2 N·m not held) and a
+    0.25 mm wire row whose peak current is capped by the supply, V/R(T) of the hot coil,
+    below its current limit at the hold's end (both checked on the per-design hold)."""
+    from mrclutch import hot_rows
+    from mrclutch.at_hand import mr_at_hand
+    from mrclutch.fast_batch import evaluate_batch
+
+    base = replace(PAPER, duty=D.Duty(torque=0.2, time=60.0))
+    fields = {"n_drums": np.array([2, 1, 5, 2, 2, 2, 3]),
+              "gap": np.array([0.7, 0.7, 0.5, 0.4, 0.7, 0.7, 0.001]) * 1e-3,
+              "wire_diameter": np.array([0.321, 0.321, 0.321, 0.321, 0.25, 0.321, 0.321]) * 1e-3,
+              "fluid": np.array(["mrf_132dg"] * 5 + ["mrf_140cg", "mrf_132dg"])}  # fmt: skip
+    r = evaluate_batch(fields, base)
+    assert list(r["valid"] > 0) == [True] * 6 + [False]
+    ok = r["valid"] > 0
+    mr = mr_at_hand(base, r["rotor_inertia_kg_m2"][ok] + r["fluid_inertia_kg_m2"][ok],
+                    r["drag_damping_N_m_s"][ok], r["max_torque_N_m"][ok],
+                    r["clutch_mass_kg"][ok], r["torque_delay_s"][ok])  # fmt: skip
+    ref = D.hot_batch(fields, base, r, mr)
+    got = hot_rows.hot_batch(fields, base, r, mr)
+    for key in D.HOT_COLUMNS:
+        assert np.isnan(got[key][6]) and np.isnan(ref[key][6]), key
+        np.testing.assert_allclose(got[key][:6], ref[key][:6], rtol=1e-9, err_msg=key)
+    # the caps bind where the docstring says (the per-design holds of those rows)
+    one = replace(base, clutch=replace(base.clutch, n_drums=1))
+    c1 = D.design_context(one, one.current_limit)
+    end = D.hold(c1, D.duty_load(c1, 0.2), 60.0, mr.item(1), 1.0, 1e3)
+    cap = min(one.current_limit, D.supply_at(c1, end["coil_temperature_C"]))
+    assert end["current_A"] == pytest.approx(cap) and end["torque_N_m"] < 0.2
+    many = replace(base, clutch=replace(base.clutch, wire_diameter=0.25e-3))
+    c4 = D.design_context(many, many.current_limit)
+    peak = D.hold(c4, D.peak_load(c4), 30.0, mr.item(4), 1.0, 1e3)
+    assert peak["current_A"] < many.current_limit * 0.99
+    assert peak["current_A"] == pytest.approx(D.supply_at(c4, peak["coil_temperature_C"]))
+
+
+def test_interp_rows_is_np_interp_per_row() -> None:
+    """Row by row np.interp, ends and a flat run (repeated knots) included."""
+    from mrclutch.hot_rows import interp_rows
+
+    xp = np.array([[0.0, 1.0, 2.0, 3.0], [0.0, 0.5, 0.5, 2.0], [1.0, 2.0, 4.0, 8.0]])
+    fp = np.array([[0.0, 2.0, 3.0, 7.0], [1.0, 2.0, 5.0, 6.0], [0.0, 1.0, 2.0, 3.0]])
+    for x in (-1.0, 0.0, 0.25, 0.5, 1.5, 2.0, 3.0, 5.0, 9.0):
+        got = interp_rows(np.full(3, x), xp, fp)
+        want = [np.interp(x, xp[k], fp[k]) for k in range(3)]
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-15, err_msg=str(x))
+
+
+def test_march_batch_is_march_of_each_design() -> None:
+    """Two networks stacked, each with its own load law: march_batch's temperatures are
+    march's of each one (1e-12)."""
+    from magnetics.hot import Load, march, march_batch
+    from magnetics.thermal import Network, network
+
+    rg = build_section(PAPER.clutch, PAPER.materials).table
+    one = network(rg, 25.0, 130.0)
+    two = replace(one, capacity=np.asarray(one.capacity) * 1.7, r20=float(one.r20) * 0.8)
+    nets = (one, two)
+    stack = Network(np.stack([np.asarray(n.capacity).reshape(3) for n in nets]),
+                    np.stack([np.asarray(n.conductance).reshape(3, 3) for n in nets]),
+                    np.array([float(n.to_air) for n in nets]),
+                    np.array([float(n.r20) for n in nets]), 25.0,
+                    np.stack([np.asarray(n.inverse).reshape(3, 3) for n in nets]))  # fmt: skip
+    laws = [lambda t: (7.0 - 0.01 * t[0], 0.5 + 0.01 * t[1]), lambda t: (3.0, 2.0 - 0.005 * t[2])]
+    m = march_batch(stack, lambda t: tuple(np.array([laws[k](t[k])[j] for k in range(2)])
+                                            for j in range(2)), 40.0, 50)  # fmt: skip
+    for k, net in enumerate((one, two)):
+        ref = march(net, lambda t, k=k: Load(*laws[k](t)), 40.0, 50)
+        np.testing.assert_allclose(m.temperatures[:, k], ref.temperatures, rtol=1e-12)
+        np.testing.assert_allclose(m.currents[:, k], ref.currents, rtol=1e-12)

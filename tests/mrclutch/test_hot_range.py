@@ -91,7 +91,8 @@ def test_the_verdicts_box_takes_the_derived_range(hot) -> None:
     alike): the derived range reaches the verdicts."""
     fields = {f: np.array([v]) for f, v in vars(hot.clutch).items()}
     derived = hand_box_batch(fields, hot, hot.ranges)
-    default = hand_box_batch(fields, hot, replace(hot.ranges, fluid_temperature=(20.0, 40.0)))
+    typed = replace(hot.ranges, fluid_temperature=(20.0, 40.0), fluid_temperature_from="range")
+    default = hand_box_batch(fields, hot, typed)
     assert derived.b1[1][0] < default.b1[1][0]  # (nominal, low, high)
     assert derived.b1[2][0] == pytest.approx(default.b1[2][0], rel=1e-12)  # the top: 20 °C
 
@@ -99,9 +100,51 @@ def test_the_verdicts_box_takes_the_derived_range(hot) -> None:
 def test_the_optimiser_and_the_sweep_take_the_derived_range(hot) -> None:
     """The optimiser's worst case and the sweep's robust columns take the base design's
     ranges: with "duty", the derived one (never the unresolved None, which would judge
-    every candidate at the operating temperature alone)."""
+    every candidate at the operating temperature alone), its hot end then each row's own
+    (``test_each_row_takes_its_own_duty_range``)."""
     assert process_uncertainty(hot).fluid_temperature == hot.ranges.fluid_temperature
+    assert process_uncertainty(hot).fluid_temperature_from == "duty"
     assert hot.ranges.fluid_temperature[1] > 40.0
+
+
+def _row(design, n_drums: int, gap: float, fluid: str = "mrf_132dg"):  # type: ignore[no-untyped-def]
+    clutch = replace(design.clutch, n_drums=n_drums, gap=gap)
+    return replace(design, clutch=clutch, materials=replace(design.materials, fluid=fluid))
+
+
+def test_each_row_takes_its_own_duty_range(hot) -> None:
+    """A sweep or optimiser batch around a "duty" design: each row's hot end is the end of
+    its own duty hold (``hot_rows.duty_hot_ends``, all rows marched at once), the same as
+    the design-by-design ``resolved_ranges`` of that row's design to 1e-9 — 1, 2 and 4
+    drums, two gaps, a second fluid (its own march), an invalid row (NaN); the 1- and 4-drum
+    rows' ends differ from the base's by more than 5 K, so the base's range misjudged them. The
+    hand box's b1 floor of each row is the one over that row's own typed range; without a
+    duty torque the hold is the current limit's (the peak)."""
+    from mrclutch.hot_rows import duty_hot_ends
+
+    rows = [(2, 0.7e-3, "mrf_132dg"), (1, 0.7e-3, "mrf_132dg"), (4, 0.5e-3, "mrf_132dg"),
+            (2, 1.0e-3, "mrf_132dg"), (2, 0.7e-3, "mrf_140cg"), (2, 1e-6, "mrf_132dg")]  # fmt: skip
+    fields = {"n_drums": np.array([r[0] for r in rows]), "gap": np.array([r[1] for r in rows]),
+              "fluid": np.array([r[2] for r in rows])}  # fmt: skip
+    ends = duty_hot_ends(fields, hot)
+    assert np.isnan(ends[5])
+    want = np.array([resolved_ranges(_row(hot, *r)).fluid_temperature[1] for r in rows[:5]])
+    np.testing.assert_allclose(ends[:5], want, rtol=1e-9)
+    assert ends[0] == pytest.approx(hot.ranges.fluid_temperature[1], rel=1e-9)
+    assert np.all(np.abs(ends[1:3] - ends[0]) > 5.0)  # 1 drum: capped at 130 °C; 4 drums
+    box = hand_box_batch(fields, hot, hot.ranges)
+    for i in range(5):
+        one = {k: v[i : i + 1] for k, v in fields.items()}
+        typed = replace(hot.ranges, fluid_temperature=(20.0, float(want[i])),
+                        fluid_temperature_from="range")  # fmt: skip
+        assert box.b1[1][i] == pytest.approx(hand_box_batch(one, hot, typed).b1[1][0], rel=1e-9)
+    peak = replace(hot, duty=D.Duty())
+    two = {k: v[:2] for k, v in fields.items()}
+    np.testing.assert_allclose(
+        duty_hot_ends(two, peak),
+        [resolved_ranges(_row(peak, *r)).fluid_temperature[1] for r in rows[:2]],
+        rtol=1e-9,
+    )
 
 
 def test_round_trip_and_bad_values(hot) -> None:
