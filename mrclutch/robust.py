@@ -250,13 +250,17 @@ def robust_verdicts(ev: Any, uncertainty: Uncertainty | None = None,
     return out
 
 
+def _inside(t: dict[str, Any]) -> bool:
+    """Whether a threshold lies inside its input's range: only then does that input alone
+    decide the verdict (mrclutch.verdict names no other, issue 39)."""
+    return bool(t["range"][0] <= t["value"] <= t["range"][1])
+
+
 def _fmt_threshold(field: str, t: dict[str, Any]) -> str:
     label, unit, scale = next((lb, u, s) for f, lb, u, s in THRESHOLD_INPUTS if f == field)
     lo, hi = (x * scale for x in t["range"])
-    inside = t["range"][0] <= t["value"] <= t["range"][1]
-    where = "range" if inside else "outside its range"
     value = f"{t['value'] * scale:.3g} {unit}"
-    return f"{label} {t['sense']} {value} ({where} {lo:.3g}–{hi:.3g} {unit})"
+    return f"{label} {t['sense']} {value} (its range {lo:.3g}–{hi:.3g} {unit})"
 
 
 def headline(r: dict[str, Any]) -> str:
@@ -275,8 +279,10 @@ def headline(r: dict[str, Any]) -> str:
     for n in ("stable", "passive"):
         if v[n]["holds"] != "depends":
             continue
-        th = v[n]["thresholds"]
-        cond = " or ".join(_fmt_threshold(f, t) for f, t in th.items()) or "jointly decided"
+        th = {f: t for f, t in v[n]["thresholds"].items() if _inside(t)}
+        cond = (" or ".join(_fmt_threshold(f, t) for f, t in th.items())
+                or "m1, b1, the delay and K_max jointly decide it (no one input's threshold "
+                "lies inside its range)")  # fmt: skip
         nominal = words[n][0] if v[n]["nominal"] else words[n][1]
         parts.append(f"{nominal} at nominal values, {words[n][0]} only if {cond}")
     return (f"Robust verdict at K = {K:.4g} N/m: " + "; ".join(parts)

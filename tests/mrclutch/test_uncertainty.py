@@ -95,10 +95,15 @@ def paper_robust():
 def test_paper_verdict_names_b1_and_the_delay_with_thresholds(paper_robust):
     _, r = paper_robust
     head = r["headline"]
-    assert "b1 ≥" in head and "the delay ≤" in head
     for v in ("stable", "passive"):
         assert r["verdicts"][v]["holds"] == "depends"
         assert set(r["verdicts"][v]["thresholds"]) == {"b1", "delay"}
+        b1, delay = (r["verdicts"][v]["thresholds"][f] for f in ("b1", "delay"))
+        # b1's threshold lies inside its range, the delay's (≈ 0.67 ms) below the typed 1 ms
+        assert b1["range"][0] < b1["value"] < b1["range"][1]
+        assert delay["value"] < delay["range"][0]
+    # the sentence names only a threshold inside its range (issue 39), as the verdict line
+    assert head.count("b1 ≥") == 2 and "the delay ≤" not in head and "outside" not in head
     # worst ≤ nominal ≤ best
     for key in ("max_stable_K_N_per_m", "max_passive_K_N_per_m", "bandwidth_hz"):
         assert r[key]["worst"] <= r[key]["nominal"] <= r[key]["best"]
