@@ -311,6 +311,19 @@ CLI_WORDS = {"mrclutch/cli/formatting.py": ("evaluate", "report"),
              "mrclutch/cli/plots/magnetics.py": ("torque",)}  # fmt: skip
 #: How many test files a mutant runs (the best ranked; ``--files``).
 _K = [4]
+#: round2: each test's seconds (setup + call, summed over its parameters) as the runs met
+#: it, kept beside --out (``.durations.json``); a test cut by the budget is put at the
+#: budget. A test not yet met counts 10 s.
+_COSTS: dict[str, float] = {}
+_COST_FILE: list[Path] = []
+_PLUGIN = """import os
+
+
+def pytest_runtest_logreport(report):
+    if report.when in ("setup", "call"):
+        with open(os.environ["MUTATION_DURATIONS"], "a") as f:
+            f.write(f"{report.nodeid}\\t{report.duration}\\n")
+"""
 
 
 def _names(src: str) -> set[str]:
@@ -375,7 +388,21 @@ def ranked_tests(tree: Path, module: str, k: int | None = None) -> list[str]:
     module's top-level names, 3 per quoted CLI word of it (``CLI_WORDS``), 0.3 per mention
     of a name of a module of the package that imports it (the split modules are reached
     through pipeline, robust …) and 2 if its file imports the module; tests scoring 0 are
-    not run."""
+    not run. The rank is the score per cost: divided by 1 + (the test's seconds, as the
+    run has met them, ``_COSTS``) / 10 s, so a cheap test that names the module comes
+    before a slow one that names it as often."""
+    if module not in _SCORES:
+        _SCORES[module] = _scores(tree, module)
+    ranked = [(-score / (1.0 + _COSTS.get(node, 10.0) / 10.0), fname, node)
+              for score, fname, node in _SCORES[module]]  # fmt: skip
+    return [node for *_, node in sorted(ranked)[: k or _K[0]]]
+
+
+_SCORES: dict[str, list[tuple[float, str, str]]] = {}  # module → its tests' relevance
+
+
+def _scores(tree: Path, module: str) -> list[tuple[float, str, str]]:
+    """(relevance, file name, node id) of the tests of the run that name ``module``."""
     src = (tree / module).read_text()
     own, words = _names(src), set(CLI_WORDS.get(module, ()))
     up: set[str] = set()
@@ -401,8 +428,8 @@ def ranked_tests(tree: Path, module: str, k: int | None = None) -> list[str]:
                 + 0.3 * _mentions(text, up)
             )
             if score > bonus:
-                scored.append((-score, f.name, name, f"{f.relative_to(tree)}::{name}"))
-    return [node for *_, node in sorted(scored)[: k or _K[0]]]
+                scored.append((score, f.name, f"{f.relative_to(tree)}::{name}"))
+    return scored
 
 
 _FAILING: list[str] = []  # tests that fail on the unmutated tree (build_coverage)
@@ -412,17 +439,45 @@ _FAILING: list[str] = []  # tests that fail on the unmutated tree (build_coverag
 _FEW = 2
 
 
+def _learn_costs(durations: Path, targets: list[str], cut: float | None) -> None:
+    """Add the seconds each test took (``_PLUGIN``'s lines) to ``_COSTS``; with ``cut``
+    (the run hit its budget) the tests that did not report put at the budget."""
+    if not plugin_costs_on():
+        return
+    took: dict[str, float] = {}
+    for ln in durations.read_text().splitlines():
+        node, _, sec = ln.partition("\t")
+        base = node.split("[", 1)[0]
+        took[base] = took.get(base, 0.0) + float(sec)
+    for t in targets:
+        if t in took:
+            _COSTS[t] = took[t]
+        elif cut is not None:
+            _COSTS[t] = max(_COSTS.get(t, 0.0), cut)
+    _COST_FILE[0].write_text(json.dumps(_COSTS, indent=0, sort_keys=True))
+
+
+def plugin_costs_on() -> bool:
+    return bool(_COST_FILE)
+
+
 def _pytest(tree: Path, targets: list[str], timeout: float, module: str = "") -> tuple[str, str]:
     env = dict(os.environ, PYTHONPATH=str(tree), PYTHONDONTWRITEBYTECODE="1",
                NUMBA_CACHE_DIR=str(tree / ".numba"), OPENBLAS_NUM_THREADS="1")  # fmt: skip
-    cmd = [sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider",
+    durations = tree.parent / "durations.txt"
+    durations.write_text("")
+    env["MUTATION_DURATIONS"] = str(durations)
+    plugin = ["-p", "_mutation_durations"] if (tree / "_mutation_durations.py").exists() else []
+    cmd = [sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", *plugin,
            "--no-header", "-o", "addopts=--benchmark-disable", *targets,
            *(f"--ignore={t}" for t in IGNORED), *(f"--deselect={t}" for t in _FAILING)]  # fmt: skip
     try:
         r = subprocess.run(cmd, cwd=tree, env=env, capture_output=True, text=True,
                            timeout=timeout)  # fmt: skip
     except subprocess.TimeoutExpired:
+        _learn_costs(durations, targets, timeout)
         return "killed", "timeout"
+    _learn_costs(durations, targets, None)
     if r.returncode == 0:
         return "survived", ""
     failed = [ln.split(" ")[1] for ln in r.stdout.splitlines() if ln.startswith("FAILED ")]
@@ -452,6 +507,8 @@ def _worker_tree() -> Path:
         tar = subprocess.run(["git", "archive", _SOURCE["commit"]], cwd=ROOT, check=True,
                              capture_output=True).stdout  # fmt: skip
         subprocess.run(["tar", "-x", "-C", str(tree)], input=tar, check=True)
+        if _RUN.get("select") == "static":
+            (tree / "_mutation_durations.py").write_text(_PLUGIN)
         return tree
     shutil.copytree(ROOT, tree, ignore=shutil.ignore_patterns(".git", "__pycache__", "*.pyc"))
     return tree
@@ -479,7 +536,7 @@ def run_one(m: Mutant, timeout: float, tests: list[str], failing: list[str]) -> 
             files = ranked_tests(_TREE, m.module)
             status, by = _pytest(_TREE, files, timeout, m.module) if files else ("survived", "")
             if by == "timeout":
-                status, by = "survived", f"budget: {timeout:.0f} s cut {len(files)} files"
+                status, by = "survived", f"budget: {timeout:.0f} s cut {len(files)} tests"
         else:
             status, by = _pytest(_TREE, tests, timeout, m.module) if tests else ("survived", "")
             if status == "survived" and len(tests) <= _FEW:
@@ -623,6 +680,10 @@ def main(argv: list[str] | None = None) -> int:
     if args.tree == "work":
         commit += " + working tree"
     _K[0] = args.files
+    if _RUN.get("select") == "static":
+        _COST_FILE[:] = [args.out.with_suffix(".durations.json")]
+        if _COST_FILE[0].exists():
+            _COSTS.update(json.loads(_COST_FILE[0].read_text()))
     if _RUN.get("select") == "static":  # no map: each mutant ranks its own test files
         args.coverage = Path(os.devnull)
     elif not args.coverage.exists():  # the unmutated suite once: the baseline and the map
