@@ -238,6 +238,19 @@ def test_objective_out_file_gets_the_optimisers_verdict(tmp_path, capsys, monkey
         assert _triple(_json(capsys, [cmd, str(out), "--fidelity", "reference"])) == want
 
 
+def test_optimize_help_states_the_rule_its_files_carry(capsys):
+    """Issue 39: "two optimiser modes, two rules": the optimiser's own help said every design
+    is held stable and passive "at K = K_max" while both modes render (and write into
+    [render]) the worst case over the ranges; --nominal is the K_max mode."""
+    with pytest.raises(SystemExit):
+        main(["optimize", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "K = K_max (Eq. 4). Each" not in text and "at K_max (required" not in text
+    assert "at the K each design renders: by default the largest K that stays so over the " \
+           "uncertainty ranges" in text  # fmt: skip
+    assert "bandwidth (rendering bandwidth at the K the design renders, Hz)" in text
+
+
 # ---- torque: the current limit and --for -------------------------------------------------
 
 

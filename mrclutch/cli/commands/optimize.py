@@ -63,7 +63,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         "best design (differential evolution) instead. Every limit is enforced: torque, "
         "mass, envelope, continuous torque, coil power, time at peak, an optional duty "
         "cycle, the process's smallest gap and wall ([process] in the design file), and a "
-        "closed loop stable and passive at the design's own K = K_max (Eq. 4). Each design "
+        "closed loop stable and passive at the K each design renders: by default the largest "
+        "K that stays so over the uncertainty ranges (at most K_max = F_max/d, Eq. 4), with "
+        "--nominal K_max itself at nominal values. Each design "
         "is then re-evaluated at reference fidelity (exact B-rep inertia, FEM torque); "
         "those failing a limit there are dropped (Pareto) or the next candidate is tried.",
         epilog="exit status: 0 the reported design(s) meet every requirement (at reference "
@@ -76,8 +78,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--objective",
         default=None,
         help="one objective instead of the Pareto set: bandwidth (rendering bandwidth at "
-        "K_max, Hz), area (rendering area, dB·decade), zwidth (Z-width area, N²·s/m²; about "
-        "×7 slower) or transparency (least backdrive force in free motion, 10 mm at 2 Hz)",
+        "the K the design renders, Hz), area (rendering area, dB·decade), zwidth (Z-width "
+        "area, N²·s/m²; about ×7 slower) or transparency (least backdrive force in free "
+        "motion, 10 mm at 2 Hz)",
     )
     p.add_argument(
         "--rendering",
@@ -141,12 +144,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--allow-active",
         action="store_true",
-        help="do not require a passive closed loop at K_max (required by default)",
+        help="do not require a passive closed loop at the K each design renders (required "
+        "by default)",
     )
     p.add_argument(
         "--allow-unstable",
         action="store_true",
-        help="do not require a stable closed loop at K_max (required by default)",
+        help="do not require a stable closed loop at the K each design renders (required "
+        "by default)",
     )
     p.add_argument("--drums", default="1,2,3,4", help="drum counts to try (default 1,2,3,4)")
     p.add_argument(
