@@ -104,14 +104,17 @@ def judge_evaluation(ev: Evaluation, robust: bool | None = None) -> dict[str, An
 AT_RESONANCE = 0.05
 
 
-def resonance_notes(data: dict[str, Any]) -> list[str]:
+def resonance_notes(data: dict[str, Any], sides: tuple[str, ...] = ("haptic", "motor")
+                    ) -> list[str]:  # fmt: skip
     """Why a full-response bandwidth equal to a resonance is no error: where a side's first
     k_eff crossing (the bandwidth, mrclutch.haptics.model.bandwidth) lies within
     ``AT_RESONANCE`` of the free lever's resonance (Eq. 2), the crossing is that mode's
     (its reflected mass is too large for √(K/(m1+m2)) to come first), and a gain on the
-    full response compares a spring's bandwidth with a mode."""
+    full response compares a spring's bandwidth with a mode. ``sides``: the JSON's
+    ``haptic`` (the MR pair) and/or ``motor`` (the equal-force Maxon)."""
     out = []
-    for side, label in (("haptic", "MR pair"), ("motor", "Maxon 136206")):
+    labels = {"haptic": "MR pair", "motor": "Maxon 136206"}
+    for side, label in ((s, labels[s]) for s in sides):
         h = data.get(side) or {}
         bw, res, lumped = h.get("bandwidth_hz"), h.get("resonance_hz"), h.get("bandwidth_lumped_hz")
         if bw is None or res is None or not (math.isfinite(bw) and math.isfinite(res)):

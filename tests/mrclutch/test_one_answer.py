@@ -251,6 +251,63 @@ def test_optimize_help_states_the_rule_its_files_carry(capsys):
     assert "bandwidth (rendering bandwidth at the K the design renders, Hz)" in text
 
 
+# ---- numbers that look odd say why --------------------------------------------------------
+
+#: Four drums on a Ø32.7 mm envelope with 0.2 mm gaps (issue 39's "Ø40 mm, 4-drum" case):
+#: slipping unenergised at 530 rpm its films alone heat the fluid past 130 °C (zero
+#: continuous rating), and the Maxon geared ×7.2 to its force has a bandwidth equal to its
+#: transmission resonance (103.8 Hz against 104.8 Hz, lumped 6.9 Hz).
+FOUR_DRUMS = """name = "four-drums"
+[clutch]
+base = "paper"
+n_drums = 4
+drum_inner_diameter_mm = 18
+gap_mm = 0.2
+drum_thickness_mm = 0.25
+"""
+
+
+def test_a_zero_continuous_rating_and_a_bandwidth_at_a_resonance_say_why(tmp_path, capsys):
+    f = tmp_path / "four.toml"
+    f.write_text(FOUR_DRUMS)
+    data = _json(capsys, ["evaluate", str(f), "--no-uncertainty"])
+    c, m = data["clutch"], data["motor"]
+    assert c["continuous_current_A"] == 0.0 and c["continuous_torque_N_m"] == 0.0
+    (zero,) = [n for n in c["notes"] if n.startswith("continuous rating 0")]
+    assert c["idle_fluid_temperature_C"] > 130.0  # the limit the note names, exceeded
+    assert (
+        f"the fluid would settle at {c['idle_fluid_temperature_C']:.4g} °C, above its 130" in zero
+    )
+    assert abs(m["bandwidth_hz"] / m["resonance_hz"] - 1) <= 0.05
+    assert m["bandwidth_hz"] > 10 * m["bandwidth_lumped_hz"]
+    (res,) = [n for n in c["notes"] if "transmission resonance" in n]
+    assert res.startswith("the Maxon 136206's full-response bandwidth 103.8 Hz")
+    # compare prints it beside the gain it explains; the text of evaluate says both
+    code, cap = _run(capsys, ["compare", str(f)])
+    assert code == 0 and f"note: {res}" in cap.out.splitlines()
+    assert _json(capsys, ["compare", str(f)])["notes"] == [res]
+    code, cap = _run(capsys, ["evaluate", str(f), "--no-uncertainty"])
+    assert f"note: {zero}" in cap.out.splitlines() and f"note: {res}" in cap.out.splitlines()
+    # the paper preset has neither, and says neither
+    paper = _json(capsys, ["evaluate", "--preset", "paper", "--no-uncertainty"])
+    assert paper["clutch"]["continuous_current_A"] > 0
+    assert not [n for n in paper["clutch"]["notes"] if "rating 0" in n or "resonance (" in n]
+    assert _json(capsys, ["compare", "--preset", "paper"])["notes"] == []
+
+
+def test_a_motor_that_cannot_be_geared_says_why_in_every_command(tmp_path, capsys):
+    """A 250 mm drum needs the Maxon geared ×230 (its range: 0.01–100): evaluate and compare
+    say which gearing it would need, and the MR pair is still judged."""
+    f = tmp_path / "big.toml"
+    f.write_text('name = "big"\n[clutch]\nbase = "paper"\ndrum_inner_diameter_mm = 250\n')
+    code, cap = _run(capsys, ["evaluate", str(f), "--no-uncertainty"])
+    assert code == 0 and "would need gearing = 230" in cap.out and "[0.01, 100]" in cap.out
+    code, cap = _run(capsys, ["compare", str(f)])
+    assert code == 0 and cap.out.startswith("VERDICT:")
+    assert "Maxon 136206: unavailable: the equal-force maxon-136206 is left out" in cap.out
+    assert "would need gearing = 230" in cap.out
+
+
 # ---- torque: the current limit and --for -------------------------------------------------
 
 

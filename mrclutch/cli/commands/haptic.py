@@ -30,7 +30,7 @@ from mrclutch.haptic_run import (
 )
 from mrclutch.outputs import format_kmax
 from mrclutch.pipeline import evaluate, null_notes
-from mrclutch.verdict import judge_evaluation, verdict_lines
+from mrclutch.verdict import judge_evaluation, resonance_notes, verdict_lines
 
 
 def register(sub: Any) -> None:
@@ -127,14 +127,17 @@ def run_haptic(args: argparse.Namespace) -> int:
     if judged is not None:
         _, data = judged
         h = data["haptic"]
+        notes = resonance_notes(data, ("haptic",))  # a bandwidth that is a resonance
         if args.json:
             out = {**h, "source": data["source"], "verdict": data["verdict"],
-                   "render": data["render"]}  # fmt: skip
+                   "render": data["render"], "notes": notes}  # fmt: skip
             print_json({**out, "nulls": null_notes(out)})  # every null with its reason
             return 0
         print("\n".join(verdict_lines(data)))
         print(f"MR pair of design {data['design']} ({data['source']})")
         _print_metrics(h, f"MR pair, {data['source']}", rule=data["render"]["describe"])
+        for note in notes:
+            print(f"note: {note}")
         return 0
     lo, hi = LEVER_RANGE  # Transmission's own rule, stated in the option's unit
     lever = check_range("--lever-mm", args.lever_mm, lo * 1e3, hi * 1e3, " mm") * 1e-3
@@ -205,6 +208,7 @@ def _compare_design(args: argparse.Namespace, ev: Any, data: dict[str, Any]) -> 
         "bandwidth_gain": data["bandwidth_gain"],
         "bandwidth_gain_lumped": data["bandwidth_gain_lumped"],
         "sources": {"mr": src, "em": f"Maxon 136206 geared to the pair's force ({src})"},
+        "notes": resonance_notes(data),  # a bandwidth that is a resonance says so
     }
     res["nulls"] = null_notes(res)  # every null with its reason (evaluate's table)
     if args.plot:
@@ -226,6 +230,8 @@ def _compare_design(args: argparse.Namespace, ev: Any, data: dict[str, Any]) -> 
         full = "none" if g is None else f"{100 * g:.1f} %"
         print(f"At K = {K:.4g} N/m the MR lever renders {100 * gl:.1f} % more lumped bandwidth, "
               f"{full} on the full response.")  # fmt: skip
+    for note in res["notes"]:
+        print(f"note: {note}")
     if args.plot:
         print(f"figure: {args.plot}")
     return 0
