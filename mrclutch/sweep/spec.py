@@ -26,6 +26,7 @@ from geometry.params import INT_RANGES, INTEGER_FIELDS, LENGTH_FIELDS, DrumClutc
 from geometry.validation import ParameterError, check_int
 from magnetics.materials import load_fluid
 from mrclutch.inputs import read_toml
+from mrclutch.render import render_from_mapping
 
 DEFAULT_CHUNK = 20_000
 #: Most designs one spec may ask for: 10⁸ rows are ~20 GB of CSV and hours of the fast
@@ -297,6 +298,30 @@ UNUSED_SECTIONS = {
 }
 
 
+#: Why a sweep takes ``[render]`` only as what its rows are: each design at its own K_max.
+RENDER_WHY = (
+    "a sweep's rows render each design at its own K_max = F_max/d (its K_N_per_m column) "
+    "and give no verdict; the worst case's K is --with max_stable_K_worst_N_per_m and "
+    "max_passive_K_worst_N_per_m, a typed K and the verdict are evaluate's"
+)
+
+
+def _check_render(table: Any, p: Path) -> None:
+    """``[render]`` applied or refused, never ignored: the rule the rows follow (K_max) is
+    accepted, another rule or a verdict (which no row holds) refused, naming the key."""
+    if table is None:
+        return
+    if not isinstance(table, dict):
+        raise ParameterError(f"{p}: render = {table!r}: must be a table ([render])")
+    render = render_from_mapping(table, f"{p}: render")
+    if render.rule != "K_max":
+        raise ParameterError(f"{p}: render.rule = {render.rule!r}: not used by a sweep "
+                             f"({RENDER_WHY}); remove [render] or give rule = 'K_max'")  # fmt: skip
+    if "verdict" in table:
+        raise ParameterError(f"{p}: render.verdict = {render.verdict!r}: not used by a sweep "
+                             f"({RENDER_WHY}); remove it")  # fmt: skip
+
+
 def _digest_of(value: Any) -> str:
     """SHA-256 of a parsed TOML value (its canonical JSON: keys sorted; dates as text)."""
     text = json.dumps(value, sort_keys=True, default=str)
@@ -347,7 +372,8 @@ def load_spec(path: str | Path) -> tuple[SweepSpec, dict[str, Any]]:
     tables (``[operating]``, ``[transmission]``, ``[materials]`` …) are returned for the
     design layer to read. Every section enters the spec's fingerprint (``inputs``), with
     the contents of the material files it names; a section the sweep cannot use
-    (``UNUSED_SECTIONS``) is refused."""
+    (``UNUSED_SECTIONS``) is refused, and ``[render]`` unless it is the rule the rows
+    follow (``_check_render``)."""
     p = Path(path)
     data = read_toml(p, "sweep spec")
     for table in ("sweep", "parameters"):
@@ -356,6 +382,7 @@ def load_spec(path: str | Path) -> tuple[SweepSpec, dict[str, Any]]:
     for table, why in UNUSED_SECTIONS.items():
         if table in data:
             raise ParameterError(f"{p}: [{table}]: not used by a sweep ({why}); remove it")
+    _check_render(data.get("render"), p)
     inputs = {f"[{k}]": _digest_of(v) for k, v in data.items() if isinstance(v, dict)}
     top = {k: v for k, v in data.items() if not isinstance(v, dict)}
     if top:

@@ -30,6 +30,8 @@ SECTIONS = {
     "laminations": "core_mm = 0.5",
     "uncertainty": "viscosity_spread_pct = 10",
     "materials": 'fluid_file = "fluid.toml"',
+    "duty": "torque_N_m = 0.2\ntime_s = 60",
+    "render": 'rule = "K_max"',
 }
 
 #: A changed value in each section (the rows it writes change with it).
@@ -44,6 +46,8 @@ CHANGED = {
     "laminations": "core_mm = 0.3",
     "uncertainty": "viscosity_spread_pct = 20",
     "materials": 'fluid_file = "other.toml"',
+    "duty": "torque_N_m = 0.2\ntime_s = 90",
+    "render": "",  # the one other [render] a sweep takes: the same rule, implied
 }
 
 FLUID = """name = "{name}"
@@ -140,6 +144,22 @@ def test_a_resume_after_any_section_changed_is_refused_naming_it(tmp_path, secti
     assert again.complete and again.resumed_from == 4 and again.rows == 8
 
 
+@pytest.mark.parametrize(("was", "now"), [("MRF-132DG", "MRF-140CG"), ("MRF-140CG", None)])
+def test_a_resume_after_the_library_fluid_changed_is_refused(tmp_path, was, now):
+    """The issue's case: ``[materials] fluid`` changed (or removed: the base preset's fluid)
+    between a cut sweep and its resume would give rows of two fluids in one file."""
+    sections = {k: SECTIONS[k] for k in ("sweep", "parameters")}
+    interrupted(tmp_path, {**sections, "materials": f'fluid = "{was}"'})
+    before = (tmp_path / "r.csv").read_bytes()
+    changed = {**sections, "materials": f'fluid = "{now}"'} if now else sections
+    spec, _ = load_spec(write_spec(tmp_path, changed))
+    what = "changed" if now else "removed"
+    with pytest.raises(ParameterError, match=rf"model \(\[materials\] {what}\); cannot resume"):
+        run_sweep(spec, tmp_path / "r.csv", geometric_outputs, OUTPUTS, resume=True,
+                  progress=False)  # fmt: skip
+    assert (tmp_path / "r.csv").read_bytes() == before
+
+
 def test_a_material_files_contents_are_in_the_record(tmp_path):
     """The spec is unchanged, the fluid file it names is edited (its viscosity): refused,
     naming the file; a comment-free copy with the same bytes resumes."""
@@ -228,14 +248,47 @@ def test_a_section_the_sweep_cannot_use_is_refused(tmp_path, table, body):
         load_spec(path)
 
 
-def test_cli_refuses_measured_in_a_spec_in_one_line(tmp_path, capsys):
+@pytest.mark.parametrize(
+    ("body", "fragment"),
+    [('rule = "worst_case"', "render.rule = 'worst_case': not used by a sweep"),
+     ("K_N_per_m = 50", "render.rule = 'typed': not used by a sweep"),
+     ('rule = "typed"\nK_N_per_m = 50', "render.rule = 'typed': not used by a sweep"),
+     ('verdict = "nominal"', "render.verdict = 'nominal': not used by a sweep"),
+     ('rule = "K_max"\nverdict = "robust"', "render.verdict = 'robust': not used by a sweep"),
+     ('rule = "K_max"\nK = 1', r"render\.K: unknown key")],
+)  # fmt: skip
+def test_a_render_rule_the_rows_do_not_follow_is_refused(tmp_path, body, fragment):
+    """A sweep's rows render each design at its own K_max (the K_N_per_m column) and hold no
+    verdict: a [render] asking another K or a verdict was silently ignored (the rows of
+    rule = "typed", K = 50 N/m were byte for byte those without it); refused, naming the
+    key."""
+    path = write_spec(tmp_path, {k: SECTIONS[k] for k in ("sweep", "parameters")},
+                      f"[render]\n{body}\n")  # fmt: skip
+    with pytest.raises(ParameterError, match=fragment):
+        load_spec(path)
+
+
+def test_the_render_rule_the_rows_follow_is_taken(tmp_path):
+    """``rule = "K_max"`` (or an empty [render]) is what the rows do: taken, in the record."""
+    for body in ('rule = "K_max"', ""):
+        spec, rest = load_spec(write_spec(tmp_path, {k: SECTIONS[k] for k in
+                                                     ("sweep", "parameters")},
+                                          f"[render]\n{body}\n"))  # fmt: skip
+        assert "[render]" in dict(spec.inputs) and "render" in rest
+
+
+@pytest.mark.parametrize(
+    ("table", "fragment"),
+    [("[measured]\nuse_in_model = true\nm1_g = 1.5\n", "[measured]: not used by a sweep"),
+     ('[render]\nrule = "worst_case"\n', "render.rule = 'worst_case': not used by a sweep")],
+)  # fmt: skip
+def test_cli_refuses_an_unused_section_in_one_line(tmp_path, capsys, table, fragment):
     from mrclutch.cli.main import main
 
-    path = write_spec(tmp_path, {k: SECTIONS[k] for k in ("sweep", "parameters")},
-                      "[measured]\nuse_in_model = true\nm1_g = 1.5\n")  # fmt: skip
+    path = write_spec(tmp_path, {k: SECTIONS[k] for k in ("sweep", "parameters")}, table)
     assert main(["sweep", str(path), "--out", str(tmp_path / "r.csv"), "--no-progress"]) == 2
     err = capsys.readouterr().err
-    assert len(err.strip().splitlines()) == 1 and "[measured]: not used by a sweep" in err
+    assert len(err.strip().splitlines()) == 1 and fragment in err
     assert not (tmp_path / "r.csv").exists()
 
 
