@@ -22,19 +22,47 @@ from geometry.validation import ParameterError
 from mrclutch.outputs import OUTPUTS, describe
 from mrclutch.sweep.spec import SweepSpec
 
+#: The packages whose code computes a sweep's rows (``model_version`` digests their
+#: sources); their subfolders in ``CODE_ASIDE`` (the command line) compute none.
+MODEL_PACKAGES = ("geometry", "magnetics", "mrclutch")
+CODE_ASIDE = (("mrclutch", "cli"),)
+
+
+def _package_folders(name: str) -> list[Path]:
+    found = importlib.util.find_spec(name)
+    return [Path(f) for f in (found.submodule_search_locations or [])] if found else []
+
+
+def code_digest() -> str:
+    """SHA-256 of the model's source: every ``.py`` file of ``MODEL_PACKAGES`` (its path in
+    the package and its bytes), the command line aside. A code change changes it, whether
+    or not the version number was raised."""
+    digest = hashlib.sha256()
+    for name in MODEL_PACKAGES:
+        aside = [Path(*rest) for pkg, *rest in CODE_ASIDE if pkg == name]
+        for folder in _package_folders(name):
+            for f in sorted(folder.rglob("*.py")):
+                rel = f.relative_to(folder)
+                if any(rel.is_relative_to(a) for a in aside):
+                    continue
+                digest.update(f"{name}/{rel.as_posix()}".encode() + b"\0" + f.read_bytes())
+    return digest.hexdigest()
+
 
 @functools.lru_cache(maxsize=1)
 def model_version() -> str:
-    """The model that writes a sweep's rows: the installed mrclutch's version and a digest
-    of the data its models read (the error map, the materials library). A resume of rows
-    another model wrote is refused (``run_sweep``)."""
-    found = importlib.util.find_spec("magnetics")
-    folders = [Path(f) / "data" for f in (found.submodule_search_locations or [])] if found else []
+    """The model that writes a sweep's rows: the installed mrclutch's version, a digest of
+    the data its models read (the error map, the materials library) and one of its code
+    (``code_digest``: a resume across an edit of the model's code wrote rows of two models
+    into one file while the version number stayed). A resume of rows another model wrote
+    is refused (``run_sweep``)."""
+    folders = [f / "data" for f in _package_folders("magnetics")]
     digest = hashlib.sha256()
     for f in sorted([*MATERIAL_DATA.glob("*.toml"), *(x for d in folders for x in d.glob("*"))]):
         if f.is_file():
             digest.update(f.name.encode() + b"\0" + f.read_bytes())
-    return f"mrclutch {mrclutch.__version__}, model data {digest.hexdigest()[:12]}"
+    return (f"mrclutch {mrclutch.__version__}, model data {digest.hexdigest()[:12]}, "
+            f"code {code_digest()[:12]}")  # fmt: skip
 
 
 def _meta_path(out: Path) -> Path:

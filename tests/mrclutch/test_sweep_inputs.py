@@ -209,6 +209,41 @@ def test_the_model_version_is_in_the_record(tmp_path, monkeypatch):
                   progress=False)  # fmt: skip
 
 
+def test_an_edit_of_the_models_code_is_in_the_record(tmp_path, monkeypatch):
+    """The model's version digests its code: a resume across an edit of a model file
+    (drag torque ×1.5 in magnetics/drag.py gave rows 2000– of 1.5× the off-state torque in
+    the file of rows 0–1999, exit 0, the version number unchanged) is refused. The copy of
+    the sources digests as the installed ones; an edit of the command line changes nothing."""
+    spec = interrupted(tmp_path, {k: SECTIONS[k] for k in ("sweep", "parameters")})
+    copies = {}
+    for name in sweep_record.MODEL_PACKAGES:
+        for folder in sweep_record._package_folders(name):
+            for f in folder.rglob("*.py"):
+                copy = tmp_path / "src" / name / f.relative_to(folder)
+                copy.parent.mkdir(parents=True, exist_ok=True)
+                copy.write_bytes(f.read_bytes())
+        copies[name] = [tmp_path / "src" / name]
+    installed = sweep_record.code_digest()
+    monkeypatch.setattr(sweep_record, "_package_folders", lambda name: copies[name])
+    try:
+        assert sweep_record.code_digest() == installed
+        with (tmp_path / "src/mrclutch/cli/main.py").open("a") as f:
+            f.write("\n# the command line computes no row\n")
+        assert sweep_record.code_digest() == installed
+        with (tmp_path / "src/magnetics/drag.py").open("a") as f:
+            f.write("\nDRAG_SCALE = 1.5\n")
+        edited = sweep_record.code_digest()
+        assert edited != installed
+        sweep_record.model_version.cache_clear()
+        assert sweep_record.model_version().endswith(f", code {edited[:12]}")
+        with pytest.raises(ParameterError, match=rf"the model changed \(was .*, code "
+                           rf"{installed[:12]}, now .*, code {edited[:12]}\)"):  # fmt: skip
+            run_sweep(spec, tmp_path / "r.csv", geometric_outputs, OUTPUTS, resume=True,
+                      progress=False)  # fmt: skip
+    finally:
+        sweep_record.model_version.cache_clear()
+
+
 def test_other_outputs_and_an_older_record_are_refused(tmp_path):
     spec = interrupted(tmp_path, {k: SECTIONS[k] for k in ("sweep", "parameters")})
     with pytest.raises(ParameterError, match=r"the output columns differ \(--with\)"):
