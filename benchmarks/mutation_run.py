@@ -554,9 +554,10 @@ VERDICTS = ROOT / "benchmarks/data/mutation_verdicts.toml"
 def verdicts() -> dict[str, dict[str, str]]:
     """Each survivor's verdict, by "module:index": ``equivalent`` (no input a user can give
     tells it from the original; ``why`` says so), ``speed`` (the same answers, only more or
-    fewer solver iterations: benchmarks judge those, not tests) or ``test`` (the test added
-    for it). The physics run's verdicts are the file's top-level tables; another run's are
-    under its own table (``[round."module:index"]``)."""
+    fewer solver iterations: benchmarks judge those, not tests), ``test`` (the test added
+    for it) or ``rerun`` (round2: a run cut by the budget; ``test``, an existing test, fails
+    on it when run alone). The physics run's verdicts are the file's top-level tables;
+    another run's are under its own table (``[round."module:index"]``)."""
     import tomllib
 
     data = tomllib.loads(VERDICTS.read_text()) if VERDICTS.exists() else {}
@@ -574,18 +575,21 @@ def summary(mutants: list[Mutant]) -> dict[str, float]:
         return [m for m in surv if ver.get(f"{m.module}:{m.index}", {}).get("verdict") == kind]
 
     eq, speed, tested = of("equivalent"), of("speed"), of("test")
+    rerun = of("rerun")  # cut by the budget; an existing test kills it, run alone after
     non_eq = len(done) - len(eq) - len(speed)  # mutants that change an answer
     return {
         "mutants": len(done),
         "killed": len(done) - len(surv),
         "survived": len(surv),
+        "cut_by_budget": sum(m.killed_by.startswith("budget") for m in surv),
         "equivalent": len(eq),
         "speed_only": len(speed),
+        "killed_on_rerun": len(rerun),
         "given_a_test": len(tested),
-        "unexplained": len(surv) - len(eq) - len(speed) - len(tested),
+        "unexplained": len(surv) - len(eq) - len(speed) - len(tested) - len(rerun),
         "survival_non_equivalent_pct": 100.0 * (len(surv) - len(eq) - len(speed)) / max(non_eq, 1),
         "survival_after_tests_pct": 100.0
-        * (len(surv) - len(eq) - len(speed) - len(tested))
+        * (len(surv) - len(eq) - len(speed) - len(tested) - len(rerun))
         / max(non_eq, 1),
     }
 
@@ -609,7 +613,10 @@ def report(mutants: list[Mutant]) -> str:
             kind = v.get("verdict")
             say = (f"{kind}: {v.get('why', '')}" if kind in ("equivalent", "speed")
                    else f"test: `{v.get('test', '')}`" if kind == "test"
+                   else f"killed on a re-run by `{v.get('test', '')}`" if kind == "rerun"
                    else "**unexplained**")  # fmt: skip
+            if m.killed_by.startswith("budget"):
+                say = f"(cut at {m.killed_by.split()[1]} s) {say}"
             before, after = (x.replace("|", "\\|") for x in (m.before, m.after))
             lines.append(f"| {m.module} | {m.line} | `{before}` → `{after}` | {say} |")
     return "\n".join(lines)

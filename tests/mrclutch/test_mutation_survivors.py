@@ -87,3 +87,85 @@ def test_threshold_takes_the_crossing_nearest_the_value_in_p(monkeypatch):
     assert t is not None
     assert t["value"] == pytest.approx(b0 / 2, rel=1e-8)
     assert t["sense"] == "≤"
+
+
+# --- the run of today's modules (--run round2, benchmarks/data/mutation_round2.json) -----
+
+
+def test_every_design_file_key_is_read_in_si_by_its_units_factor():
+    """A design file's keys carry their unit in the name (``delay_ms``, ``m2_g`` …); each
+    is read into SI by the factor the unit states, worked here by hand: 600 rpm = 600·2π/60
+    = 62.83 rad/s, 8 A/mm² = 8e6 A/m², 2 ms = 0.002 s, 110 mm²/s = 1.1e-4 m²/s, 5 mN·m =
+    0.005 N·m, 0.5 mm = 5e-4 m, 20 g = 0.02 kg; a key in A, V, Hz, N, °C or s is taken as
+    it is. The mutant ``"wire_temperature_limit_C": (…, 1.1)`` (design.py:203) reads
+    150 °C as 165 °C; every factor of the tables is pinned the same way."""
+    from mrclutch.design import design_from_mapping
+
+    d = design_from_mapping({
+        "clutch": {"base": "paper"},
+        "operating": {"max_current_A": 5, "max_current_density_A_per_mm2": 8,
+                      "input_speed_rpm": 600, "delay_ms": 2, "coil_temperature_C": 60,
+                      "fluid_temperature_C": 45, "ambient_temperature_C": 25,
+                      "wire_temperature_limit_C": 150, "peak_duration_s": 3},
+        "support": {"bearings": 3, "bearing_load_N": 12, "grease_viscosity_mm2_per_s": 110,
+                    "seal_torque_mN_m": 5},
+        "amplifier": {"supply_voltage_V": 36, "current_bandwidth_Hz": 500},
+        "laminations": {"core_mm": 0.5, "shell_mm": 0.35},
+        "transmission": {"ratio": 1.5, "lever_mm": 120, "gearing": 2, "k_N_per_m": 9000,
+                         "b_N_s_per_m": 3, "m2_g": 20, "workspace_mm": 40},
+    })  # fmt: skip
+    op, sup, amp, lam, tr = d.operating, d.support, d.amplifier, d.laminations, d.transmission
+    got = [op.max_current, op.max_current_density, op.input_speed, op.delay,
+           op.coil_temperature, op.fluid_temperature, op.ambient_temperature,
+           op.wire_temperature_limit, op.peak_duration, sup.bearings, sup.bearing_load,
+           sup.grease_viscosity, sup.seal_torque, amp.supply_voltage, amp.current_bandwidth_hz,
+           lam.core, lam.shell, tr.ratio, tr.lever, tr.gearing, tr.k, tr.b, tr.m2,
+           tr.workspace]  # fmt: skip
+    want = [5.0, 8e6, 62.83185307179586, 0.002, 60.0, 45.0, 25.0, 150.0, 3.0, 3, 12.0,
+            1.1e-4, 0.005, 36.0, 500.0, 5e-4, 3.5e-4, 1.5, 0.12, 2.0, 9000.0, 3.0, 0.02,
+            0.04]  # fmt: skip
+    assert got == pytest.approx(want, rel=1e-12)
+
+
+def test_time_to_limits_batch_takes_its_batch_from_the_networks_capacities():
+    """``time_to_limits_batch`` answers (S,) for a network of S designs even when the
+    current, the slip heat and the coil's r20 are shared scalars: its batch is the
+    capacities' leading shape (…, 3) less the node axis. Two copies of the paper clutch's
+    network, r20 a float, give the one design's times twice. The mutant
+    ``np.shape(net.capacity)[:-2]`` (thermal.py:283) takes no batch from (2, 3) and fails
+    to broadcast it to one design."""
+    from geometry.params import preset
+    from geometry.section import build_section
+    from magnetics.thermal import Network, network, time_to_limits, time_to_limits_batch
+
+    one = network(build_section(preset("paper")).table)
+    two = Network(np.stack([one.capacity] * 2), np.stack([one.conductance] * 2),
+                  np.stack([np.asarray(one.to_air)] * 2), float(one.r20), one.ambient,
+                  np.stack([one.inverse] * 2))  # fmt: skip
+    tw, tf = time_to_limits_batch(two, 3.0, 5.0, 155.0, 130.0)
+    w1, f1 = time_to_limits(one, 3.0, 5.0, 155.0, 130.0)
+    assert np.shape(tw) == np.shape(tf) == (2,)
+    assert tw == pytest.approx([w1, w1], rel=1e-12)
+    assert tf == pytest.approx([f1, f1], rel=1e-12)
+
+
+def test_null_notes_take_the_tables_note_else_the_keys_documented_meaning():
+    """``pipeline.null_notes``: a null (None or NaN) under a table with a ``note`` is
+    explained by that note; outside one, by the key's documented meaning (``NAN_MEANS``);
+    an inf by ``INF_MEANS``. The mutant ``note and NAN_MEANS.get(…)`` (pipeline.py:241)
+    gives a null outside any note no reason and one under a note the key's meaning."""
+    from mrclutch.pipeline import INF_MEANS, NAN_MEANS, null_notes
+
+    data = {
+        "haptic": {"resonance_hz": None, "B_N_s_per_m": float("nan")},
+        "em": {"note": "no motor of this torque", "resonance_hz": None,
+               "B_N_s_per_m": float("nan")},
+        "duty": {"time_to_wire_limit_s": float("inf")},
+    }  # fmt: skip
+    assert null_notes(data) == {
+        "haptic/resonance_hz": NAN_MEANS["resonance_hz"],
+        "haptic/B_N_s_per_m": NAN_MEANS["B_N_s_per_m"],
+        "em/resonance_hz": "no motor of this torque",
+        "em/B_N_s_per_m": "no motor of this torque",
+        "duty/time_to_wire_limit_s": INF_MEANS["time_to_wire_limit_s"],
+    }
