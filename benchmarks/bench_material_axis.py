@@ -8,10 +8,12 @@ designs) twice on each executor: as it is, and with one more axis,
 ``ProcessPoolExecutor`` of N processes and a Dask ``LocalCluster`` of N worker processes
 (``mrclutch.cli.executors.local_cluster``: what ``mrclutch sweep --dask-local N`` starts),
 each started and warmed (mrclutch imported, the kernels loaded) before its clock starts.
+Then ``--sample`` random valid rows of the three-fluid file are compared with the single
+``evaluate`` of each row's design (max torque, mass, off-state torque, bandwidth).
 The two specs alternate for ``--rounds`` rounds on each executor (the fastest run of
 each counts), so a change in the machine's load hits both. Checks that the pool and the
 cluster wrote the same rows for each spec, and prints each run's time and the ratio with
-the axis / without it on the same executor.
+the axis / without it on the same executor, with each one's rows/s (the fastest run).
 """
 
 from __future__ import annotations
@@ -27,12 +29,14 @@ from concurrent.futures import Executor, ProcessPoolExecutor
 from contextlib import contextmanager
 from pathlib import Path
 
+import numpy as np
 from bench_scaleout import _same  # the same files, byte for byte (folders part by part)
 
 from mrclutch.cli.executors import local_cluster
 from mrclutch.design import design_from_mapping
-from mrclutch.pipeline import BatchEvaluator
-from mrclutch.sweep import SweepSpec, chunk_rows, load_spec, run_sweep
+from mrclutch.pipeline import BatchEvaluator, evaluate
+from mrclutch.sweep import SweepSpec, chunk_rows, load_spec, read_results, run_sweep
+from mrclutch.verify import design_of
 
 SPEC = Path(__file__).resolve().parents[1] / "examples" / "random_sweep.toml"
 FLUIDS = 'fluid = {values = ["MRF-122EG", "MRF-132DG", "MRF-140CG"]}'
@@ -89,12 +93,41 @@ def _executor(where: str, n: int) -> Iterator[Executor]:
         cluster.close()
 
 
+#: (results column, the same figure of ``evaluate(design)``) compared on the sampled rows
+SINGLE = (
+    ("max_torque_N_m", lambda e: e.clutch.max_torque),
+    ("clutch_mass_kg", lambda e: e.clutch.clutch_mass),
+    ("off_state_torque_N_m", lambda e: e.clutch.drag.torque),
+    ("bandwidth_hz", lambda e: e.haptic["bandwidth_hz"]),
+)
+
+
+def _against_single(spec: SweepSpec, ev: BatchEvaluator, out: Path, n: int
+                    ) -> tuple[float, list[str]]:  # fmt: skip
+    """The largest relative difference between ``n`` random valid rows of ``out`` and the
+    single ``evaluate`` of each row's design (rebuilt from its id: ``verify.design_of``),
+    and the fluids the sample holds."""
+    res = read_results(out)
+    valid = np.flatnonzero(res["valid"] == 1)
+    rows = np.random.default_rng(0).choice(valid, size=min(n, valid.size), replace=False)
+    worst = 0.0
+    for i in rows:
+        e = evaluate(design_of(spec, ev.base, int(res["design_id"][i])))
+        assert e.design.materials.fluid == res["fluid"][i]
+        for col, single in SINGLE:
+            want = float(single(e))
+            worst = max(worst, abs(res[col][i] / want - 1))
+    return worst, sorted(set(res["fluid"][rows].tolist()))
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--designs", type=int, default=100_000)
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--format", choices=("csv", "parquet"), default="csv")
     ap.add_argument("--rounds", type=int, default=2, help="runs of each; the fastest counts")
+    ap.add_argument("--sample", type=int, default=30,
+                    help="rows of the three-fluid sweep checked against evaluate")  # fmt: skip
     args = ap.parse_args(argv)
     n = args.workers
     times: dict[tuple[str, str], float] = {}
@@ -115,17 +148,33 @@ def main(argv: list[str] | None = None) -> int:
                         t = _timed(spec, out, ev, ex, n)
                         times[where, label] = min(t, times.get((where, label), t))
                         print(f"{where:>12} {label:>13} round {r + 1}: {args.designs} designs "
-                              f"in {t:.2f} s", flush=True)  # fmt: skip
+                              f"in {t:.2f} s ({args.designs / t:.0f} rows/s)",
+                              flush=True)  # fmt: skip
         for label in specs:
             a, b = (folder / f"{w}-{label}.{args.format}".replace(" ", "_")
                     for w in ("process pool", "dask-local"))  # fmt: skip
             if not _same(a, b):
                 print(f"{label}: the pool and the cluster wrote different rows", file=sys.stderr)
                 return 1
+        spec, ev = specs["three fluids"]
+        out = folder / f"process_pool-three_fluids.{args.format}"
+        worst, fluids = _against_single(spec, ev, out, args.sample)
+        print(
+            f"{args.sample} sampled rows of the three-fluid sweep ({', '.join(fluids)}) "
+            f"against single evaluate calls: largest relative difference {worst:.1e}"
+        )
+        if not worst <= 1e-6:
+            print("rows differ from single evaluate calls", file=sys.stderr)
+            return 1
     print(f"rows identical on both executors; {n} workers, {args.format}")
     for where in ("process pool", "dask-local"):
+        best = {label: args.designs / times[where, label] for label in specs}
         ratio = times[where, "three fluids"] / times[where, "without"]
-        print(f"{where}: three-fluid axis / without = {ratio:.2f}")
+        print(
+            f"{where}: without {best['without']:.0f} rows/s, three fluids "
+            f"{best['three fluids']:.0f} rows/s (fastest of {args.rounds}); "
+            f"three-fluid axis / without = {ratio:.2f}"
+        )
     return 0
 
 
