@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from geometry.params import PRESETS
 from geometry.validation import ParameterError
 from mrclutch.cli.commands import optimize as optimize_cmd
 from mrclutch.cli.commands import optimize_pareto as pareto_cmd
@@ -135,10 +136,22 @@ def _verdict_lines(text):
     return [ln for ln in text.splitlines() if ln.startswith("VERDICT:")]
 
 
-@pytest.mark.parametrize("target", ["--preset=paper", "thin_drums.toml", "paper_bench.toml"])
+#: Every preset and every example design file (not the sweep specs): what a user runs first.
+TARGETS = [f"--preset={n}" for n in PRESETS] + sorted(
+    p.name for p in EXAMPLES.glob("*.toml") if "[sweep]" not in p.read_text()
+)
+
+
+def test_the_targets_are_every_preset_and_example():
+    assert {"--preset=paper", "--preset=paper-holes", "thin_drums.toml",
+            "paper_bench.toml"} <= set(TARGETS)  # fmt: skip
+
+
+@pytest.mark.parametrize("target", TARGETS)
 def test_commands_lead_with_one_verdict_and_agree(target, capsys):
     """evaluate, compare and haptic on one design at one fidelity: the first line is the
-    verdict, said once, the same line in each; their JSON gives the same K, K_max, status."""
+    verdict, said once, the same line in each; their JSON gives the same K, K_max, status
+    and gearing."""
     args = [target] if target.startswith("--") else [str(EXAMPLES / target)]
     texts, triples, gearing = _every_command(capsys, args)
     assert len(set(texts)) == 1 and len(set(triples)) == 1 and len(set(gearing)) == 1
