@@ -381,8 +381,9 @@ def test_torque_for_finds_the_current_of_a_torque(capsys):
 
 
 @pytest.mark.parametrize("argv", [
-    ["--for", "-1"], ["--for", "0.3", "--current", "2"], ["--for", "nan"],
-    ["--current", "-1"], ["--current", "20"],
+    ["--for", "-1"], ["--for", "0.3", "--current", "2"], ["--for", "nan"], ["--for", "abc"],
+    ["--for", "0"], ["--for", "inf"], ["--for", "0.3", "--plot", "t.png"],
+    ["--for", "0.3", "--method", "bogus"], ["--current", "-1"], ["--current", "20"],
 ])  # fmt: skip
 def test_torque_bad_input_is_one_line_exit_2(argv, capsys):
     code, cap = _run(capsys, ["torque", "--preset", "paper", *argv])

@@ -44,7 +44,7 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     p.add_argument("--ignore-limit", action="store_true",
                    help="allow currents below 0 A or above the design's current limit (its "
                    "max_current_A capped by the current density and the supply)")  # fmt: skip
-    p.add_argument("--for", dest="for_torque", type=float, default=None, metavar="NM",
+    p.add_argument("--for", dest="for_torque", default=None, metavar="NM",
                    help="the current that gives NM N·m (yield + drag at the slip speed), by "
                    "each --method (both: network and FEM); or what the most is, if out of "
                    "reach")  # fmt: skip
@@ -166,7 +166,11 @@ def _past_limit(design: Any, currents: Any) -> list[str]:
 def _torque_for(args: argparse.Namespace, design: Any) -> int:
     """``torque --for NM``: the current each method needs for NM N·m, or the most it gives
     at the design's current limit (``--ignore-limit``: up to 10× that limit)."""
-    target = check_range("--for", args.for_torque, 0.0, 1e6, " N·m", lo_open=True)
+    try:  # parsed here, not by argparse: a word is one line too (its usage block is not)
+        value = float(args.for_torque)
+    except ValueError:
+        raise CLIError(f"--for {args.for_torque!r}: give a torque in N·m, e.g. --for 0.3") from None
+    target = check_range("--for", value, 0.0, 1e6, " N·m", lo_open=True)
     if args.current is not None or args.map is not None or args.plot:
         raise CLIError("--for: not with --current, --map or --plot (it finds the current)")
     methods = ("network", "fem") if args.method == "both" else (args.method,)
