@@ -169,3 +169,118 @@ def test_null_notes_take_the_tables_note_else_the_keys_documented_meaning():
         "em/B_N_s_per_m": "no motor of this torque",
         "duty/time_to_wire_limit_s": INF_MEANS["time_to_wire_limit_s"],
     }
+
+
+def test_the_delay_range_is_refused_above_one_second_and_taken_at_it():
+    """``Uncertainty.delay``'s upper end is at most 1 s (a haptic loop's delay): 1.0 s is
+    taken, 1.05 s refused in one line naming the delay. The mutant ``delay[1] > 1.1``
+    (uncertainty.py:118) takes 1.05 s."""
+    from geometry.validation import ParameterError
+    from mrclutch.uncertainty import Uncertainty
+
+    assert Uncertainty(delay=(0.001, 1.0)).delay == (0.001, 1.0)
+    with pytest.raises(ParameterError, match=r"delay = \[0\.001, 1\.05\] s: must be <= 1 s"):
+        Uncertainty(delay=(0.001, 1.05))
+
+
+def test_the_optimisers_verified_candidates_are_numbered_from_one(monkeypatch):
+    """``members.verify_candidates`` hands the FEM check its N best candidates numbered 1 … N
+    (the ranks the report prints beside each re-solved torque), one fast torque and one
+    error bound each. The FEM solve itself is replaced by a recorder. The mutant
+    ``range(1, len(top) - 1)`` (members.py:197) numbers three candidates [1]."""
+    from mrclutch import members
+    from mrclutch.optimize.limits import Constraints
+
+    seen: dict = {}
+
+    def record(designs, ids, values, fast, bounds, fem_size, executor):
+        seen.update(n=len(designs), ids=list(ids), values=list(values), fast=len(fast),
+                    bounds=len(bounds))  # fmt: skip
+        return []
+
+    monkeypatch.setattr(members, "verify_designs", record)
+    base = design_preset("paper")
+    top = [SimpleNamespace(design=base, value=float(v)) for v in (3.0, 2.0, 1.0)]
+    members.verify_candidates(top, base, Constraints(), None, None)
+    assert seen == {"n": 3, "ids": [1, 2, 3], "values": [3.0, 2.0, 1.0], "fast": 3, "bounds": 3}
+
+
+def test_churchill_chu_h_is_the_published_correlation_written_out():
+    """``thermal.churchill_chu_h``: Nu = {0.6 + 0.387 Ra^(1/6) / [1 + (0.559/Pr)^(9/16)]^(8/27)}²
+    (Churchill & Chu 1975, horizontal cylinder), Ra = g β ΔT D³/(ν α), β = 1/T_film,
+    h = Nu k/D, with the module's air properties. For D = 50 mm, ΔT = 30 K, 20 °C air the
+    film is at 308.15 K and h = 5.64 W/(m²·K) (Incropera's range for free convection in
+    gases, 2–25). The mutant exponent 9/27 (thermal.py:106) gives 5.43 (3.7 % less)."""
+    from magnetics.thermal import AIR_ALPHA, AIR_K, AIR_NU, AIR_PR, churchill_chu_h
+
+    d, dt, ta = 0.05, 30.0, 20.0
+    ra = 9.81 / (ta + 273.15 + dt / 2) * dt * d**3 / (AIR_NU * AIR_ALPHA)
+    nu = (0.6 + 0.387 * ra ** (1 / 6) / (1 + (0.559 / AIR_PR) ** (9 / 16)) ** (8 / 27)) ** 2
+    h = float(churchill_chu_h(d, dt, ta))
+    assert h == pytest.approx(nu * AIR_K / d, rel=1e-12)
+    assert 2.0 < h < 25.0
+
+
+def test_only_the_side_rendered_at_the_others_k_max_says_so(capsys):
+    """``compare`` renders both sides at the smaller K_max: the side whose own K_max is the
+    larger (the MR pair, 343.9 against the motor's 299.2 N/m) says "the smaller K_max of the
+    two" and its own; the motor, at its own K_max, and ``haptic`` of one actuator say
+    "K_max … N/m [source]". The mutant ``… or rule is None or …`` (cli/commands/haptic.py:255)
+    labels every side so."""
+    from mrclutch.cli.main import main
+
+    assert main(["haptic", "--actuator", "maxon-136209"]) == 0
+    one = capsys.readouterr().out
+    assert "smaller K_max" not in one
+    assert "\n  K_max " in one and "[maxon-136209, Table 1 catalogue]:" in one
+    assert main(["compare"]) == 0
+    two = capsys.readouterr().out
+    labelled = [ln for ln in two.splitlines() if "the smaller K_max of the two, [" in ln]
+    assert len(labelled) == 1 and "this side's own K_max" in labelled[0]
+    assert sum(ln.startswith("  K_max ") for ln in two.splitlines()) == 1
+
+
+def test_the_field_map_spans_the_section_and_a_margin(monkeypatch):
+    """``plot_field`` draws r from 0 to the last grid node within 1.3 × the section's outer
+    radius and z over the nodes within 3 mm of the section's ends, in mm. On nodes every
+    5 mm over r 0–50 mm, z −30–30 mm, a section of r ≤ 20 mm and z ±10 mm: r 0–25 mm (the
+    node at 25 ≤ 26 mm), z −10–10 mm (±13 mm keeps the nodes at ±10). The mutant
+    ``r[keep_r][1]`` (cli/plots/magnetics.py:58) stops r at the second node, 5 mm."""
+    import matplotlib.pyplot as plt
+
+    from mrclutch.cli.plots import magnetics as magnetics_plots
+
+    figs: list = []
+    monkeypatch.setattr(magnetics_plots, "save_png", lambda fig, path, dpi=110: figs.append(fig))
+    r, z = np.linspace(0, 0.05, 11), np.linspace(-0.03, 0.03, 13)
+    rc, zc = np.meshgrid((r[:-1] + r[1:]) / 2, (z[:-1] + z[1:]) / 2)
+    sol = SimpleNamespace(r_nodes=r, z_nodes=z, centre_r=rc.ravel(), centre_z=zc.ravel(),
+                          b=np.full(rc.size, 1.0), current=2.0)  # fmt: skip
+    section = SimpleNamespace(r_max=0.02, z_min=-0.01, z_max=0.01, regions=[])
+    magnetics_plots.plot_field(section, sol, "unused.png")
+    ax = figs[0].axes[0]
+    try:
+        assert ax.get_xlim() == pytest.approx((0.0, 25.0), abs=1e-9)
+        assert ax.get_ylim() == pytest.approx((-10.0, 10.0), abs=1e-9)
+        assert ax.get_xlabel() == "r (mm)" and ax.get_ylabel() == "z (mm)"
+    finally:
+        plt.close(figs[0])
+
+
+def test_verify_top_asks_for_yes_above_ten_thousand_fem_solves_not_at_it(monkeypatch):
+    """``sweep --verify-top N``: more than MAX_FEM_UNASKED = 10⁴ FEM solves need --yes;
+    10⁴ itself does not (the time estimate, put at 1 s here, still could). The mutant
+    ``n >= MAX_FEM_UNASKED`` (cli/commands/sweep.py:196) refuses 10⁴."""
+    import argparse
+
+    from mrclutch.cli.commands import sweep
+    from mrclutch.cli.errors import CLIError
+
+    monkeypatch.setattr(sweep, "check_fem_size", lambda base, size: None)
+    monkeypatch.setattr(sweep, "fem_solve_seconds", lambda base, size, n: 1.0)
+    base = design_preset("paper")
+    assert sweep.MAX_FEM_UNASKED == 10**4
+    sweep._check_fem_work(argparse.Namespace(verify_top=10**4, yes=False), base, 1e-3)
+    sweep._check_fem_work(argparse.Namespace(verify_top=10**4 + 1, yes=True), base, 1e-3)
+    with pytest.raises(CLIError, match=r"--verify-top 10001: more than 10000 FEM solves; add"):
+        sweep._check_fem_work(argparse.Namespace(verify_top=10**4 + 1, yes=False), base, 1e-3)
