@@ -194,9 +194,13 @@ def path_pareto(tmp_path, kind, executors):
 
 
 def path_process_pool(tmp_path, kind, executors):
-    """Spawned processes (they never read the user's fluid file): the in-process bytes."""
+    """Spawned processes (they never read the user's fluid file): --verify-top's FEM solves
+    there (before any chunk: the FEM registers the file itself) equal those in this
+    process, and the pool writes the in-process bytes."""
+    spec, base, _ = two_designs(tmp_path, kind, "r.csv")
+    _same_fem(spec, base, tmp_path / "r.csv", executors("pool"))
+    two_designs(tmp_path, kind, "r.parquet")
     for out in ("r.csv", "r.parquet"):
-        two_designs(tmp_path, kind, out)
         spec, base, res = two_designs(tmp_path, kind, f"pool-{out}", executor=executors("pool"))
         assert _files(tmp_path / f"pool-{out}") == _files(tmp_path / out)
     check_rows(spec, base, res, kind)
@@ -204,11 +208,23 @@ def path_process_pool(tmp_path, kind, executors):
 
 def path_dask_workers(tmp_path, kind, executors):
     """A Dask cluster's workers (the user's fluid file registered only from the bytes the
-    spec carries: a KeyError in the workers before): the in-process bytes."""
-    two_designs(tmp_path, kind, "r.csv")
+    spec carries: a KeyError in the workers before): --verify-top's FEM solves there
+    (before any chunk) equal those in this process, and the workers write the in-process
+    bytes."""
+    spec, base, _ = two_designs(tmp_path, kind, "r.csv")
+    _same_fem(spec, base, tmp_path / "r.csv", executors("dask"))
     spec, base, res = two_designs(tmp_path, kind, "dask.csv", executor=executors("dask"))
     assert (tmp_path / "dask.csv").read_bytes() == (tmp_path / "r.csv").read_bytes()
     check_rows(spec, base, res, kind)
+
+
+def _same_fem(spec, base, results, executor):
+    """--verify-top 2 (FEM at 1 mm) on ``executor``: the rows this process solves."""
+    there = verify_top(spec, base, results, 2, TORQUE, True, 1e-3, executor)
+    here = verify_top(spec, base, results, 2, TORQUE, True, 1e-3)
+    assert [r.design_id for r in there] == [r.design_id for r in here] and len(here) == 2
+    for a, b in zip(there, here, strict=True):
+        assert a.fem_torque == pytest.approx(b.fem_torque, rel=1e-9) and a.fem_torque > 0
 
 
 def _files(p):
