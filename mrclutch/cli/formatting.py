@@ -289,6 +289,18 @@ def explain_json(ev: dict) -> dict:
     }  # fmt: skip
 
 
+def _rule_note(paper: dict) -> list[str]:
+    """Why the paper column's K is not the one ``evaluate --preset paper`` prints: beside a
+    member it renders by the members' ``[render]`` rule (issue 39: one design, one answer,
+    each K said with its rule)."""
+    render = paper.get("render") or {}
+    if render.get("rule", "K_max") == "K_max":
+        return []
+    return [f"    (both by the optimiser's rule: {render['describe']}; the paper preset's own "
+            f"rule, K_max = F_max/d, renders {paper['haptic']['K_max_N_per_m']:.4g} N/m, as "
+            f"evaluate --preset paper --fidelity {paper['fidelity']} prints)"]  # fmt: skip
+
+
 def explain(ev: dict, paper: dict, label: str) -> str:
     """How a design's bandwidth and resonance relate, where its damping comes from (the
     b1 budget) and its thermal rating, beside the paper preset's."""
@@ -312,6 +324,7 @@ def explain(ev: dict, paper: dict, label: str) -> str:
             p["bandwidth_lumped_hz"]),
         row("system resonance at K = 0 (Hz)", a["resonance_hz"], p["resonance_hz"]),
         row("K rendered (N/m)", a["K_N_per_m"], p["K_N_per_m"]),
+        *_rule_note(paper),
         row("K_max = F_max/d (N/m)", a["K_max_N_per_m"], p["K_max_N_per_m"]),
         row("b1 at the hand (N·s/m)", a["b1_N_s_per_m"], p["b1_N_s_per_m"]),
         row("  share from the drum-gap films", film(a), film(p), ".0%"),

@@ -300,6 +300,25 @@ def test_optimize_help_states_the_rule_its_files_carry(capsys):
     assert "bandwidth (rendering bandwidth at the K the design renders, Hz)" in text
 
 
+def test_the_paper_beside_a_member_says_which_rule_renders_its_K():
+    """Beside a member the optimiser judges the paper preset by the members' rule (42.9 N/m,
+    the worst case over the ranges), not the K_max evaluate prints for it (361.7 N/m at
+    reference): the column says so, with the K_max its own file renders."""
+    from mrclutch.cli.formatting import explain
+    from mrclutch.verdict import for_workshop
+
+    base = design_preset("paper")
+    plain = judge(base)
+    paper = judge(for_workshop(base, base.ranges)[0])
+    k_max = plain["haptic"]["K_max_N_per_m"]
+    assert paper["haptic"]["K_N_per_m"] < 0.5 * k_max == 0.5 * paper["haptic"]["K_max_N_per_m"]
+    text = explain(plain, paper, "member #1")
+    assert (f"(both by the optimiser's rule: the largest K stable and passive over the ranges; "
+            f"the paper preset's own rule, K_max = F_max/d, renders {k_max:.4g} N/m, as "
+            "evaluate --preset paper --fidelity fast prints)") in text  # fmt: skip
+    assert "optimiser's rule" not in explain(plain, plain, "member #1")
+
+
 # ---- numbers that look odd say why --------------------------------------------------------
 
 #: Four drums on a Ø32.7 mm envelope with 0.2 mm gaps (issue 39's "Ø40 mm, 4-drum" case):
