@@ -281,6 +281,8 @@ def test_objective_out_file_gets_the_optimisers_verdict(tmp_path, capsys, monkey
                           "1", "--out", str(out)])  # fmt: skip
     d = load_design(out)
     assert d.render.rule == "worst_case" and d.measured is None
+    assert design_preset("paper").measured is not None  # the base had a bench: said dropped
+    assert [n for n in data["notes"] if "[measured] bench table was dropped" in n]
     want = _triple(data["reference"])
     assert data["verdict"]["status"] == want[0]
     for cmd in ("evaluate", "compare"):
