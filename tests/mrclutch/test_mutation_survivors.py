@@ -243,26 +243,36 @@ def test_only_the_side_rendered_at_the_others_k_max_says_so(capsys):
 def test_the_field_map_spans_the_section_and_a_margin(monkeypatch):
     """``plot_field`` draws r from 0 to the last grid node within 1.3 × the section's outer
     radius and z over the nodes within 3 mm of the section's ends, in mm. On nodes every
-    5 mm over r 0–50 mm, z −30–30 mm, a section of r ≤ 20 mm and z ±10 mm: r 0–25 mm (the
-    node at 25 ≤ 26 mm), z −10–10 mm (±13 mm keeps the nodes at ±10). The mutant
-    ``r[keep_r][1]`` (cli/plots/magnetics.py:58) stops r at the second node, 5 mm."""
+    2.5 mm over r 0–50 mm and 5 mm over z −30–30 mm, a section of r ≤ 20 mm and z ±10 mm:
+    r 0–25 mm (25 ≤ 1.3 × 20 = 26 < 27.5 mm), z −10–10 mm (±13 mm keeps the nodes at ±10). A steel region
+    r 5–15 mm, z −5–5 mm is outlined by a 10 × 10 mm rectangle at (5, −5) mm; the fluid is
+    not outlined. The mutants ``r[keep_r][1]`` (cli/plots/magnetics.py:58) stop r at the
+    second node, 2.5 mm; ``r_max * 1.43`` (:44) at 27.5 mm; ``(g.r1 - g.r0) / 1000.0`` (:56)
+    draws the outline 10 µm wide."""
     import matplotlib.pyplot as plt
 
     from mrclutch.cli.plots import magnetics as magnetics_plots
 
     figs: list = []
     monkeypatch.setattr(magnetics_plots, "save_png", lambda fig, path, dpi=110: figs.append(fig))
-    r, z = np.linspace(0, 0.05, 11), np.linspace(-0.03, 0.03, 13)
+    r, z = np.linspace(0, 0.05, 21), np.linspace(-0.03, 0.03, 13)
     rc, zc = np.meshgrid((r[:-1] + r[1:]) / 2, (z[:-1] + z[1:]) / 2)
     sol = SimpleNamespace(r_nodes=r, z_nodes=z, centre_r=rc.ravel(), centre_z=zc.ravel(),
                           b=np.full(rc.size, 1.0), current=2.0)  # fmt: skip
-    section = SimpleNamespace(r_max=0.02, z_min=-0.01, z_max=0.01, regions=[])
+    steel = SimpleNamespace(part="steel", r0=0.005, r1=0.015, z0=-0.005, z1=0.005)
+    fluid = SimpleNamespace(part="fluid", r0=0.015, r1=0.016, z0=-0.005, z1=0.005)
+    section = SimpleNamespace(r_max=0.02, z_min=-0.01, z_max=0.01, regions=[steel, fluid])
     magnetics_plots.plot_field(section, sol, "unused.png")
     ax = figs[0].axes[0]
     try:
         assert ax.get_xlim() == pytest.approx((0.0, 25.0), abs=1e-9)
         assert ax.get_ylim() == pytest.approx((-10.0, 10.0), abs=1e-9)
         assert ax.get_xlabel() == "r (mm)" and ax.get_ylabel() == "z (mm)"
+        assert len(ax.patches) == 1
+        box = ax.patches[0]
+        assert (*box.get_xy(), box.get_width(), box.get_height()) == pytest.approx(
+            (5.0, -5.0, 10.0, 10.0), abs=1e-9
+        )
     finally:
         plt.close(figs[0])
 
@@ -284,3 +294,29 @@ def test_verify_top_asks_for_yes_above_ten_thousand_fem_solves_not_at_it(monkeyp
     sweep._check_fem_work(argparse.Namespace(verify_top=10**4 + 1, yes=True), base, 1e-3)
     with pytest.raises(CLIError, match=r"--verify-top 10001: more than 10000 FEM solves; add"):
         sweep._check_fem_work(argparse.Namespace(verify_top=10**4 + 1, yes=False), base, 1e-3)
+
+
+def test_the_fem_check_of_a_sweep_is_timed_from_its_start(tmp_path, monkeypatch, capsys):
+    """``sweep --verify-top N`` prints how long the FEM re-solves took: the clock after them
+    less the clock before. A clock at 100.0 s before and 102.5 s after gives 2.5 s (the
+    re-solves themselves replaced by a stand-in). The mutant ``perf_counter() + t0``
+    (cli/commands/sweep.py:235) gives 202.5 s."""
+    from mrclutch.cli.commands import sweep
+    from mrclutch.cli.main import main
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "s.toml").write_text('[sweep]\nmode = "random"\nsamples = 4\nseed = 3\n'
+                                     'base = "paper"\n[parameters]\n'
+                                     "gap_mm = {min = 0.3, max = 0.9}\n")  # fmt: skip
+    ticks = iter([100.0, 102.5])
+    monkeypatch.setattr(sweep, "time", SimpleNamespace(perf_counter=lambda: next(ticks)))
+    monkeypatch.setattr(sweep, "verify_top", lambda *a: [])
+    monkeypatch.setattr(sweep, "write_verified", lambda *a: "r.verified.csv")
+    took: list[float] = []
+    monkeypatch.setattr(sweep, "format_verified", lambda rows, key, size, workers, s:
+                        took.append(s) or "")  # fmt: skip
+    argv = ["sweep", "s.toml", "--out", "r.csv", "--no-progress", "--workers", "1",
+            "--verify-top", "1", "--verify-fem-size-mm", "1"]  # fmt: skip
+    assert main(argv) == 0
+    capsys.readouterr()
+    assert took == [2.5]
