@@ -401,6 +401,29 @@ def test_torque_for_finds_the_current_of_a_torque(capsys):
     assert low["current_A"] == 0.0
 
 
+@pytest.mark.slow
+def test_torque_for_answers_at_each_fidelity(capsys):
+    """--method both: the fast path's (network) and the reference's (FEM) current for
+    0.3 N·m on the paper preset, each giving 0.3 N·m back by its own method (Brent to 1e-4
+    A at ~0.07 N·m/A), and each at the design's current limit the max torque evaluate
+    prints at that fidelity."""
+    from magnetics.torque import torque_curve
+
+    rows = _json(capsys, ["torque", "--preset", "paper", "--for", "0.3", "--method", "both"])
+    rows = {r["method"]: r for r in rows["methods"]}
+    assert set(rows) == {"network", "fem"}
+    clutch = design_preset("paper").clutch
+    for method, fidelity in (("network", "fast"), ("fem", "reference")):
+        i = rows[method]["current_A"]
+        back = torque_curve(clutch, [i], method=method).torque[0]
+        assert back == pytest.approx(0.3, abs=1e-4), method
+        ev = _json(capsys, ["evaluate", "--preset", "paper", "--fidelity", fidelity,
+                            "--no-uncertainty"])  # fmt: skip
+        assert rows[method]["torque_at_limit_N_m"] == pytest.approx(
+            ev["clutch"]["max_torque_N_m"], rel=1e-6), method  # fmt: skip
+    assert rows["network"]["current_A"] != rows["fem"]["current_A"]
+
+
 @pytest.mark.parametrize("argv", [
     ["--for", "-1"], ["--for", "0.3", "--current", "2"], ["--for", "nan"], ["--for", "abc"],
     ["--for", "0"], ["--for", "inf"], ["--for", "0.3", "--plot", "t.png"],
