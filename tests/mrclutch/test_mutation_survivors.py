@@ -320,3 +320,48 @@ def test_the_fem_check_of_a_sweep_is_timed_from_its_start(tmp_path, monkeypatch,
     assert main(argv) == 0
     capsys.readouterr()
     assert took == [2.5]
+
+
+def test_an_uncertainty_tables_refused_value_is_named_by_its_file_key():
+    """``uncertainty_from_mapping``: a value the Uncertainty itself refuses (a delay range
+    up to 2 s, above its 1 s cap) is named by the file's key, then the SI field's own
+    message: "uncertainty.delay_ms: delay = [0.001, 2.0] s: …". The mutant
+    ``str(exc).split(" ", 1)[1]`` (uncertainty.py:274) names it by the message's second
+    word."""
+    from geometry.validation import ParameterError
+    from mrclutch.uncertainty import uncertainty_from_mapping
+
+    with pytest.raises(ParameterError) as err:
+        uncertainty_from_mapping({"delay_ms": [1, 2000]})
+    assert str(err.value).startswith("uncertainty.delay_ms: delay = [0.001, 2.0] s: must be")
+
+
+def test_a_design_file_without_operating_keys_gets_the_documented_operating_point():
+    """A design file that gives no [operating] key gets the paper's bench (Fig. 2b, §IV-B)
+    and the stated defaults: 7 A, 530 rpm (55.5 rad/s), 1 ms delay, coil and ambient air at
+    20 °C, magnet wire of class 155 (155 °C), the peak held 1 s. The mutant ambient 22 °C
+    (operating.py:41) moves every temperature rise's base."""
+    from mrclutch.design import design_from_mapping
+
+    op = design_from_mapping({"clutch": {"base": "paper"}}).operating
+    got = (op.max_current, op.input_speed, op.delay, op.coil_temperature,
+           op.ambient_temperature, op.wire_temperature_limit, op.peak_duration)  # fmt: skip
+    assert got == pytest.approx((7.0, 530 * math.pi / 30, 1e-3, 20.0, 20.0, 155.0, 1.0))
+
+
+def test_search_box_refusals_say_which_process_bound():
+    """``search_box``: a process bound above a range's upper edge is refused naming the
+    bound: for the gap, the process's smallest gap (runout + tolerance)/eccentricity bound;
+    for a drum wall, its smallest wall. The mutant ``name != "gap"`` (optimize/box.py:40)
+    gives each the other's reason."""
+    from geometry.validation import ParameterError
+    from mrclutch.design import design_from_mapping
+    from mrclutch.optimize.box import search_box
+
+    base = design_from_mapping({"clutch": {"base": "paper"},
+                                "process": {"runout_mm": 0.05, "tolerance_mm": 0.05,
+                                            "min_wall_mm": 0.8}})  # fmt: skip
+    with pytest.raises(ParameterError, match=r"^gap_mm: the process's smallest gap \(runout"):
+        search_box(base, {"gap": (0.1e-3, 0.3e-3)})
+    with pytest.raises(ParameterError, match=r"^drum_thickness_mm: the process's smallest wall"):
+        search_box(base, {"drum_thickness": (0.2e-3, 0.5e-3)})
