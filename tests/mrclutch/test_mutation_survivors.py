@@ -365,3 +365,37 @@ def test_search_box_refusals_say_which_process_bound():
         search_box(base, {"gap": (0.1e-3, 0.3e-3)})
     with pytest.raises(ParameterError, match=r"^drum_thickness_mm: the process's smallest wall"):
         search_box(base, {"drum_thickness": (0.2e-3, 0.5e-3)})
+
+
+def test_no_uncertainty_shrinks_every_range_to_the_nominal_value():
+    """``no_uncertainty`` (``--no-uncertainty``): every spread 0, the torque factor (1, 1),
+    the temperature and delay ranges the operating values (20 °C, 1 ms without a design),
+    no bench damping. The mutants that put 0.001 in any of its zeros (uncertainty.py:445)
+    leave a spread."""
+    from mrclutch.uncertainty import no_uncertainty
+
+    u = no_uncertainty()
+    spreads = (u.viscosity_spread, u.gap_tolerance, u.runout, u.drum_thickness_tolerance,
+               u.yield_stress_spread, u.bh_spread)  # fmt: skip
+    assert spreads == (0.0,) * 6
+    assert u.torque_factor == (1.0, 1.0)
+    assert u.fluid_temperature == (20.0, 20.0) and u.delay == (1e-3, 1e-3)
+    assert u.bench_damping == (0.0, 0.0)
+
+
+def test_a_design_written_to_toml_reads_its_decimals_back_bit_for_bit():
+    """``design_to_toml`` writes each SI field as the shortest decimal of its file unit
+    that reads back to the same float: a gap of 0.523 mm is "gap_mm = 0.523", a delay of
+    1.7 ms "delay_ms = 1.7", and both read back bit for bit. The mutant ``float(to_si(m)) != si``
+    (design.py:448) writes the first decimal that does not read back (0.5 mm)."""
+    import tomllib
+
+    from mrclutch.design import design_from_mapping, design_to_toml
+
+    d = design_preset("paper")
+    d = replace(d, clutch=replace(d.clutch, gap=0.523e-3),
+                operating=replace(d.operating, delay=1.7e-3))  # fmt: skip
+    text = design_to_toml(d)
+    assert "gap_mm = 0.523\n" in text and "delay_ms = 1.7\n" in text
+    back = design_from_mapping(tomllib.loads(text))
+    assert back.clutch.gap == d.clutch.gap and back.operating.delay == d.operating.delay
