@@ -399,3 +399,30 @@ def test_a_design_written_to_toml_reads_its_decimals_back_bit_for_bit():
     assert "gap_mm = 0.523\n" in text and "delay_ms = 1.7\n" in text
     back = design_from_mapping(tomllib.loads(text))
     assert back.clutch.gap == d.clutch.gap and back.operating.delay == d.operating.delay
+
+
+def test_the_pareto_json_quotes_its_search_box_in_mm(monkeypatch, capsys):
+    """``optimize`` (Pareto) writes the box it searched as ``box_mm``: each length's
+    [low, high] of ``search_box`` (SI) × 1e3, the default box of the paper preset here,
+    with where each edge came from. A short search (16 designs, 4 generations, 2 members,
+    the fast path) is enough: the box does not depend on it. The mutant ``lo / 1000.0``
+    (cli/commands/optimize_pareto.py:142) quotes every low edge 10⁶ times too small."""
+    import json
+
+    from mrclutch.cli.commands import optimize_pareto as pareto_cmd
+    from mrclutch.cli.main import main
+    from mrclutch.optimize.box import search_box
+
+    real = pareto_cmd.pareto
+    monkeypatch.setattr(pareto_cmd, "pareto", lambda *a, **k: real(
+        *a, **{**k, "pop_size": 16, "generations": 4, "members": 2}))  # fmt: skip
+    code = main(["optimize", "--drums", "2", "--nominal", "--no-verify", "--json",
+                 "--no-progress"])  # fmt: skip
+    cap = capsys.readouterr()
+    assert code in (0, 3), cap.err  # 3: a requirement missed; the JSON is whole
+    data = json.loads(cap.out)
+    box, source = search_box(design_preset("paper"), None)
+    assert data["box_mm"] == {
+        f"{k}_mm": pytest.approx([lo * 1e3, hi * 1e3], rel=1e-12) for k, (lo, hi) in box.items()
+    }
+    assert data["box_source"] == {f"{k}_mm": v for k, v in source.items()}
