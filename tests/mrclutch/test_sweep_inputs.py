@@ -47,7 +47,7 @@ CHANGED = {
     "uncertainty": "viscosity_spread_pct = 20",
     "materials": 'fluid_file = "other.toml"',
     "duty": "torque_N_m = 0.2\ntime_s = 90",
-    "render": "",  # the one other [render] a sweep takes: the same rule, implied
+    "render": "",  # the one other `[render]` a sweep takes: the same rule, implied
 }
 
 FLUID = """name = "{name}"
@@ -294,7 +294,7 @@ def test_a_section_the_sweep_cannot_use_is_refused(tmp_path, table, body):
 )  # fmt: skip
 def test_a_render_rule_the_rows_do_not_follow_is_refused(tmp_path, body, fragment):
     """A sweep's rows render each design at its own K_max (the K_N_per_m column) and hold no
-    verdict: a [render] asking another K or a verdict was silently ignored (the rows of
+    verdict: a `[render]` asking another K or a verdict was silently ignored (the rows of
     rule = "typed", K = 50 N/m were byte for byte those without it); refused, naming the
     key."""
     path = write_spec(tmp_path, {k: SECTIONS[k] for k in ("sweep", "parameters")},
@@ -304,7 +304,7 @@ def test_a_render_rule_the_rows_do_not_follow_is_refused(tmp_path, body, fragmen
 
 
 def test_the_render_rule_the_rows_follow_is_taken(tmp_path):
-    """``rule = "K_max"`` (or an empty [render]) is what the rows do: taken, in the record."""
+    """``rule = "K_max"`` (or an empty `[render]`) is what the rows do: taken, in the record."""
     for body in ('rule = "K_max"', ""):
         spec, rest = load_spec(write_spec(tmp_path, {k: SECTIONS[k] for k in
                                                      ("sweep", "parameters")},
