@@ -51,7 +51,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "fidelity": ("mrclutch.cli.commands.fidelity", "speed against accuracy: time and error of "
                  "every method (chart + table)"),
     "tables": ("mrclutch.cli.commands.handoff", "the material library as CSV tables (B-H, "
-               "yield stress, viscosity)"),
+               "yield stress, viscosity, hysteresis, fluid life)"),
     "device": ("mrclutch.cli.commands.handoff", "the device description a haptic rendering "
                "framework clamps its commands to"),
 }  # fmt: skip
