@@ -244,8 +244,8 @@ def test_the_field_map_spans_the_section_and_a_margin(monkeypatch):
     """``plot_field`` draws r from 0 to the last grid node within 1.3 × the section's outer
     radius and z over the nodes within 3 mm of the section's ends, in mm. On nodes every
     2.5 mm over r 0–50 mm and 5 mm over z −30–30 mm, a section of r ≤ 20 mm and z ±10 mm:
-    r 0–25 mm (25 ≤ 1.3 × 20 = 26 < 27.5 mm), z −10–10 mm (±13 mm keeps the nodes at ±10). A steel region
-    r 5–15 mm, z −5–5 mm is outlined by a 10 × 10 mm rectangle at (5, −5) mm; the fluid is
+    r 0–25 mm (25 ≤ 1.3 × 20 = 26 < 27.5 mm), z −10–10 mm (±13 mm keeps the nodes at
+    ±10). A steel region r 5–15 mm, z −5–5 mm is outlined by a 10 × 10 mm rectangle at (5, −5) mm; the fluid is
     not outlined. The mutants ``r[keep_r][1]`` (cli/plots/magnetics.py:58) stop r at the
     second node, 2.5 mm; ``r_max * 1.43`` (:44) at 27.5 mm; ``(g.r1 - g.r0) / 1000.0`` (:56)
     draws the outline 10 µm wide."""
@@ -386,8 +386,10 @@ def test_no_uncertainty_shrinks_every_range_to_the_nominal_value():
 def test_a_design_written_to_toml_reads_its_decimals_back_bit_for_bit():
     """``design_to_toml`` writes each SI field as the shortest decimal of its file unit
     that reads back to the same float: a gap of 0.523 mm is "gap_mm = 0.523", a delay of
-    1.7 ms "delay_ms = 1.7", and both read back bit for bit. The mutant ``float(to_si(m)) != si``
-    (design.py:448) writes the first decimal that does not read back (0.5 mm)."""
+    1.7 ms "delay_ms = 1.7", the paper's 530 rpm "input_speed_rpm = 530.0", and they read
+    back bit for bit. The mutants ``float(to_si(m)) != si`` (design.py:448) write the first
+    decimal that does not read back (0.5 mm); ``factor < 1 or inv * factor == 1`` (:436)
+    writes the speed as rad/s × round(60/2π) = 10 (555 "rpm")."""
     import tomllib
 
     from mrclutch.design import design_from_mapping, design_to_toml
@@ -397,6 +399,7 @@ def test_a_design_written_to_toml_reads_its_decimals_back_bit_for_bit():
                 operating=replace(d.operating, delay=1.7e-3))  # fmt: skip
     text = design_to_toml(d)
     assert "gap_mm = 0.523\n" in text and "delay_ms = 1.7\n" in text
+    assert "input_speed_rpm = 530.0\n" in text  # a factor 2π/60 that is no 1/integer
     back = design_from_mapping(tomllib.loads(text))
     assert back.clutch.gap == d.clutch.gap and back.operating.delay == d.operating.delay
 
@@ -426,3 +429,19 @@ def test_the_pareto_json_quotes_its_search_box_in_mm(monkeypatch, capsys):
         f"{k}_mm": pytest.approx([lo * 1e3, hi * 1e3], rel=1e-12) for k, (lo, hi) in box.items()
     }
     assert data["box_source"] == {f"{k}_mm": v for k, v in source.items()}
+
+
+def test_the_figures_frequencies_span_the_band_log_spaced():
+    """``impedance.band_frequencies``: POINTS = 1500 frequencies log-spaced from the band's
+    low end to its high end (BAND_HZ by default; 1–100 Hz given): constant ratio
+    100^(1/1499) between neighbours. The mutant ``np.log10(band[1])`` as the start
+    (impedance.py:30) gives 1500 times the top."""
+    from mrclutch.haptics.model import BAND_HZ
+    from mrclutch.impedance import POINTS, band_frequencies
+
+    f = band_frequencies()
+    assert f.size == POINTS == 1500
+    assert (f[0], f[-1]) == pytest.approx(BAND_HZ, rel=1e-12)
+    g = band_frequencies((1.0, 100.0))
+    assert (g[0], g[-1]) == pytest.approx((1.0, 100.0), rel=1e-12)
+    assert g[1:] / g[:-1] == pytest.approx(np.full(1499, 100 ** (1 / 1499)), rel=1e-12)
