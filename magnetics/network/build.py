@@ -165,6 +165,7 @@ def network_from_regions(
     rung_perm, rung_fluid = zeros(m + 1), zeros(m + 1)
     gap_r0 = np.stack([at[f.r0] for f in films], axis=1)
     gap_r1 = np.stack([at[f.r1] for f in films], axis=1)
+    radii = _stacked_radii(at, rg)  # every region's r0, r1 once: (specs, (R, S), (R, S))
     for k, f in enumerate(films):
         inner, outer = f.walls
         r0, r1, g0, g1 = box(f)
@@ -177,7 +178,7 @@ def network_from_regions(
                 q0, q1 = at[sp.z0], at[sp.z1]
                 e0 = np.where(np.abs(q1 - e0) < 1e-12, np.minimum(e0, q0), e0)
                 e1 = np.where(np.abs(q0 - e1) < 1e-12, np.maximum(e1, q1), e1)
-        near = _window_regions(at, f, rg)  # what the fringes' legs may run through
+        near = _window_regions(at, f, radii)  # what the fringes' legs may run through
         for z, (zname, z0, z1) in enumerate(zones):
             a, b = wall(inner, zname), wall(outer, zname)
             lo = np.maximum(np.maximum(at[a.z0], at[b.z0]), g0)
@@ -329,20 +330,30 @@ def network_from_regions(
     )  # fmt: skip
 
 
+def _stacked_radii(
+    at: Mapping[str, FloatArray], rg: Regions
+) -> tuple[list[RegionSpec], FloatArray, FloatArray]:
+    """Every region of ``rg`` with its inner and outer radii stacked (R, S), once per
+    build: ``_window_regions`` asks per film, and a Python loop over the regions per film
+    was half of a 20-drum design's evaluate."""
+    specs = list(rg)
+    return specs, np.stack([at[sp.r0] for sp in specs]), np.stack([at[sp.r1] for sp in specs])
+
+
 def _window_regions(
-    at: Mapping[str, FloatArray], f: RegionSpec, rg: Regions
+    at: Mapping[str, FloatArray],
+    f: RegionSpec,
+    radii: tuple[list[RegionSpec], FloatArray, FloatArray],
 ) -> tuple[list[RegionSpec], list[RegionSpec]]:
     """The regions that reach, in some design, within one gap's width inside and outside
-    film ``f``'s radii (``_fringe_decay``'s windows), the film itself left out."""
+    film ``f``'s radii (``_fringe_decay``'s windows), the film itself left out; ``radii``
+    from ``_stacked_radii``."""
+    specs, r0, r1 = radii
     gap = at[f.r1] - at[f.r0]
-    inside, outside = [], []
-    for sp in rg:
-        if sp is not f:
-            if np.any((at[sp.r1] > at[f.r0] - gap) & (at[sp.r0] < at[f.r0])):
-                inside.append(sp)
-            if np.any((at[sp.r1] > at[f.r1]) & (at[sp.r0] < at[f.r1] + gap)):
-                outside.append(sp)
-    return inside, outside
+    inside = np.any((r1 > at[f.r0] - gap) & (r0 < at[f.r0]), axis=1)
+    outside = np.any((r1 > at[f.r1]) & (r0 < at[f.r1] + gap), axis=1)
+    return ([sp for sp, k in zip(specs, inside, strict=True) if k and sp is not f],
+            [sp for sp, k in zip(specs, outside, strict=True) if k and sp is not f])  # fmt: skip
 
 
 def _fringe_decay(
