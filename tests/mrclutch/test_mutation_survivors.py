@@ -245,10 +245,10 @@ def test_the_field_map_spans_the_section_and_a_margin(monkeypatch):
     radius and z over the nodes within 3 mm of the section's ends, in mm. On nodes every
     2.5 mm over r 0–50 mm and 5 mm over z −30–30 mm, a section of r ≤ 20 mm and z ±10 mm:
     r 0–25 mm (25 ≤ 1.3 × 20 = 26 < 27.5 mm), z −10–10 mm (±13 mm keeps the nodes at
-    ±10). A steel region r 5–15 mm, z −5–5 mm is outlined by a 10 × 10 mm rectangle at (5, −5) mm; the fluid is
-    not outlined. The mutants ``r[keep_r][1]`` (cli/plots/magnetics.py:58) stop r at the
-    second node, 2.5 mm; ``r_max * 1.43`` (:44) at 27.5 mm; ``(g.r1 - g.r0) / 1000.0`` (:56)
-    draws the outline 10 µm wide."""
+    ±10). A steel region r 5–15 mm, z −5–5 mm is outlined by a 10 × 10 mm rectangle at
+    (5, −5) mm; the fluid is not outlined. The mutants ``r[keep_r][1]``
+    (cli/plots/magnetics.py:58) stop r at the second node, 2.5 mm; ``r_max * 1.43`` (:44)
+    at 27.5 mm; ``(g.r1 - g.r0) / 1000.0`` (:56) draw the outline 10 µm wide."""
     import matplotlib.pyplot as plt
 
     from mrclutch.cli.plots import magnetics as magnetics_plots
@@ -445,3 +445,35 @@ def test_the_figures_frequencies_span_the_band_log_spaced():
     g = band_frequencies((1.0, 100.0))
     assert (g[0], g[-1]) == pytest.approx((1.0, 100.0), rel=1e-12)
     assert g[1:] / g[:-1] == pytest.approx(np.full(1499, 100 ** (1 / 1499)), rel=1e-12)
+
+
+def test_optimize_refuses_a_duty_of_zero_seconds(capsys):
+    """``optimize --duty NM:S``: both the torque and the time must be > 0; ``0.2:0`` is
+    refused in one line, exit 2. The mutant ``duty[1] >= 0`` (cli/commands/optimize.py:247)
+    takes a duty of no time."""
+    from mrclutch.cli.main import main
+
+    assert main(["optimize", "--objective", "bandwidth", "--duty", "0.2:0"]) == 2
+    err = capsys.readouterr().err
+    assert "--duty '0.2:0': torque and seconds must be > 0" in err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_optimize_objective_bar_counts_60_generations_a_drum_count(monkeypatch):
+    """``optimize --objective``: its progress bar counts 60 generations (the search's
+    default maxiter) for each drum count searched: 120 for --drums 1,2. The bar is stopped
+    at its start. The mutant ``61 * len(drums)`` (cli/commands/optimize.py:299) counts
+    122."""
+    from mrclutch.cli.commands import optimize as optimize_cmd
+    from mrclutch.cli.main import main
+
+    totals: list[int] = []
+
+    def bar(total, *a, **k):
+        totals.append(total)
+        raise _Stop
+
+    monkeypatch.setattr(optimize_cmd, "progress_bar", bar)
+    with pytest.raises(_Stop):
+        main(["optimize", "--objective", "bandwidth", "--drums", "1,2", "--nominal"])
+    assert totals == [120]
