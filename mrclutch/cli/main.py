@@ -16,7 +16,7 @@ import sys
 import warnings
 from collections.abc import Collection, Sequence
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any, NoReturn, TextIO
 
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.paths import OUTPUT_OPTIONS, check_writable
@@ -69,11 +69,20 @@ class _Version(argparse.Action):
         parser.exit()
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """argparse's parser whose usage errors are one line on stderr, exit 2, as every other
+    bad input of the CLI (argparse prints its usage block first; the line names where the
+    options are listed instead)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message} (options: {self.prog} --help)\n")
+
+
 def build_parser(commands: Collection[str] | None = None) -> argparse.ArgumentParser:
     """The parser. The modules of ``commands`` (None: every command) register their full
     subparsers; every other command is a stub that only carries its summary for ``--help``
     (its module is not imported)."""
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="mrclutch",
         description="Design MR drum clutches for haptic devices: CAD, inertia, torque, "
         "drag and the haptic consequences (SI units; lengths in mm where marked _mm).",

@@ -139,3 +139,24 @@ def test_corrupt_meta_refuses_the_resume(here, capsys, meta):
     Path("r.csv.meta.json").write_bytes(meta)
     _fails(capsys, [*argv, "--resume"], "r.csv.meta.json: unreadable")
     assert Path("r.csv").read_bytes() == csv  # the results are untouched
+
+
+@pytest.mark.parametrize(
+    ("argv", "fragment"),
+    [
+        (["torque", "--preset", "paper", "--speed-rpm", "abc"],
+         "mrclutch torque: error: argument --speed-rpm: invalid float value: 'abc'"),
+        (["haptic", "--lever-mm", "x"], "mrclutch haptic: error: argument --lever-mm"),
+        (["evaluate", "--bogus"], "mrclutch: error: unrecognized arguments: --bogus"),
+        ([], "the following arguments are required: COMMAND"),
+    ],
+)  # fmt: skip
+def test_argparse_usage_errors_are_one_line(capsys, argv, fragment):
+    """argparse's own errors (a word for a number, an unknown choice or option) are one
+    line and exit 2 like every other bad input, not its usage block and then the error."""
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err
+    assert fragment in err and "usage:" not in err, err
+    assert err.count("\n") == 1 and "--help" in err, err
