@@ -477,3 +477,34 @@ def test_optimize_objective_bar_counts_60_generations_a_drum_count(monkeypatch):
     with pytest.raises(_Stop):
         main(["optimize", "--objective", "bandwidth", "--drums", "1,2", "--nominal"])
     assert totals == [120]
+
+
+def test_pareto_refuses_a_material_axis_that_is_no_part_and_list():
+    """``pareto(materials=…)``: each entry must name a part (a SLOTS key) and give a
+    non-empty list of material names; an unknown part, a bare string or an empty list is
+    refused before any search, naming the entry. The mutant that joins the three tests with
+    ``and`` (optimize/pareto.py:108) lets each through alone."""
+    from geometry.validation import ParameterError
+
+    base = design_preset("paper")
+    for bad in ({"no_such_part": ["x"]}, {"fluid": "MRF-132DG"}, {"fluid": []}):
+        slot = next(iter(bad))
+        with pytest.raises(ParameterError, match=rf"^materials: '{slot}': give a part"):
+            pareto(base, drum_counts=(2,), pop_size=4, members=1, materials=bad)
+
+
+def test_the_motor_side_takes_the_mr_designs_lever():
+    """``motor_transmission``: the paper's EM bench (170 mm lever) moved to the MR design's
+    lever and workspace: on a 75 mm lever its lever is 75 mm, its k scaled by
+    (170/75)² (``Transmission.with_lever``); on the 170 mm lever it is the bench itself.
+    The mutant ``mr_tr.lever == EM_170.lever`` (at_hand.py:54) keeps the 170 mm lever."""
+    from mrclutch.at_hand import motor_transmission
+    from mrclutch.haptics.actuator import EM_170, MR_170, TABLE2_MR, actuator
+
+    motor = actuator("maxon-136206")
+    short = replace(MR_170, lever=0.075)
+    em = motor_transmission(TABLE2_MR, short, motor)
+    assert em.lever == 0.075 and em.workspace == short.workspace
+    assert em.k == pytest.approx(EM_170.k * (0.170 / 0.075) ** 2, rel=1e-12)
+    same = motor_transmission(TABLE2_MR, MR_170, motor)
+    assert same.lever == EM_170.lever and same.k == EM_170.k
