@@ -462,7 +462,7 @@ seal_torque_mN_m = 5
 def test_torque_is_the_designs_at_its_own_speed_temperature_and_support(tmp_path, capsys):
     """One design, one torque: `torque` at the current limit is `evaluate`'s max torque (fast:
     the network) and its 0 A torque the off-state torque, at the design's input speed, fluid
-    temperature and [support] drag. It was taken at 530 rpm, 20 °C and the default bearings
+    temperature and `[support]` drag. It was taken at 530 rpm, 20 °C and the default bearings
     whatever the file said (0.4272 against evaluate's 0.4309 N·m on this design)."""
     f = tmp_path / "d.toml"
     f.write_text(OFF_PAPER)
