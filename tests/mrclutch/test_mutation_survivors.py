@@ -508,3 +508,49 @@ def test_the_motor_side_takes_the_mr_designs_lever():
     assert em.k == pytest.approx(EM_170.k * (0.170 / 0.075) ** 2, rel=1e-12)
     same = motor_transmission(TABLE2_MR, MR_170, motor)
     assert same.lever == EM_170.lever and same.k == EM_170.k
+
+
+def test_vary_refuses_a_range_outside_the_lengths_valid_range_at_either_end():
+    """``parse_bounds`` (``--vary NAME_mm=LO:HI``): a range reaching below the length's
+    smallest valid value or above its largest is refused naming both (the optimiser would
+    only see invalid rows); one inside is read in metres. For the gap: LO at half its
+    smallest, HI at twice its largest, each refused alone. The mutant ``a / 0.001 < least``
+    (optimize/box.py:71) never refuses the low end."""
+    from geometry.params import LENGTH_RANGES
+    from geometry.validation import ParameterError
+    from mrclutch.optimize.box import parse_bounds
+
+    least, most = next((lo, hi) for f, lo, hi, _ in LENGTH_RANGES if f == "gap")
+    inside = (2 * least * 1e3, most * 1e3 / 2)
+    assert parse_bounds([f"gap_mm={inside[0]!r}:{inside[1]!r}"]) == {
+        "gap": pytest.approx((2 * least, most / 2), rel=1e-12)
+    }
+    for lo, hi in ((least * 1e3 / 2, inside[1]), (inside[0], 2 * most * 1e3)):
+        with pytest.raises(ParameterError, match=r"gap_mm must stay within \["):
+            parse_bounds([f"gap_mm={lo!r}:{hi!r}"])
+
+
+def test_optimize_reads_its_mm_and_g_limits_into_si(monkeypatch):
+    """``optimize``'s limits typed in the options' units reach the search in SI:
+    --max-length-mm 40 and --max-diameter-mm 50 as 0.040 and 0.050 m, --max-mass-g 150 as
+    0.150 kg. The search is
+    stopped at its start (its constraints recorded). The mutant
+    ``args.max_length_mm / 0.001`` (cli/commands/optimize.py:259) limits the length to
+    40 km."""
+    from mrclutch.cli.commands import optimize as optimize_cmd
+    from mrclutch.cli.main import main
+
+    seen: list = []
+
+    def stop(base, **k):
+        seen.append(k["constraints"])
+        raise _Stop
+
+    monkeypatch.setattr(optimize_cmd, "optimize", stop)
+    with pytest.raises(_Stop):
+        main(["optimize", "--objective", "bandwidth", "--drums", "2", "--nominal",
+              "--no-progress", "--max-length-mm", "40", "--max-diameter-mm", "50",
+              "--max-mass-g", "150"])  # fmt: skip
+    assert seen[0].max_length == pytest.approx(0.040, rel=1e-12)
+    assert seen[0].max_diameter == pytest.approx(0.050, rel=1e-12)
+    assert seen[0].max_mass == pytest.approx(0.150, rel=1e-12)
