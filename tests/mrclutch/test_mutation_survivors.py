@@ -389,7 +389,8 @@ def test_a_design_written_to_toml_reads_its_decimals_back_bit_for_bit():
     1.7 ms "delay_ms = 1.7", the paper's 530 rpm "input_speed_rpm = 530.0", and they read
     back bit for bit. The mutants ``float(to_si(m)) != si`` (design.py:448) write the first
     decimal that does not read back (0.5 mm); ``factor < 1 or inv * factor == 1`` (:436)
-    writes the speed as rad/s × round(60/2π) = 10 (555 "rpm")."""
+    writes the speed as rad/s × round(60/2π) = 10 (555 "rpm"); ``inv / factor == 1``
+    (:247) reads 110 mm²/s as 110 × 1e-6, one ulp from 110e-6."""
     import tomllib
 
     from mrclutch.design import design_from_mapping, design_to_toml
@@ -400,8 +401,11 @@ def test_a_design_written_to_toml_reads_its_decimals_back_bit_for_bit():
     text = design_to_toml(d)
     assert "gap_mm = 0.523\n" in text and "delay_ms = 1.7\n" in text
     assert "input_speed_rpm = 530.0\n" in text  # a factor 2π/60 that is no 1/integer
+    # a decimal prefix divides: 110 / 1e6 is the float 110e-6, 110 × 1e-6 is not
+    assert "grease_viscosity_mm2_per_s = 110.0\n" in text
     back = design_from_mapping(tomllib.loads(text))
     assert back.clutch.gap == d.clutch.gap and back.operating.delay == d.operating.delay
+    assert back.support.grease_viscosity == d.support.grease_viscosity == 110e-6
 
 
 def test_the_pareto_json_quotes_its_search_box_in_mm(monkeypatch, capsys):
@@ -533,7 +537,8 @@ def test_vary_refuses_a_range_outside_the_lengths_valid_range_at_either_end():
 def test_optimize_reads_its_mm_and_g_limits_into_si(monkeypatch):
     """``optimize``'s limits typed in the options' units reach the search in SI:
     --max-length-mm 40 and --max-diameter-mm 50 as 0.040 and 0.050 m, --max-mass-g 150 as
-    0.150 kg. The search is
+    0.150 kg, --duty 0.2:60 as 0.2 N·m held 60 s (the mutant ``duty_torque=duty[1]``,
+    cli/commands/optimize.py:265, asks 60 N·m). The search is
     stopped at its start (its constraints recorded). The mutant
     ``args.max_length_mm / 0.001`` (cli/commands/optimize.py:259) limits the length to
     40 km."""
@@ -550,7 +555,8 @@ def test_optimize_reads_its_mm_and_g_limits_into_si(monkeypatch):
     with pytest.raises(_Stop):
         main(["optimize", "--objective", "bandwidth", "--drums", "2", "--nominal",
               "--no-progress", "--max-length-mm", "40", "--max-diameter-mm", "50",
-              "--max-mass-g", "150"])  # fmt: skip
+              "--max-mass-g", "150", "--duty", "0.2:60"])  # fmt: skip
     assert seen[0].max_length == pytest.approx(0.040, rel=1e-12)
     assert seen[0].max_diameter == pytest.approx(0.050, rel=1e-12)
     assert seen[0].max_mass == pytest.approx(0.150, rel=1e-12)
+    assert (seen[0].duty_torque, seen[0].duty_time) == (0.2, 60.0)
