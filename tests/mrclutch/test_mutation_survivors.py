@@ -560,3 +560,33 @@ def test_optimize_reads_its_mm_and_g_limits_into_si(monkeypatch):
     assert seen[0].max_diameter == pytest.approx(0.050, rel=1e-12)
     assert seen[0].max_mass == pytest.approx(0.150, rel=1e-12)
     assert (seen[0].duty_torque, seen[0].duty_time) == (0.2, 60.0)
+
+
+def test_the_pareto_table_on_the_fast_path_reads_back_to_its_json(monkeypatch, capsys):
+    """``optimize`` (Pareto, --no-verify): each member's row of the printed table quotes its
+    fast row of the JSON of the same (seeded) run: continuous torque above drag in mN·m
+    (× 1e3), mass in g (× 1e3), each within half its last printed digit. The mutant
+    ``f[CONTINUOUS] * 1100.0`` (cli/commands/optimize_pareto.py:205) prints it 10 % high."""
+    import json
+
+    from mrclutch.cli.commands import optimize_pareto as pareto_cmd
+    from mrclutch.cli.main import main
+
+    real = pareto_cmd.pareto
+    monkeypatch.setattr(pareto_cmd, "pareto", lambda *a, **k: real(
+        *a, **{**k, "pop_size": 16, "generations": 4, "members": 2}))  # fmt: skip
+    argv = ["optimize", "--drums", "2", "--nominal", "--no-verify", "--no-progress"]
+    assert main(argv) in (0, 3)
+    text = capsys.readouterr().out.splitlines()
+    assert main([*argv, "--json"]) in (0, 3)
+    members = json.loads(capsys.readouterr().out)["members"]
+    head = next(i for i, ln in enumerate(text) if ln.lstrip().startswith("# drums"))
+    # member, drums, gap, wall, d_in, zone, BW Hz, backdr N, then these two
+    assert text[head].split()[10:14] == ["cont", "mNm", "mass", "g"]
+    cont, mass = 8, 9
+    rows = [ln.split() for ln in text[head + 1 : head + 1 + len(members)]]
+    assert members and [int(r[0]) for r in rows] == [m["member"] for m in members]
+    for r, m in zip(rows, members, strict=True):
+        assert float(r[cont]) == pytest.approx(m["fast"]["continuous_above_drag_N_m"] * 1e3,
+                                               abs=0.05)  # fmt: skip
+        assert float(r[mass]) == pytest.approx(m["fast"]["clutch_mass_kg"] * 1e3, abs=0.005)
