@@ -36,6 +36,27 @@ def _run(args: list[str], env: dict[str, str], cwd: Path) -> subprocess.Complete
     return run
 
 
+def quick_start_lines() -> list[str]:
+    """The README's Quick start commands as written (the fenced block after "## Quick
+    start"), comments cut: the main job's line, then the tests' line."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    block = text.split("## Quick start", 1)[1].split("```bash", 1)[1].split("```", 1)[0]
+    return [line.split("#", 1)[0].strip() for line in block.splitlines() if line.strip()]
+
+
+#: What the tests' line's ``python -m pytest`` runs in the fresh venv: one file that imports
+#: the network package (the import that failed), in one process. The whole suite is what
+#: .ci/run runs with that same line; here it would run this test inside itself.
+SMOKE = "-n 0 -p no:randomly -p no:cacheprovider tests/magnetics/test_network.py"
+
+
+def test_the_quick_start_is_two_lines_a_main_job_and_the_tests():
+    """What the install test runs is the README's block: two lines, the main job first."""
+    main_job, tests = quick_start_lines()
+    assert main_job.startswith("pip install . && mrclutch report"), main_job
+    assert tests == 'pip install -e ".[dev]" && python -m pytest', tests
+
+
 @pytest.mark.slow
 @pytest.mark.skipif(
     not os.environ.get("CI") and not os.environ.get("MRCLUTCH_INSTALL_TEST"),
@@ -43,16 +64,17 @@ def _run(args: list[str], env: dict[str, str], cwd: Path) -> subprocess.Complete
     "(CI set) or with MRCLUTCH_INSTALL_TEST=1",
 )
 def test_quick_start_lines_in_either_order_in_one_venv(tmp_path):
-    """In a fresh venv (``--system-site-packages``: the dependencies of this environment,
-    so only the build backend is fetched, as pip does; the project installed with
-    ``--no-deps``) from a copy of the working tree (its files git does not ignore): install
-    the wheel (``pip install .``), run a solve that compiles (its cache in
-    $XDG_CACHE_HOME/mrclutch/numba, no file of it in site-packages), then
-    ``pip install -e .`` on top: ``mrclutch evaluate --preset paper`` runs (it failed with
-    ``cannot import name 'Network'`` when the cache lived in the package), the package is
-    imported from the source copy and site-packages holds no ``magnetics`` folder; the
-    solve compiles for the new source and gives the same torque; the wheel again on top
-    of the editable install: ``evaluate`` runs."""
+    """The README's Quick start run as written (``quick_start_lines``), both lines in one
+    fresh venv (``--system-site-packages``: the dependencies of this environment, so only
+    the build backend is fetched, as pip does) in a copy of the working tree (its files git
+    does not ignore): the main job's line (``pip install . && mrclutch report …``) writes
+    its report; a solve that compiles caches its kernels in $XDG_CACHE_HOME/mrclutch/numba,
+    none in site-packages; the tests' line on top (``pip install -e ".[dev]" && python -m
+    pytest``, its pytest limited to ``SMOKE`` by PYTEST_ADDOPTS) passes, and then
+    ``mrclutch evaluate --preset paper`` runs (it failed with ``cannot import name
+    'Network'`` when the cache lived in the package), site-packages holds no ``magnetics``
+    folder and the solve compiles for the source copy with the same torque; the main job's
+    line again, on top of the editable install, writes its report."""
     ls = ["git", "ls-files", "-z", "--cached", "--others", "--exclude-standard"]
     files = subprocess.run(ls, cwd=ROOT, capture_output=True, check=True).stdout.decode()
     files = files.split("\0")
@@ -68,21 +90,25 @@ def test_quick_start_lines_in_either_order_in_one_venv(tmp_path):
     env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_CACHE_DIR", "PYTHONPATH")}
     env.update(XDG_CACHE_HOME=str(tmp_path / "cache"), PATH=f"{venv / 'bin'}:{env['PATH']}",
                OPENBLAS_NUM_THREADS="1", PIP_DISABLE_PIP_VERSION_CHECK="1")  # fmt: skip
-    pip = [str(py), "-m", "pip", "install", "-q", "--no-deps"]
     site = Path(_run([str(py), "-c", "import sysconfig; print(sysconfig.get_path('purelib'))"],
                      env, tmp_path).stdout.strip())  # fmt: skip
     cache = tmp_path / "cache" / "mrclutch" / "numba"
     evaluate = ["mrclutch", "evaluate", "--preset", "paper", "--no-uncertainty"]
 
-    _run([*pip, str(src)], env, tmp_path)  # pip install .
+    main_job, tests = quick_start_lines()
+    shell = ["bash", "-c"]
+
+    _run([*shell, main_job], env, src)  # the README's first line, as written
+    assert (src / "report" / "report.html").is_file(), "the main job wrote its report"
     first = _run([str(py), "-c", _COMPILE], env, tmp_path)
     where, numba, torque = first.stdout.split()
     assert Path(where).is_relative_to(site) and numba == "True"
     assert list(cache.rglob("*.nbi")), "the compiled kernels are cached in the user's folder"
     assert not list((site / "magnetics").rglob("*.nb[ic]")), "no kernel cache in the package"
-    _run(evaluate, env, tmp_path)
 
-    _run([*pip, "-e", str(src)], env, tmp_path)  # pip install -e . on top
+    # the README's second line, as written, on top (its pytest limited to SMOKE, below)
+    ran = _run([*shell, tests], {**env, "PYTEST_ADDOPTS": SMOKE}, src)
+    assert " passed" in ran.stdout and " failed" not in ran.stdout, ran.stdout[-2000:]
     assert not (site / "magnetics").exists(), "the wheel's package folder is gone"
     out = _run(evaluate, env, tmp_path)
     assert "K_max" in out.stdout or "N/m" in out.stdout, out.stdout
@@ -91,5 +117,7 @@ def test_quick_start_lines_in_either_order_in_one_venv(tmp_path):
     assert Path(where).is_relative_to(src) and torque_again == torque
     assert not list(src.rglob("*.nb[ic]")), "no kernel cache in the source tree either"
 
-    _run([*pip, str(src)], env, tmp_path)  # and the wheel again on top of the editable
+    shutil.rmtree(src / "report")
+    _run([*shell, main_job], env, src)  # and the first line again, on top of the editable
+    assert (src / "report" / "report.html").is_file()
     _run(evaluate, env, tmp_path)
