@@ -92,8 +92,8 @@ COMMANDS = {  # command -> its flags that take a value (fuzzed) and its switches
     ),
     "compare": (["--stiffness", "--delay-ms", "--workspace-mm"], ["--json"], []),
     "torque": (
-        ["--current", "--speed-rpm", "--fluid-temperature-C"],
-        ["--json"],
+        ["--current", "--speed-rpm", "--fluid-temperature-C", "--for"],
+        ["--json", "--ignore-limit"],
         ["--method", "circuit"],
     ),
     "scale": (["--factor"], ["--json"], []),
