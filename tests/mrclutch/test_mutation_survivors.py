@@ -590,3 +590,72 @@ def test_the_pareto_table_on_the_fast_path_reads_back_to_its_json(monkeypatch, c
         assert float(r[cont]) == pytest.approx(m["fast"]["continuous_above_drag_N_m"] * 1e3,
                                                abs=0.05)  # fmt: skip
         assert float(r[mass]) == pytest.approx(m["fast"]["clutch_mass_kg"] * 1e3, abs=0.005)
+
+
+def test_every_uncertainty_key_is_read_in_si_by_its_units_factor():
+    """The [uncertainty] table's keys carry their unit: % spreads as fractions (20 % =
+    0.20), mm as m (0.03 mm = 3e-5 m), ms as s, N·s/m and °C as they are. The mutant
+    ``"runout_mm": (…, 0.0011, …)`` (uncertainty.py:216) reads 0.04 mm as 4.4e-5 m."""
+    from mrclutch.uncertainty import uncertainty_from_mapping
+
+    u = uncertainty_from_mapping({
+        "viscosity_spread_pct": 20, "fluid_temperature_C": [20, 50], "gap_tolerance_mm": 0.03,
+        "runout_mm": 0.04, "drum_thickness_tolerance_mm": 0.05, "delay_ms": [1, 3],
+        "bench_damping_N_s_per_m": [0, 0.2], "yield_stress_spread_pct": 12, "bh_spread_pct": 6,
+    })  # fmt: skip
+    got = (u.viscosity_spread, *u.fluid_temperature, u.gap_tolerance, u.runout,
+           u.drum_thickness_tolerance, *u.delay, *u.bench_damping, u.yield_stress_spread,
+           u.bh_spread)  # fmt: skip
+    want = (0.20, 20.0, 50.0, 3e-5, 4e-5, 5e-5, 1e-3, 3e-3, 0.0, 0.2, 0.12, 0.06)
+    assert got == pytest.approx(want, rel=1e-12)
+
+
+def test_a_measured_tables_source_is_kept():
+    """[measured] ``source``: the bench's name, kept as typed (a string). The mutant
+    ``key != "source"`` (uncertainty.py:309) refuses it or takes another key for it."""
+    from geometry.validation import ParameterError
+    from mrclutch.uncertainty import measured_from_mapping
+
+    assert measured_from_mapping({"source": "bench 3, 2025"}).source == "bench 3, 2025"
+    with pytest.raises(ParameterError, match=r"measured\.source = 3: must be a string"):
+        measured_from_mapping({"source": 3})
+
+
+def test_the_slowest_input_speed_accepted_is_1e_6_rad_s():
+    """``Operating.input_speed`` ≥ MIN_INPUT_SPEED = 1e-6 rad/s (a turn in 73 days; nearer
+    0 the drag underflows): 1e-6 is taken, 0.9e-6 refused naming input_speed. The mutant
+    1.1e-6 (operating.py:24) refuses 1e-6."""
+    from geometry.validation import ParameterError
+    from mrclutch.operating import MIN_INPUT_SPEED, Operating
+
+    assert MIN_INPUT_SPEED == 1e-6
+    assert Operating(input_speed=1e-6).input_speed == 1e-6
+    with pytest.raises(ParameterError, match="input_speed"):
+        Operating(input_speed=0.9e-6)
+
+
+def test_an_operating_key_without_its_unit_is_told_the_key_with_it():
+    """A design file's ``operating.delay = 1`` or ``max_current = 5`` (no unit) is refused
+    with the key it means: "unknown key; write delay_ms" (… max_current_A). The mutant
+    ``k.rsplit("_", 2)`` (design.py:261) strips two words: no hint for max_current."""
+    from geometry.validation import ParameterError
+    from mrclutch.design import design_from_mapping
+
+    with pytest.raises(ParameterError, match=r"operating\.delay: unknown key; write delay_ms"):
+        design_from_mapping({"clutch": {"base": "paper"}, "operating": {"delay": 1}})
+    with pytest.raises(ParameterError, match=r"max_current: unknown key; write max_current_A"):
+        design_from_mapping({"clutch": {"base": "paper"}, "operating": {"max_current": 5}})
+
+
+def test_a_value_the_design_refuses_is_told_with_the_files_key_first():
+    """A file value in range for the reader but refused by the design's own check (a lever
+    of 1e-9 mm = 1e-12 m) is told with the file's key and value first:
+    "…transmission.lever_mm = 1e-09: lever = 1e-12 m: …". The mutant ``split(" ", 1)[1]``
+    (design.py:261) looks the key up by the message's second word and says only
+    "lever = 1e-12 m: …"."""
+    from geometry.validation import ParameterError
+    from mrclutch.design import design_from_mapping
+
+    with pytest.raises(ParameterError) as err:
+        design_from_mapping({"clutch": {"base": "paper"}, "transmission": {"lever_mm": 1e-9}})
+    assert "transmission.lever_mm = 1e-09: lever = 1e-12 m" in str(err.value)
