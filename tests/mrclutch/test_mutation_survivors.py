@@ -57,9 +57,15 @@ def test_sweep_rate_is_designs_timed_over_the_time_they_took(monkeypatch):
 
     monkeypatch.setattr(estimates, "time", SimpleNamespace(perf_counter=lambda: clock[0]))
     monkeypatch.setattr(estimates, "use_compiled", lambda: None)  # no process-wide switch
-    spec = SimpleNamespace(n_designs=10_000, chunk_size=100,
-                           design_fields=lambda i: (None, {"gap": np.zeros(10_000)}))  # fmt: skip
+    asked: list[int] = []  # the chunks whose fields are timed: the first (chunk 0)
+
+    def fields(i):
+        asked.append(i)
+        return None, {"gap": np.zeros(10_000)}
+
+    spec = SimpleNamespace(n_designs=10_000, chunk_size=100, design_fields=fields)
     rate, done = estimates.sweep_rate(spec, evaluator, 2)
+    assert asked == [0]  # the mutant design_fields(1) (estimates.py:29) times chunk 1
     assert done == 300
     assert rate == pytest.approx(1600.0, rel=1e-12)
 
@@ -160,6 +166,7 @@ def test_null_notes_take_the_tables_note_else_the_keys_documented_meaning():
         "haptic": {"resonance_hz": None, "B_N_s_per_m": float("nan")},
         "em": {"note": "no motor of this torque", "resonance_hz": None,
                "B_N_s_per_m": float("nan")},
+        "zwidth": {"mr": {"K_max_N_per_m": None}},
         "duty": {"time_to_wire_limit_s": float("inf")},
     }  # fmt: skip
     assert null_notes(data) == {
@@ -167,6 +174,7 @@ def test_null_notes_take_the_tables_note_else_the_keys_documented_meaning():
         "haptic/B_N_s_per_m": NAN_MEANS["B_N_s_per_m"],
         "em/resonance_hz": "no motor of this torque",
         "em/B_N_s_per_m": "no motor of this torque",
+        "zwidth/mr/K_max_N_per_m": NAN_MEANS["K_max_N_per_m"],  # the last key's, not "mr"'s
         "duty/time_to_wire_limit_s": INF_MEANS["time_to_wire_limit_s"],
     }
 
@@ -555,11 +563,13 @@ def test_optimize_reads_its_mm_and_g_limits_into_si(monkeypatch):
     with pytest.raises(_Stop):
         main(["optimize", "--objective", "bandwidth", "--drums", "2", "--nominal",
               "--no-progress", "--max-length-mm", "40", "--max-diameter-mm", "50",
-              "--max-mass-g", "150", "--duty", "0.2:60"])  # fmt: skip
+              "--max-mass-g", "150", "--duty", "0.2:60",
+              "--max-residual-torque-mNm", "5"])  # fmt: skip
     assert seen[0].max_length == pytest.approx(0.040, rel=1e-12)
     assert seen[0].max_diameter == pytest.approx(0.050, rel=1e-12)
     assert seen[0].max_mass == pytest.approx(0.150, rel=1e-12)
     assert (seen[0].duty_torque, seen[0].duty_time) == (0.2, 60.0)
+    assert seen[0].max_residual_torque == pytest.approx(0.005, rel=1e-12)  # :270, 5 mN·m
 
 
 def test_the_pareto_table_on_the_fast_path_reads_back_to_its_json(monkeypatch, capsys):
