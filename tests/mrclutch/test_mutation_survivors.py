@@ -669,3 +669,21 @@ def test_a_value_the_design_refuses_is_told_with_the_files_key_first():
     with pytest.raises(ParameterError) as err:
         design_from_mapping({"clutch": {"base": "paper"}, "transmission": {"lever_mm": 1e-9}})
     assert "transmission.lever_mm = 1e-09: lever = 1e-12 m" in str(err.value)
+
+
+def test_the_mass_and_diameter_terms_are_the_value_over_its_limit_less_one():
+    """``Constraints.terms``' mass and diameter terms are x/x_max − 1: 0 for the paper
+    clutch with its own mass (diameter) as the limit, 1 with half of it, −0.5 with twice
+    it. The mutant ``d/d_max − 2`` (optimize/limits.py:100) puts the diameter limit at
+    twice the one typed."""
+    from mrclutch.optimize.limits import Constraints, evaluate_rows
+
+    base = design_preset("paper")
+    c = base.clutch
+    fields = {k: np.array([getattr(c, k)]) for k in ("gap", "drum_thickness", "n_drums")}
+    rows = evaluate_rows(fields, base, Constraints().resolved(base))
+    for key, col in (("mass", "clutch_mass_kg"), ("diameter", "diameter_m")):
+        x = float(rows[col][0])
+        for limit, term in ((x, 0.0), (x / 2, 1.0), (2 * x, -0.5)):
+            cons = replace(Constraints(), **{f"max_{key}": limit}).resolved(base)
+            assert float(cons.terms(rows)[key][0]) == pytest.approx(term, abs=1e-12)
