@@ -687,3 +687,48 @@ def test_the_mass_and_diameter_terms_are_the_value_over_its_limit_less_one():
         for limit, term in ((x, 0.0), (x / 2, 1.0), (2 * x, -0.5)):
             cons = replace(Constraints(), **{f"max_{key}": limit}).resolved(base)
             assert float(cons.terms(rows)[key][0]) == pytest.approx(term, abs=1e-12)
+
+
+def test_the_optimisers_rows_quote_evaluates_coil_power_and_drag_free_torque(capsys):
+    """``evaluate_rows`` (the optimiser's limit columns) on the paper preset against
+    ``evaluate --json`` of the same design: the coil power at the current limit (I² R at
+    the coil's temperature, R = R20 (1 + α (T − 20))) and the continuous torque above drag
+    (continuous torque − off-state drag), within the fast path's own agreement (1e-9). The
+    mutants ``coil_temperature + 20.0`` (optimize/limits.py:168) and ``continuous + off``
+    (:182) move each."""
+    import json
+
+    from mrclutch.cli.main import main
+    from mrclutch.optimize.limits import CONTINUOUS, Constraints, evaluate_rows
+
+    assert main(["evaluate", "--preset", "paper", "--json"]) == 0
+    cl = json.loads(capsys.readouterr().out)["clutch"]
+    base = design_preset("paper")
+    c = base.clutch
+    fields = {k: np.array([getattr(c, k)]) for k in ("gap", "drum_thickness", "n_drums")}
+    rows = evaluate_rows(fields, base, Constraints().resolved(base))
+    assert rows["coil_power_W"][0] == pytest.approx(cl["coil_power_W"], rel=1e-9)
+    above = cl["continuous_torque_N_m"] - cl["off_state_torque_N_m"]
+    assert rows[CONTINUOUS][0] == pytest.approx(above, rel=1e-9)
+
+
+def test_a_member_touches_a_range_edge_within_one_percent_of_the_range():
+    """``range_edges``: a member touches an edge of its search range within EDGE = 1 % of
+    the range's width. A gap range 0.2–0.6 mm (width 0.4 mm, so within 4 µm): 0.203 mm
+    touches the lower edge, 0.597 mm the upper one, 0.207, 0.4 and 0.593 mm none. The
+    mutant ``EDGE * (hi + lo)`` (optimize/box.py:91) takes 1 % of 0.8 mm = 8 µm and flags
+    0.207 and 0.593 mm."""
+    from mrclutch.optimize.box import EDGE, range_edges
+
+    assert EDGE == 0.01
+    base = design_preset("paper")
+    box, source = {"gap": (0.2e-3, 0.6e-3)}, {"gap": "range"}
+
+    def edges(gap: float) -> tuple[str, ...]:
+        d = replace(base, clutch=replace(base.clutch, gap=gap))
+        return range_edges(d, box, source, (2,))
+
+    assert edges(0.203e-3) == ("gap at the lower edge of --vary (0.2 mm): widen the range or "
+                               "relax the process limit",)  # fmt: skip
+    assert edges(0.597e-3) == ("gap at the upper edge of --vary (0.6 mm): widen the range",)
+    assert edges(0.207e-3) == edges(0.593e-3) == edges(0.4e-3) == ()
