@@ -233,7 +233,7 @@ def test_only_the_side_rendered_at_the_others_k_max_says_so(capsys):
     """``compare`` renders both sides at the smaller K_max: the side whose own K_max is the
     larger (the MR pair, 343.9 against the motor's 299.2 N/m) says "the smaller K_max of the
     two" and its own; the motor, at its own K_max, and ``haptic`` of one actuator say
-    "K_max … N/m [source]". The mutant ``… or rule is None or …`` (cli/commands/haptic.py:255)
+    "K_max … N/m `[source]`". The mutant ``… or rule is None or …`` (cli/commands/haptic.py:255)
     labels every side so."""
     from mrclutch.cli.main import main
 
@@ -345,7 +345,7 @@ def test_an_uncertainty_tables_refused_value_is_named_by_its_file_key():
 
 
 def test_a_design_file_without_operating_keys_gets_the_documented_operating_point():
-    """A design file that gives no [operating] key gets the paper's bench (Fig. 2b, §IV-B)
+    """A design file that gives no `[operating]` key gets the paper's bench (Fig. 2b, §IV-B)
     and the stated defaults: 7 A, 530 rpm (55.5 rad/s), 1 ms delay, coil and ambient air at
     20 °C, magnet wire of class 155 (155 °C), the peak held 1 s. The mutant ambient 22 °C
     (operating.py:41) moves every temperature rise's base."""
@@ -603,7 +603,7 @@ def test_the_pareto_table_on_the_fast_path_reads_back_to_its_json(monkeypatch, c
 
 
 def test_every_uncertainty_key_is_read_in_si_by_its_units_factor():
-    """The [uncertainty] table's keys carry their unit: % spreads as fractions (20 % =
+    """The `[uncertainty]` table's keys carry their unit: % spreads as fractions (20 % =
     0.20), mm as m (0.03 mm = 3e-5 m), ms as s, N·s/m and °C as they are. The mutant
     ``"runout_mm": (…, 0.0011, …)`` (uncertainty.py:216) reads 0.04 mm as 4.4e-5 m."""
     from mrclutch.uncertainty import uncertainty_from_mapping
@@ -621,7 +621,7 @@ def test_every_uncertainty_key_is_read_in_si_by_its_units_factor():
 
 
 def test_a_measured_tables_source_is_kept():
-    """[measured] ``source``: the bench's name, kept as typed (a string). The mutant
+    """`[measured]` ``source``: the bench's name, kept as typed (a string). The mutant
     ``key != "source"`` (uncertainty.py:309) refuses it or takes another key for it."""
     from geometry.validation import ParameterError
     from mrclutch.uncertainty import measured_from_mapping
