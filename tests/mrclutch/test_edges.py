@@ -273,3 +273,26 @@ def test_process_moves_the_worst_cases_runout_and_gap_tolerance(paper):
     u = process_uncertainty(base)
     assert (u.runout, u.gap_tolerance) == (0.05e-3, 0.01e-3)
     assert u.viscosity_spread == 0.18 and u.fluid_temperature == (20.0, 40.0)
+
+
+def test_a_fluid_temperature_range_below_the_operating_point_raises_b1s_high_edge():
+    """A range reaching below the operating temperature (0–20 °C on the paper preset, at
+    20 °C) raises b1's high edge by the drag's ratio between the range's cold end and the
+    operating point, read here from two fast-path evaluations at 20 and 0 °C (η(T) of the
+    carrier: ×3.08), every other spread zero; its low edge stays b1 (the factor at 20 °C is
+    the smaller). The default ranges start at the operating point, where the cold factor
+    is 1, so only such a range tells ×factor from ÷factor (mutation survivor
+    hand_box.py:144)."""
+    base = design_preset("paper")
+    op = base.operating
+    cold = op.fluid_temperature - 20.0
+    unc = Uncertainty(viscosity_spread=0.0, fluid_temperature=(cold, op.fluid_temperature),
+                      gap_tolerance=0.0, runout=0.0, drum_thickness_tolerance=0.0)  # fmt: skip
+    gap = {"gap": np.array([base.clutch.gap])}
+    b1, lo, hi = hand_box_batch(gap, base, unc).b1
+    colder = replace(base, operating=replace(op, fluid_temperature=cold))
+    ratio = (evaluate_batch(gap, colder)["drag_damping_N_m_s"]
+             / evaluate_batch(gap, base)["drag_damping_N_m_s"])  # fmt: skip
+    assert ratio[0] > 2.0  # the carrier is much thicker at 0 °C
+    assert hi[0] == pytest.approx(b1[0] * ratio[0], rel=1e-9)
+    assert lo[0] == pytest.approx(b1[0], rel=1e-12)
