@@ -732,3 +732,22 @@ def test_a_member_touches_a_range_edge_within_one_percent_of_the_range():
                                "relax the process limit",)  # fmt: skip
     assert edges(0.597e-3) == ("gap at the upper edge of --vary (0.6 mm): widen the range",)
     assert edges(0.207e-3) == edges(0.593e-3) == edges(0.4e-3) == ()
+
+
+@pytest.mark.parametrize(("lo", "hi", "ok"), [(-40.0, 130.0, True), (-40.01, 20.0, False),
+                                               (20.0, 130.01, False)])  # fmt: skip
+def test_a_fluid_temperature_range_may_reach_the_fluids_own_limits(lo, hi, ok):
+    """MRF-132DG's rated range is −40…130 °C ([lord-mrf132dg]): a `[uncertainty]` range that
+    reaches exactly its ends is the fluid's own and is accepted; a hundredth of a degree
+    past either end is refused, naming the fluid's range. Mutants ``lo <= flo`` and
+    ``hi >= fhi`` (uncertainty.py:376) refuse the rated ends."""
+    from geometry.validation import ParameterError
+    from mrclutch.uncertainty import Uncertainty, check_consistent
+
+    d = design_preset("paper")
+    d = replace(d, uncertainty=Uncertainty(fluid_temperature=(lo, hi)))
+    if ok:
+        check_consistent(d)
+    else:
+        with pytest.raises(ParameterError, match="must lie in the fluid's range"):
+            check_consistent(d)
