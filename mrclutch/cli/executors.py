@@ -6,6 +6,7 @@
 
 from __future__ import annotations
 
+import gc
 import logging
 import math
 import os
@@ -102,7 +103,16 @@ def _dask_client(scheduler: str | None, n: int | None, timeout: float) -> Iterat
     try:
         client = distributed.Client(scheduler, timeout=timeout)
     except (OSError, ValueError) as exc:  # a bad address; none answering (TimeoutError)
-        raise CLIError(f"--scheduler {scheduler}: {_line(exc)}") from None
+        refused = f"--scheduler {scheduler}: {_line(exc)}"
+    else:
+        refused = None
+    if refused is not None:
+        # the half-started Client sits in a reference cycle: collected here, its __del__
+        # closes its loop now; left to a later collection, that __del__ can run inside the
+        # next Client's loop start (the new thread's bootstrap), which holds the lock its
+        # close waits for: the process hung (a full suite run, in-process main())
+        gc.collect()
+        raise CLIError(refused)
     try:
         try:
             client.wait_for_workers(1, timeout=timeout)
