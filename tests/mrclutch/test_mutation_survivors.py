@@ -751,3 +751,24 @@ def test_a_fluid_temperature_range_may_reach_the_fluids_own_limits(lo, hi, ok):
     else:
         with pytest.raises(ParameterError, match="must lie in the fluid's range"):
             check_consistent(d)
+
+
+def test_headline_names_each_verdict_by_how_it_holds():
+    """``robust.headline`` on a hand-made read-out: stability holds over every value of the
+    ranges, passivity depends on b1 (threshold 0.4 N·s/m inside its range 0.1–1). The
+    sentence says "stable for every value", never "passive for every value", and gives
+    passivity's condition with its threshold. Mutant ``holds != "always"`` (robust.py:272)
+    swaps which verdict is called unconditional."""
+    from mrclutch.robust import headline
+
+    band = {"worst": 40.0, "best": 400.0}
+    b1 = {"range": (0.1, 1.0), "value": 0.4, "sense": "≥"}
+    r = {"K_N_per_m": 100.0, "max_stable_K_N_per_m": band, "max_passive_K_N_per_m": band,
+         "verdicts": {"stable": {"holds": "always", "nominal": True, "thresholds": {}},
+                      "passive": {"holds": "depends", "nominal": False,
+                                  "thresholds": {"b1": b1}}}}  # fmt: skip
+    text = headline(r)
+    assert text.startswith("Robust verdict at K = 100 N/m: stable for every value of the "
+                           "ranges; not passive at nominal values, passive only if b1 ≥ "
+                           "0.4 N·s/m (its range 0.1–1 N·s/m)"), text  # fmt: skip
+    assert "passive for every value" not in text and "unstable" not in text
