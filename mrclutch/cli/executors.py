@@ -149,7 +149,9 @@ def local_cluster(n: int) -> Any:
                 n_workers=n,
                 threads_per_worker=1,
                 processes=True,
-                dashboard_address=None,
+                # any free port for its HTTP server: None still binds 8787, and a second
+                # cluster on the machine then failed this one's start (port in use)
+                dashboard_address=":0",
                 silence_logs=logging.ERROR,  # not a warning per chunk cancelled by Ctrl-C
             )
     finally:

@@ -168,7 +168,7 @@ def test_dask_local_cluster_executor_gives_the_same_rows(tmp_path):
     run_sweep(spec, tmp_path / "a.csv", geometric_outputs, OUTPUTS, progress=False)
     with (
         distributed.LocalCluster(
-            n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
+            n_workers=1, threads_per_worker=2, processes=False, dashboard_address=":0"
         ) as cluster,
         distributed.Client(cluster) as client,
     ):
