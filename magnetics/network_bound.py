@@ -192,19 +192,22 @@ class NetworkBound:
         """ê at scaled inputs ``x`` (P, k). Row by row in elementwise products and sums,
         not BLAS products, so a row's value does not depend on the batch it comes in."""
         a = np.asarray(self.a)
-        xa = np.zeros_like(x)
-        for i in range(x.shape[1]):
-            xa += x[:, i : i + 1] * a[i]  # (xᵀA)_j = Σ_i x_i A_ij
-        return self.c + np.sum(x * np.asarray(self.b), axis=1) + np.sum(xa * x, axis=1)
+        xt = np.ascontiguousarray(x.T)  # (k, P): each product below runs along the designs
+        xa = np.zeros_like(xt)
+        for i in range(xt.shape[0]):
+            xa += a[i][:, None] * xt[i]  # (xᵀA)_j = Σ_i x_i A_ij, i ascending
+        quad = np.ascontiguousarray((xa * xt).T).sum(axis=1)  # each row's k terms, as before
+        return self.c + np.sum(x * np.asarray(self.b), axis=1) + quad
 
     def scale(self, x: np.ndarray) -> np.ndarray:
         """σ̂ = exp(d + g·x) > 0 at scaled inputs ``x`` (P, k): the residual's local size."""
         return np.exp(self.d + np.sum(x * np.asarray(self.g), axis=1))
 
-    def bound(self, x: np.ndarray) -> np.ndarray:
-        """|ê| + q·σ̂ at scaled inputs ``x`` (P, k)."""
+    def bound(self, x: np.ndarray, estimate: np.ndarray | None = None) -> np.ndarray:
+        """|ê| + q·σ̂ at scaled inputs ``x`` (P, k) (``estimate``: ê there, if computed)."""
+        est = self.estimate(x) if estimate is None else estimate
         # normalised conformal interval (Lei et al., JASA 113 (2018) 1094, §5.2)
-        return np.abs(self.estimate(x)) + self.q * self.scale(x)
+        return np.abs(est) + self.q * self.scale(x)
 
 
 @functools.lru_cache(maxsize=1)
@@ -290,8 +293,9 @@ def network_bound(
             inside &= solved
             x = np.concatenate([x, xf], axis=1)
         x0 = np.where(inside[:, None], x, 0.0)
-        est = np.where(inside, m.estimate(x0), np.nan).reshape(shape)
-        bound = np.where(inside, m.bound(x0), np.inf).reshape(shape)
+        e = m.estimate(x0)
+        est = np.where(inside, e, np.nan).reshape(shape)
+        bound = np.where(inside, m.bound(x0, e), np.inf).reshape(shape)
     if not shape:
         return float(est), float(bound), why
     return est, bound, why
