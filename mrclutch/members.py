@@ -155,7 +155,7 @@ def paper_beside(base: ClutchDesign, fidelity: str, wc: WorstCase | None) -> dic
     return judge(for_workshop(paper_on(base), ranges(wc))[0], fidelity)
 
 
-def member_record(i: int, m: Member, ev: dict | None, violations: list[str]) -> dict:
+def member_record(i: int, m: Member, ev: dict, violations: list[str]) -> dict:
     """Pareto member ``i`` as JSON: its fast-path row, its limits and its check."""
     return {"member": i, "n_drums": m.design.clutch.n_drums,
             "design_mm": m.design.clutch.to_mm(), "fast": dict(m.row),

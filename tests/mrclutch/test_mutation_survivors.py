@@ -575,8 +575,9 @@ def test_optimize_reads_its_mm_and_g_limits_into_si(monkeypatch):
 def test_the_pareto_table_on_the_fast_path_reads_back_to_its_json(monkeypatch, capsys):
     """``optimize`` (Pareto, --no-verify): each member's row of the printed table quotes its
     fast row of the JSON of the same (seeded) run: continuous torque above drag in mN·m
-    (× 1e3), mass in g (× 1e3), each within half its last printed digit. The mutant
-    ``f[CONTINUOUS] * 1100.0`` (cli/commands/optimize_pareto.py:205) prints it 10 % high."""
+    (× 1e3), mass in g (× 1e3), each within half its last printed digit. (The round2
+    mutant at cli/commands/optimize_pareto.py:205 sat in a branch no member reached — every
+    member is judged, with --no-verify on the fast path — and the branch is removed.)"""
     import json
 
     from mrclutch.cli.commands import optimize_pareto as pareto_cmd

@@ -26,7 +26,6 @@ from mrclutch.members import (
     verify_members,
 )
 from mrclutch.optimize import (
-    CONTINUOUS,
     RENDERING,
     Constraints,
     ParetoSet,
@@ -192,21 +191,15 @@ def _print_pareto(args: argparse.Namespace, ps: ParetoSet, rows: list[dict], kep
     for r in rows:
         m = ps.members[r["member"] - 1]
         c = m.design.clutch
-        src = r["reference"] if r["reference"] is not None else None
-        if src is not None:
-            h, cl = src["haptic"], src["clutch"]
-            rv = h["bandwidth_hz"] if args.rendering == "bandwidth" else m.row[ps.objectives[0][1]]
-            vals = (rv, src["hand"]["mr"]["backdrive_force_N"],
-                    (cl["continuous_torque_N_m"] - cl["off_state_torque_N_m"]) * 1e3,
-                    cl["clutch_mass_kg"] * 1e3, h["K_N_per_m"], h["max_stable_K_N_per_m"],
-                    h["max_passive_K_N_per_m"])  # fmt: skip
-        else:
-            f = m.row
-            vals = (f[ps.objectives[0][1]], f["backdrive_force_N"], f[CONTINUOUS] * 1e3,
-                    f["clutch_mass_kg"] * 1e3, f["K_N_per_m"], f["max_stable_K_N_per_m"],
-                    f["max_passive_K_N_per_m"])  # fmt: skip
+        src = r["reference"]  # the member's judged evaluation (members.judge_members)
+        h, cl = src["haptic"], src["clutch"]
+        rv = h["bandwidth_hz"] if args.rendering == "bandwidth" else m.row[ps.objectives[0][1]]
+        vals = (rv, src["hand"]["mr"]["backdrive_force_N"],
+                (cl["continuous_torque_N_m"] - cl["off_state_torque_N_m"]) * 1e3,
+                cl["clutch_mass_kg"] * 1e3, h["K_N_per_m"], h["max_stable_K_N_per_m"],
+                h["max_passive_K_N_per_m"])  # fmt: skip
         mark = " DROPPED" if r["violations"] else ""
-        status = src["verdict"]["status"] if src is not None and "verdict" in src else "—"
+        status = src["verdict"]["status"] if "verdict" in src else "—"
         print(f"{r['member']:>3} {c.n_drums:>5} {c.gap * 1e3:>6.3f} {c.drum_thickness * 1e3:>6.3f} "
               f"{c.drum_inner_diameter * 1e3:>6.2f} {c.zone_length * 1e3:>6.2f} "
               f"{vals[0]:>8.4g} {vals[1]:>8.3g} {vals[2]:>8.3g} {vals[3]:>7.4g} {vals[4]:>7.4g} "
