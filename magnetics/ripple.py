@@ -26,7 +26,8 @@ about a mean shifted by (e_in² + e_out²)·T''/4 (``mean_shift``).
 T'' comes from central finite differences of the reluctance network's torque with the
 gap changed (``gap_derivatives``): the design rebuilt at g ± h (its drums re-stacked, so
 the films' radii move by a few h too, a second-order share stated in docs/hysteresis.md),
-checked by Richardson: the difference at h and 2h agrees to O(h²) (``fd_check``).
+checked by Richardson: the difference at h and 2h agrees to O(h²) (``fd_check``). The five
+designs of the stencil are one network of five rows, solved at once (``stencil_torque``).
 
 Where it breaks down: every film is moved by the same eccentricity (alternate films open
 and close together in the sector model; on a rigid rotor they do: the inner and outer
@@ -45,11 +46,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from geometry.params import MIN_GAP, DrumClutch
-from geometry.section import build_section
+from geometry.materials import DEFAULT_CHOICE
+from geometry.params import MIN_GAP, DrumClutch, broadcast_fields
+from geometry.regions import Regions, per_topology
 from geometry.validation import ParameterError, check_positive
 from magnetics.materials import Magnetic
-from magnetics.torque import torque_curve
+from magnetics.network import network_from_regions
+from magnetics.network.torque import network_gap_torque
 
 #: Finite-difference step on the gap, m (1 % of the paper's 0.7 mm films).
 GAP_STEP = 7e-6
@@ -112,10 +115,30 @@ def gap_derivatives(
     gaps = centre + step * np.array([-2.0, -1.0, 0.0, 1.0, 2.0])
     if gaps[0] <= 0:
         raise ParameterError(f"step = {step:g} m: larger than half the gap ({clutch.gap:g} m)")
-    t = []
-    for g in gaps:
-        c = replace(clutch, gap=float(g))
-        s = build_section(c) if materials is None else build_section(c, materials)
-        t.append(float(torque_curve(s, [current], materials=magnetic_table).yield_torque[0]))
+    for g in gaps:  # every point a valid design (DrumClutch's checks name one that is not)
+        replace(clutch, gap=float(g))
+    t = [float(x) for x in stencil_torque(clutch, gaps, current, materials, magnetic_table)]
     first, second, check = derivatives(t, step)
     return GapDerivatives(float(current), t[2], first, second, check)
+
+
+def stencil_torque(
+    clutch: DrumClutch,
+    gaps: ArrayLike,
+    current: float,
+    materials: Any = None,
+    magnetic_table: Mapping[str, Magnetic] | None = None,
+) -> np.ndarray:
+    """The network's yield torque (N·m) of ``clutch`` with every film at each of ``gaps``
+    (m), all at ``current`` A: the designs as rows of one region table and one network
+    (``per_topology``), solved at once — per row the numbers of ``torque_curve`` on each
+    design alone."""
+    p = broadcast_fields({"gap": np.asarray(gaps, dtype=float)}, clutch)
+
+    def one(rg: Regions, rows: np.ndarray) -> dict[str, np.ndarray]:
+        net = network_from_regions(rg, magnetic_table)
+        cur = np.full((rows.size, 1), float(current))
+        return {"t": network_gap_torque(net, cur, magnetic_table)[:, 0].sum(axis=-1)}
+
+    ok = np.ones(p["gap"].size, dtype=bool)
+    return per_topology(p, ok, one, DEFAULT_CHOICE if materials is None else materials)["t"]

@@ -17,13 +17,12 @@ import numpy as np
 from geometry import regions
 from geometry.mass import MassReport, analytic_mass, brep_mass
 from geometry.materials import MRF, MaterialChoice
-from geometry.section import build_section
 from geometry.validation import check_choice
 from magnetics import thermal
 from magnetics.circuit import path_from_section
 from magnetics.drag import Drag, coupled_fluid_inertia
 from magnetics.materials import FLUIDS
-from magnetics.network import network_from_regions
+from magnetics.network import Network, network_from_regions
 from magnetics.torque import (
     coil_properties,
     continuous_torque,
@@ -31,6 +30,7 @@ from magnetics.torque import (
     torque_curve,
 )
 from mrclutch.design import ClutchDesign, current_limit
+from mrclutch.design_network import network_curve, section_network
 from mrclutch.trust import choose, circuit_trust
 
 FIDELITIES: tuple[str, ...] = ("fast", "reference")
@@ -120,7 +120,7 @@ def clutch_figures(
     quantity needs an FEM) are added to the figures' notes."""
     check_choice("fidelity", fidelity, FIDELITIES)
     c, op = design.clutch, design.operating
-    section = build_section(c, design.materials)
+    section, net = section_network(c, design.materials)  # shared with the feel and the duty
     fem_size = None
     extra: tuple[str, ...] = ()
     if accuracy is not None:
@@ -142,14 +142,17 @@ def clutch_figures(
         mass = brep_mass(c, materials=design.materials)
     i_max = design.current_limit
     temp = op.fluid_temperature
-    curve = torque_curve(
-        section, [i_max], method=torque_method, speed_rpm=op.input_speed_rpm, fem_size=fem_size,
-        temperature=temp, support=design.support,
-    )  # fmt: skip
+    if torque_method == "network":  # torque_curve's network branch on the shared network
+        curve = network_curve(section, net, [i_max], op.input_speed_rpm, temp, design.support)
+    else:
+        curve = torque_curve(
+            section, [i_max], method=torque_method, speed_rpm=op.input_speed_rpm,
+            fem_size=fem_size, temperature=temp, support=design.support,
+        )  # fmt: skip
     drag = curve.drag
     coil = coil_properties(c, i_max, op.coil_temperature)
     thermal = thermal_figures(design, section.table, path_from_section(section), drag.torque,
-                              float(curve.torque[0]))  # fmt: skip
+                              float(curve.torque[0]), net)  # fmt: skip
     d, length = section.envelope
     notes = (tuple(mass.notes) + extra + drag.notes + _thermal_notes(design, thermal)
              + _density_notes(design) + _supply_notes(design))  # fmt: skip
@@ -179,15 +182,17 @@ def clutch_figures(
 
 
 def thermal_figures(design: ClutchDesign, rg: regions.Regions, path: Any, off_torque: float,
-                    peak_torque: float) -> dict[str, float]:  # fmt: skip
+                    peak_torque: float, ladder: Network | None = None
+                    ) -> dict[str, float]:  # fmt: skip
     """Continuous rating and peak endurance of one design (``magnetics.thermal``): the same
     closed forms as the sweeps' continuous torque, plus the transient at the peak current
-    holding the peak torque while slipping at the input speed."""
+    holding the peak torque while slipping at the input speed. ``ladder``: ``rg``'s
+    reluctance network if already built (None: built here)."""
     op = design.operating
     limit = fluid_limit(rg.materials)
     net = thermal.network(rg, op.ambient_temperature, limit)
     # the chords through the default torque model's curve (the network), as the sweeps
-    ladder = network_from_regions(rg)
+    ladder = network_from_regions(rg) if ladder is None else ladder
     i_c, t_c = continuous_torque(net, path, op.input_speed, off_torque,
                                  op.wire_temperature_limit, limit,
                                  torque_at=network_yield_at(ladder))  # fmt: skip

@@ -32,7 +32,6 @@ import numpy as np
 from geometry import regions
 from geometry.params import INT_RANGES, valid
 from geometry.regions import Regions
-from geometry.section import build_section
 from geometry.validation import ParameterError, check_range
 from magnetics import thermal
 from magnetics.drag import Support, drag_terms, totals
@@ -40,8 +39,8 @@ from magnetics.dynamics import Amplifier, supply_current
 from magnetics.hot import Load, march, tau_y_coefficient, tau_y_factor
 from magnetics.life import fluid_volume, life_hours, mean_power
 from magnetics.materials import FLUIDS
-from magnetics.torque import torque_curve
 from mrclutch.batch import batch_fields
+from mrclutch.design_network import network_yield, section_network
 from mrclutch.haptics.actuator import TABLE2_MR, HapticParams
 from mrclutch.haptics.model import metrics_of
 from mrclutch.uncertainty import range_from
@@ -283,12 +282,10 @@ def design_context(design: Any, current_limit: float) -> Context:
     the network's cold yield torque on ``GRID`` currents from 0 to the limit, its
     operating point; what ``evaluation_duty`` and the sweep's hot columns both hold."""
     op = design.operating
-    section = build_section(design.clutch, design.materials)
+    section, net = section_network(design.clutch, design.materials)  # evaluate's network
     currents = np.linspace(0.0, current_limit, GRID)
-    curve = torque_curve(section, currents, method="network", speed_rpm=op.input_speed_rpm,
-                         support=design.support)  # fmt: skip
     limit = FLUIDS[design.materials.fluid].temperature_range[1]  # as clutch.fluid_limit
-    return context(section.table, currents, curve.yield_torque, current_limit,
+    return context(section.table, currents, network_yield(section, net, currents), current_limit,
                    op.input_speed, design.support, design.amplifier, op.ambient_temperature,
                    limit, op.wire_temperature_limit, op.fluid_temperature)  # fmt: skip
 

@@ -24,14 +24,14 @@ from numpy.typing import ArrayLike
 
 from geometry import regions
 from geometry.params import MIN_GAP, valid
-from geometry.section import build_section
 from magnetics.circuit import path_from_regions, path_from_section
 from magnetics.hysteresis import coercive_current, pulse_train, torque_loop
 from magnetics.network import network_from_regions
 from magnetics.ripple import GAP_STEP, gap_derivatives, ripple_amplitude
-from magnetics.torque import network_torque_and_flux, torque_curve
+from magnetics.torque import network_torque_and_flux
 from mrclutch.batch import batch_fields
 from mrclutch.design import ClutchDesign, current_limit
+from mrclutch.design_network import network_yield, section_network
 
 #: % of the reference force: the hand's force JND ([pang1991], about 7 %).
 FORCE_JND_PCT = 7.0
@@ -53,13 +53,13 @@ def feel_figures(design: ClutchDesign, max_torque: float, yield_torque: float,
     hand (N), as ``evaluate --json``'s ``feel``. ``max_torque``, ``yield_torque`` and
     ``off_torque`` (N·m): the clutch figures at the current limit; ``backdrive`` (N): the
     unpowered lever's backdrive force, to which the residual force adds."""
-    section = build_section(design.clutch, design.materials)
+    section, net = section_network(design.clutch, design.materials)  # evaluate's network
     path = path_from_section(section)
     peak = design.current_limit
     reduction = design.transmission.reduction  # F = T·nG/l [lebel] Eq. 4
 
     def torque_at(cur: ArrayLike) -> np.ndarray:
-        return torque_curve(section, np.asarray(cur, float), method="network").yield_torque
+        return network_yield(section, net, np.asarray(cur, float))
 
     ic = float(coercive_current(path, [peak])[0])
     loop = torque_loop(torque_at, peak, ic, LOOP_POINTS)

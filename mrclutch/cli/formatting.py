@@ -7,12 +7,15 @@ from __future__ import annotations
 
 import math
 from statistics import median
+from typing import TYPE_CHECKING
 
 from mrclutch.design import ClutchDesign
-from mrclutch.optimize import Constraints, WorstCase
 from mrclutch.outputs import CLUTCH_ROWS, HAND_ROWS, format_kmax, output, row_label
 from mrclutch.process import MAX_ECCENTRICITY
 from mrclutch.verdict import verdict_lines
+
+if TYPE_CHECKING:  # annotations only: evaluate and compare do not load the optimiser
+    from mrclutch.optimize import Constraints, WorstCase
 
 
 def format_robust(r: dict) -> list[str]:

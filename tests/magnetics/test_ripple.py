@@ -20,7 +20,9 @@ from magnetics.ripple import (
     gap_derivatives,
     mean_shift,
     ripple_amplitude,
+    stencil_torque,
 )
+from magnetics.torque import torque_curve
 from mrclutch.design import design_preset
 
 A, G = 1e-3, 0.7e-3  # a test clutch T(g) = A/g N·m (A in N·m·m)
@@ -74,6 +76,34 @@ def test_paper_gap_curvature_converges() -> None:
     assert a.first < 0 and a.second > 0
     assert b.second == pytest.approx(a.second, rel=0.02)
     assert a.fd_check < 0.02
+
+
+@pytest.mark.parametrize("n_drums", [1, 3])
+def test_the_stencil_solved_at_once_is_each_design_solved_alone(n_drums: int) -> None:
+    """The five designs of the stencil as one network of five rows (issue 40): each row's
+    torque is torque_curve's on that design alone, to rounding (the rows' regions are
+    evaluated on arrays: at most a few ulp, against T'' × h² ≈ 1e-5 of T), and
+    gap_derivatives is the stencil's central differences of them."""
+    d = design_preset("paper")
+    c = replace(d.clutch, n_drums=n_drums)
+    gaps = c.gap + 7e-6 * np.array([-2.0, -1.0, 0.0, 1.0, 2.0])
+    alone = np.array([torque_curve(build_section(replace(c, gap=float(g)), d.materials),
+                                   [5.0]).yield_torque[0] for g in gaps])  # fmt: skip
+    together = stencil_torque(c, gaps, 5.0, d.materials)
+    assert together.shape == (5,)
+    np.testing.assert_allclose(together, alone, rtol=4e-16 * 4, atol=0)
+    assert np.all(np.diff(alone) < 0)  # five distinct designs, not one repeated
+    gd = gap_derivatives(c, 5.0, d.materials)
+    assert gd.torque == together[2]
+    assert gd.second == (together[3] - 2 * together[2] + together[1]) / 7e-6**2
+
+
+def test_a_stencil_point_that_is_no_design_is_named() -> None:
+    """A gap whose stencil leaves the valid designs is refused by DrumClutch's own check,
+    naming the parameter, before any network is built."""
+    c = design_preset("paper").clutch
+    with pytest.raises(ParameterError, match=r"gap = 0.0061 m: must be in \[0.0001, 0.005\]"):
+        gap_derivatives(c, 5.0, step=2e-3)  # the stencil's top: 2.1 + 2 × 2 mm
 
 
 # ---- the FEM's check of the network's dT/dg (magnetics/fem/gap_shape.py) ---------------
