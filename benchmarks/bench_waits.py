@@ -2,6 +2,7 @@
 command a designer runs, against its goal.
 
     python benchmarks/bench_waits.py [--rounds 3] [--skip-install] [--skip-long]
+                                     [--against DIR]
 
 Runs each command in a fresh subprocess (this checkout first on ``PYTHONPATH``, the
 user's numba cache as it is: run it once before to measure the "after the first run"
@@ -24,6 +25,10 @@ loaded machine inflates least) and the goal:
   over the second (goal ≤ 5 s).
 
 Times depend on the machine and its load: the script prints the load average beside them.
+``--against DIR`` (another checkout, e.g. ``git worktree add /tmp/before HEAD~3``) times its
+interactive commands in the same run, each round of a command alternating between the two
+checkouts, so both columns see the same load: a before/after that a changing load does not
+fake.
 """
 
 from __future__ import annotations
@@ -145,32 +150,61 @@ def install_first_run(tmp: Path) -> list[tuple[str, float, float, str]]:
     return out
 
 
+def _interactive(rounds: int, tmp: Path, roots: list[Path]) -> None:
+    """The floor and the interactive commands: median wall and CPU of ``rounds`` runs in
+    each checkout of ``roots`` (its first the one judged against the goal), the rounds
+    alternating between them."""
+    envs = []
+    for root in roots:
+        env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+        env.update(PYTHONPATH=str(root), OPENBLAS_NUM_THREADS="1",
+                   PYTHONPYCACHEPREFIX=str(tmp / "pyc"))  # fmt: skip
+        envs.append(env)
+        for cmd in ("evaluate --preset paper", *INTERACTIVE.values()):  # the first runs
+            _run(_mrclutch(cmd, tmp), env, root)
+    head = "".join(f" {'median s':>9s} {'CPU s':>6s}" for _ in roots)
+    print(f"{'command':44s}{head}  goal")
+    if len(roots) > 1:
+        print(f"{'':44s}" + "".join(f" {str(r)[-16:]:>16s}" for r in roots))
+
+    def row(name: str, argv: list[str], goal: bool) -> None:
+        runs: list[list[tuple[float, str, float]]] = [[] for _ in roots]
+        for _ in range(rounds):
+            for i, (env, root) in enumerate(zip(envs, roots, strict=True)):
+                runs[i].append(_run(argv, env, root))
+        meds = [(statistics.median(r[0] for r in rs), statistics.median(r[2] for r in rs))
+                for rs in runs]  # fmt: skip
+        cells = "".join(f" {w:9.2f} {c:6.2f}" for w, c in meds)
+        verdict = f"  ≤ 0.5 s {'met' if meds[0][0] <= 0.5 else 'NOT met'}" if goal else ""
+        print(f"{name:44s}{cells}{verdict}")
+
+    # the floor under every command: the interpreter and numpy (on the same load)
+    row("(floor) python -c 'import numpy'", [sys.executable, "-c", "import numpy"], False)
+    for name, cmd in INTERACTIVE.items():
+        row(name, _mrclutch(cmd, tmp), True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--rounds", type=int, default=3, help="runs of each interactive command")
     ap.add_argument("--skip-install", action="store_true", help="no fresh-venv first run")
     ap.add_argument("--skip-long", action="store_true", help="interactive commands only")
+    ap.add_argument("--against", type=Path, default=None, metavar="DIR",
+                    help="another checkout whose interactive commands are timed beside "
+                    "this one's, on the same load")  # fmt: skip
     a = ap.parse_args()
+    roots = [ROOT]
+    if a.against is not None:
+        if not (a.against / "mrclutch" / "__main__.py").is_file():
+            raise SystemExit(f"--against {a.against}: not a checkout of mrclutch")
+        roots.append(a.against.resolve())
     print(f"load average before: {os.getloadavg()[0]:.2f} ({os.cpu_count()} CPUs)")
     with tempfile.TemporaryDirectory(prefix="mrclutch-waits-") as t:
         tmp = Path(t)
         env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
         env.update(PYTHONPATH=str(ROOT), OPENBLAS_NUM_THREADS="1",
                    PYTHONPYCACHEPREFIX=str(tmp / "pyc"))  # fmt: skip
-        for cmd in ("evaluate --preset paper", *INTERACTIVE.values()):  # the first runs
-            _run(_mrclutch(cmd, tmp), env, ROOT)
-        print(f"{'command':44s} {'median s':>9s} {'CPU s':>6s}  goal")
-        # the floor under every command: the interpreter and numpy (on the same load)
-        runs = [_run([sys.executable, "-c", "import numpy"], env, ROOT) for _ in range(a.rounds)]
-        floor = "(floor) python -c 'import numpy'"
-        print(f"{floor:44s} "
-              f"{statistics.median(r[0] for r in runs):9.2f} "
-              f"{statistics.median(r[2] for r in runs):6.2f}")  # fmt: skip
-        for name, cmd in INTERACTIVE.items():
-            runs = [_run(_mrclutch(cmd, tmp), env, ROOT) for _ in range(a.rounds)]
-            med = statistics.median(r[0] for r in runs)
-            cpu = statistics.median(r[2] for r in runs)
-            print(f"{name:44s} {med:9.2f} {cpu:6.2f}  ≤ 0.5 s {'met' if med <= 0.5 else 'NOT met'}")
+        _interactive(a.rounds, tmp, roots)
         if not a.skip_long:
             for name, (cmd, goal) in LONG.items():
                 took, err, cpu = _run(_mrclutch(cmd, tmp), env, ROOT)
