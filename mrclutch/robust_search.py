@@ -12,6 +12,7 @@ import numpy as np
 
 from geometry.numerics import illinois
 from mrclutch.haptics.actuator import HapticParams
+from mrclutch.haptics.limits import quiet_below
 from mrclutch.haptics.model import (
     _num_coeffs,
     max_stable_stiffness,
@@ -36,7 +37,8 @@ def stable_stiffness_batch(p: HapticParams) -> np.ndarray:
     first crossing met as K grows is destabilising: the stability limit is min K_c.
 
     Crossings are the sign changes of Im X on a grid of each design (log-spaced over
-    [1e-4 ω_a, ω_top], ω_a the largest |zero| of Num, merged with a linear grid of step
+    [ω_lo, ω_top], ω_a the largest |zero| of Num, ω_lo = min(1e-4 ω_a,
+    ``limits.quiet_below``: no crossing lies below it), merged with a linear grid of step
     0.25/τ), refined by Illinois regula falsi. |X(ω)| = ω|Num(jω)|/|k + jbω| does not
     depend on τ and rises beyond ω_a (each factor |jω − z| does for ω ≥ |z|), so no
     crossing beyond ω_top can give a smaller K_c once |X(ω_top)| exceeds the smallest found.
@@ -54,13 +56,10 @@ def stable_stiffness_batch(p: HapticParams) -> np.ndarray:
     if n == 0:
         return out.reshape(shape)
     coeffs = tuple(np.ravel(np.broadcast_to(c, shape)) for c in _num_coeffs(p))
-    a3, a2, a1, a0 = coeffs
-    # largest |zero| of Num: companion matrices of the monic cubic, batched
-    comp = np.zeros((n, 3, 3))
-    comp[:, 0, :] = -np.stack([a2 / a3, a1 / a3, a0 / a3], axis=1)
-    comp[:, 1, 0] = comp[:, 2, 1] = 1.0
-    w_a = np.max(np.abs(np.linalg.eigvals(comp)), axis=1)
+    zeros = zero_moduli(coeffs)
+    w_a = np.max(zeros, axis=1)
     tau = f["delay"]
+    w_lo = np.minimum(1e-4 * w_a, quiet_below(np.min(zeros, axis=1), tau))  # grid start
     exact = (f["sample_period"] > 0) | (tau <= 0)
     with np.errstate(divide="ignore", invalid="ignore"):
         w_end = np.maximum(4.0 * w_a, np.where(tau > 0, 4.0 / tau, 0.0))
@@ -71,7 +70,7 @@ def stable_stiffness_batch(p: HapticParams) -> np.ndarray:
         over = n_lin > _MAX_LINEAR
         exact[todo[over]] = True
         rows = todo[~over]
-        best = _crossing_scan(coeffs, f["k"], f["b"], tau, w_a, w_top, n_lin[~over], rows)
+        best = _crossing_scan(coeffs, f["k"], f["b"], tau, w_lo, w_top, n_lin[~over], rows)
         done = np.isfinite(best) & (_abs_x(coeffs, f["k"], f["b"], w_top, rows) > best)
         out[rows[done]] = best[done]
         todo = rows[~done]
@@ -87,6 +86,17 @@ def stable_stiffness_batch(p: HapticParams) -> np.ndarray:
     return out.reshape(shape)
 
 
+def zero_moduli(coeffs: tuple[np.ndarray, ...]) -> np.ndarray:
+    """|zeros| (N, 3) of the cubics a3 s³ + a2 s² + a1 s + a0 (``coeffs`` = (a3, a2, a1, a0),
+    arrays (N,), a3 ≠ 0): the eigenvalues of the companion matrices of the monic cubics,
+    batched (first row −(a2, a1, a0)/a3, ones below the diagonal)."""
+    a3, a2, a1, a0 = coeffs
+    comp = np.zeros((a3.size, 3, 3))
+    comp[:, 0, :] = -np.stack([a2 / a3, a1 / a3, a0 / a3], axis=1)
+    comp[:, 1, 0] = comp[:, 2, 1] = 1.0
+    return np.abs(np.linalg.eigvals(comp))
+
+
 def _abs_x(coeffs: tuple[np.ndarray, ...], k: np.ndarray, b: np.ndarray, w: np.ndarray,
            rows: np.ndarray) -> np.ndarray:  # fmt: skip
     """|X(ω)| = ω|Num(jω)|/|k + jbω| of ``rows`` at their ω (independent of the delay)."""
@@ -96,7 +106,7 @@ def _abs_x(coeffs: tuple[np.ndarray, ...], k: np.ndarray, b: np.ndarray, w: np.n
 
 
 def _crossing_scan(coeffs: tuple[np.ndarray, ...], k: np.ndarray, b: np.ndarray,
-                   tau: np.ndarray, w_a: np.ndarray, w_top: np.ndarray, n_lin: np.ndarray,
+                   tau: np.ndarray, w_lo: np.ndarray, w_top: np.ndarray, n_lin: np.ndarray,
                    rows: np.ndarray) -> np.ndarray:  # fmt: skip
     """The smallest K_c = Re X(ω_c) > 0 over the crossings of Im X = 0 in (0, ω_top] of
     each of ``rows`` (inf where none): the grid and the refinement of
@@ -131,7 +141,7 @@ def _crossing_scan(coeffs: tuple[np.ndarray, ...], k: np.ndarray, b: np.ndarray,
         sl = order[a : a + 256]
         r = rows[sl]
         m = int(np.max(n_lin[sl]))
-        lo, hi = np.log(1e-4 * w_a[r]), np.log(w_top[r])
+        lo, hi = np.log(w_lo[r]), np.log(w_top[r])
         w_log = np.exp(lo[:, None] + (hi - lo)[:, None] * t)
         w_lin = w_top[r, None] * np.linspace(0.0, 1.0, m)[1:]  # step ≤ 0.25/τ
         w = np.sort(np.concatenate([w_log, w_lin], axis=1), axis=1)

@@ -11,7 +11,8 @@ reach the right half-plane only by crossing the imaginary axis (χ is retarded),
 K E(jω) = −jω Num(jω)/(k + jbω) =: K(ω)·E — i.e. where X(ω) = −jω Num/((k+jbω)E) is real
 and positive, with K_c = X. Every crossing frequency is found (polynomial roots when there
 is no delay; otherwise sign changes of Im X on a grid fine against the delay's phase
-period, refined by Illinois regula falsi, up to a frequency beyond which the lower bound
+period, from below ``quiet_below`` (no crossing lies lower), refined by Illinois regula
+falsi, up to a frequency beyond which the lower bound
 ω|Num(jω)|/|k+jbω| ≤ K(ω), increasing there, exceeds the best K_c), with its crossing
 direction sign Re(ds/dK) = Re[−E (bs+k)/χ'(s)]. The number of right-half-plane roots at K
 is 2 Σ sign over crossings with K_c < K: stable iff it is 0. The largest stable K is the
@@ -142,6 +143,17 @@ def _scan_imaginary_axis(
     return np.concatenate(found)
 
 
+def quiet_below(w_z: Any, tau: Any) -> Any:
+    """A frequency [rad/s] below which Im X < 0, so no crossing lies there: half of
+    min(w_z/2, (π/2)/(4/w_z + τ)), w_z the smallest |zero| of Num (Hurwitz), τ the delay
+    (plus half the hold). For ω ≤ w_z/2 each zero turns arg Num(jω) by at most (4/3)ω/w_z
+    (a real one atan(ω/σ); a pair atan(2σω/(|z|² − ω²)) ≤ (8/3)ω/|z|), so arg X =
+    −π/2 + arg Num(jω) + ωτ − atan(bω/k) stays in (−π, 0) while ω(4/w_z + τ) < π/2.
+    The scans start no higher (a low, delay-driven crossing near √(K/(m1 + m2)) lies far
+    below 10⁻⁴ ω_a where b1 is small and b/m1 large). Vectorised."""
+    return 0.5 * np.minimum(0.5 * w_z, 0.5 * math.pi / (4.0 / w_z + tau))
+
+
 def _crossings(
     p: HapticParams, k_stop: float | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -175,7 +187,8 @@ def _crossings(
         def lower(w: float) -> float:  # |X| ≥ ω|Num(jω)|/|k + jbω| (|E| ≤ 1), increasing
             return abs(1j * w * np.polyval(a, 1j * w)) / abs(p.k + p.b * 1j * w)
 
-        wc = _scan_imaginary_axis(X, w_a, tau, lower, k_stop)
+        w_z = float(np.min(np.abs(roots)))  # the slowest zero of Num
+        wc = _scan_imaginary_axis(X, w_a, tau, lower, k_stop, w_lo=quiet_below(w_z, tau))
     xv = X(wc)
     ok = real_positive(xv)
     wc, Kc = wc[ok], xv.real[ok]
