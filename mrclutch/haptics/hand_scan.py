@@ -17,7 +17,7 @@ import numpy as np
 from geometry.numerics import illinois
 from mrclutch.haptics.actuator import HapticParams
 from mrclutch.haptics.impedance import _hold, _num_coeffs
-from mrclutch.haptics.limits import MAX_GRID, StabilitySearchError
+from mrclutch.haptics.limits import MAX_GRID, StabilitySearchError, quiet_below
 
 
 def _p_hands(p: HapticParams, rows: np.ndarray) -> np.ndarray:
@@ -190,7 +190,8 @@ def _crossings_hands(
     else:
         nz = np.where(mags > 1e-12 * w_a[:, None], mags, np.inf).min(axis=1)
         hands_on = np.any(rows != 0.0, axis=1)
-        w_lo = np.where(hands_on, 1e-2 * nz, np.nan)  # a slow hand mode
+        # a slow hand mode; without a hand, below limits.quiet_below no crossing lies
+        w_lo = np.where(hands_on, 1e-2 * nz, quiet_below(nz, tau))
         hid, wc = _scan_hands(p, c, w_a, w_lo, X, k_stop)
     xv = X(hid, wc)
     ok = (xv.real > 0) & (np.abs(xv.imag) <= 1e-6 * np.abs(xv))

@@ -12,6 +12,7 @@ import pytest
 from mrclutch import robust_search
 from mrclutch.design import design_preset
 from mrclutch.haptics.actuator import TABLE2_MR, HapticParams
+from mrclutch.haptics.hand import NO_HAND, max_stable_stiffness_coupled
 from mrclutch.haptics.model import max_stable_stiffness, rendering_area
 from mrclutch.haptics.zwidth import zwidth
 from mrclutch.pipeline import evaluate
@@ -31,10 +32,11 @@ def test_a_light_lever_with_little_grounded_damping_is_limited_by_its_slow_delay
     b1 = Mω_c tan(ω_cτ). With ω_c = 5 rad/s, τ = 10 ms, M = 0.2001 kg: b1 = 0.050067 N·s/m,
     K_c = 5.008760 N/m. A stiff, strongly damped coupling (k = 10⁶ N/m, b = 50 N·s/m) on a
     light actuator (m1 = 0.1 g) puts Num's largest zero at b/m1 ≈ 4.8e5 rad/s, so 5 rad/s
-    lies below 10⁻⁴ ω_a, where both kernels began their scans: they missed this crossing
-    and gave 79002 N/m, a spring the loop cannot hold (a Padé(8) model of the delay has
-    roots with Re s > 0 there). The coupling's compliance moves the 2-DOF limit from the
-    rigid one by O(K/k) = 5e-6: rtol 1e-5."""
+    lies below 10⁻⁴ ω_a, where the three kernels (exact, batch, coupled without a hand)
+    began their scans: they missed this crossing and gave 79002 N/m, a spring the loop
+    cannot hold (a Padé(8) model of the delay has roots with Re s > 0 there). The
+    coupling's compliance moves the 2-DOF limit from the rigid one by O(K/k) = 5e-6:
+    rtol 1e-5."""
     m1, m2, tau, wc = 1e-4, 0.2, 0.01, 5.0
     M = m1 + m2
     b1 = M * wc * math.tan(wc * tau)
@@ -43,6 +45,7 @@ def test_a_light_lever_with_little_grounded_damping_is_limited_by_its_slow_delay
     p = HapticParams(m1, b1, 1e6, 50.0, m2, delay=tau)
     assert max_stable_stiffness(p) == pytest.approx(k_c, rel=1e-5)
     assert stable_stiffness_batch(_one(p))[0] == pytest.approx(k_c, rel=1e-5)
+    assert max_stable_stiffness_coupled(p, NO_HAND) == pytest.approx(k_c, rel=1e-5)
 
 
 def test_box_search_without_a_sense_finds_the_smallest():
