@@ -335,6 +335,16 @@ def _mmf(
             "dtotal": dstack + ds * (1.0 + kn.leak * dstack)}  # fmt: skip
 
 
+def linear_flux(
+    path: MagneticPath, ampere_turns: ArrayLike, materials: Mapping[str, Magnetic] | None = None
+) -> FloatArray:
+    """Gap flux Φ (Wb), (S, C), of the unsaturated circuit (every material on its initial
+    slope) at ``ampere_turns`` (S, C): |N·I|/F'(0), ``solve_flux``'s first iterate."""
+    mats = MATERIALS if materials is None else materials
+    ni = np.abs(np.atleast_2d(np.asarray(ampere_turns, dtype=float)))
+    return ni / _mmf(path, mats, np.zeros((path.turns.size, 1)))["dtotal"]
+
+
 def solve_flux(
     path: MagneticPath,
     ampere_turns: ArrayLike,

@@ -17,7 +17,7 @@ from geometry.materials import MaterialChoice
 from geometry.params import valid
 from geometry.validation import ParameterError, check_choice
 from magnetics import thermal
-from magnetics.circuit import path_from_regions, solve_flux
+from magnetics.circuit import linear_flux, path_from_regions, solve_flux
 from magnetics.drag import coupled_fluid_inertia, drag_terms, totals
 from magnetics.dynamics import supply_current, torque_response
 from magnetics.error_map import error_bound
@@ -155,9 +155,15 @@ def evaluate_batch(
         out["fluid_inertia"] = coupled_fluid_inertia(rg)
         path = path_from_regions(rg)
         # the loop's flux at the peak: the torque response's start (its torque is not used)
-        flux = np.abs(solve_flux(path, (path.turns * current[rows])[:, None], rtol=1e-7))
+        ni = (path.turns * current[rows])[:, None]
+        flux = np.abs(solve_flux(path, ni, rtol=1e-7))
         ladder = network_from_regions(rg)
-        t_peak, x_peak = network_torque_and_flux(ladder, current[rows][:, None])
+        # the network's Newton starts from its linear solution scaled by the circuit's
+        # saturation there (~40 % fewer steps; the same answer to the solve's tolerance)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            gain = flux / linear_flux(path, ni)
+        gain = np.where(np.isfinite(gain) & (gain > 0), gain, 1.0)
+        t_peak, x_peak = network_torque_and_flux(ladder, current[rows][:, None], gain=gain)
         out["yield_torque"] = t_peak.sum(-1)[:, 0]
         # the network's error bound reads its solution at the peak (no second solve)
         for k, v in solution_features(ladder, x_peak).items():

@@ -128,7 +128,7 @@ def _warm_solve(kernel: Any) -> None:
     tab, inv, nseg = _tables(magnetic("steel_1018"), magnetic("mrf_132dg"))
     e2, e3 = np.zeros((0, 1)), np.zeros((0, 1, 8))
     off = np.zeros(len(_PACKED), np.int64)
-    kernel(e2, off, 1, 6, tab, inv, nseg, e2, np.zeros((0, 1), np.int64), e3, False, 1e-10,
+    kernel(e2, off, 1, 6, tab, inv, nseg, e2, np.zeros((0, 1), np.int64), e3, False, e2, 1e-10,
            60, e3, np.zeros(0, np.bool_))  # fmt: skip
 
 

@@ -83,9 +83,11 @@ def network_torque_and_flux(
     fluid: MRFluid | None = None,
     convention: str = DEFAULT_CONVENTION,
     start: FloatArray | None = None,
+    gain: ArrayLike | None = None,
 ) -> tuple[FloatArray, FloatArray]:
     """(yield torque (S, C, 2m) of every film in zone A then B, the loop fluxes
-    (S, C, ``Network.unknowns``)) at currents (S, C) A, the Newton started at ``start`` if given.
+    (S, C, ``Network.unknowns``)) at currents (S, C) A, the Newton started at ``start`` if given
+    (``gain``: the linear start's scale, ``solve_network``).
 
     The film's flux x_k spreads over its walls' overlap L plus the fringing length
     (``Network.gap_eff``): over the overlap B = x_k·(L/L_eff)/(2π r L), and past each end,
@@ -114,7 +116,7 @@ def network_torque_and_flux(
     cur = np.asarray(currents, dtype=float)
     cur = np.broadcast_to(cur if cur.ndim == 2 else cur.reshape(1, -1),
                           (net.turns.size, cur.shape[-1] if cur.ndim else 1))  # fmt: skip
-    x = solve_network(net, net.turns[:, None] * cur, mats, start=start)
+    x = solve_network(net, net.turns[:, None] * cur, mats, start=start, gain=gain)
     return network_film_torque(net, x, mats, fl, convention), x
 
 

@@ -153,8 +153,10 @@ def test_max_torque_is_the_network_curve_with_its_own_bound():
                           support=base.support)  # fmt: skip
         assert tc.method == "network"
         assert out["max_torque_N_m"][i] == pytest.approx(tc.torque[0], rel=1e-9)
+        # the sweep's Newton starts at the circuit-scaled linear start (fast_batch), the
+        # single design's at the linear one: the same solution to the solve's tolerance
         assert out["torque_error_bound"][i] == pytest.approx(
-            circuit_error(c, "network", i_max).bound, rel=1e-12
+            circuit_error(c, "network", i_max).bound, rel=1e-8
         )
     assert np.isnan(out["max_torque_N_m"][2]) and np.isnan(out["torque_error_bound"][2])
 
