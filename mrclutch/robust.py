@@ -12,13 +12,21 @@ box:
   and the best at (m1⁻, b1⁺, τ⁻);
 * largest stable K — monotone in none of m1, b1, τ (a heavier m1 can stabilise; where
   the transmission's own damping b is light, more b1 can destabilise: tested
-  counter-examples), so a *bounded global search* over (m1, b1, τ) (:func:`box_search`:
-  a 3 × 3 × 3 grid of the box, then grids half as wide on the best point, five times for
-  the worst case), each point by :func:`stable_stiffness_batch` (the
+  counter-examples). The worst: from the crossings themselves
+  (:func:`mrclutch.robust_search.stable_worst_box`: at one frequency the loop gain is
+  affine in (m1, b1), so the least crossing gain over the box lies on the edges of a
+  parallelogram; the 8 corners' crossings and 16 families of edge points, scanned over
+  frequency and refined), never above the earlier 3 × 3 × 3 search with six zooms by
+  more than 1e-9 (tests/mrclutch/test_robust_speed_paths.py). The best: a *bounded
+  global search* (:func:`box_search`: a 3 × 3 × 3 grid of the box, then grids half as
+  wide on the best point), each point by :func:`stable_stiffness_batch` (the
   D-subdivision of ``haptics.model`` on arrays of designs, equal to
   ``max_stable_stiffness`` to 1e-9: tested);
 * bandwidth at the rendered K_max — monotone in none of m1, b1, τ, K (tests show
-  counter-examples for each): the same search over all four.
+  counter-examples for each). The worst: exact over τ and K
+  (``robust_columns.bandwidth_worst_delay_K``: k_eff is linear in K and a cosine in ωτ,
+  so the first crossing over them is a corner's or a root of a degree-6 polynomial),
+  searched over (m1, b1); the best: the search over all four.
 
 The searches are checked against 1000 random samples of the ranges of 200 random designs
 (the reported worst is never above the sampled one, and within 2 % of it).

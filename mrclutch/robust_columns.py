@@ -5,7 +5,7 @@ max_stable_K_worst_N_per_m``)."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,7 +18,7 @@ from mrclutch.haptics.model import (
     bandwidth,
     max_passive_stiffness,
 )
-from mrclutch.robust_search import box_search, stable_stiffness_batch
+from mrclutch.robust_search import box_search, stable_stiffness_batch, stable_worst_box
 from mrclutch.uncertainty import Uncertainty
 
 # ---- the verdicts over the box ----------------------------------------------------------
@@ -49,9 +49,7 @@ def robust_limits(
                                                      "bandwidth") for c in cases}  # fmt: skip
     if not ok.any():
         return out
-    sub = HandBox(*(tuple(x[ok] for x in f) if isinstance(f, tuple) else f[ok]
-                    for f in (box.m1, box.b1, box.delay, box.K, box.k, box.b, box.m2,
-                              box.valid)))  # fmt: skip
+    sub = _rows(box, ok)
     (_, mlo, mhi), (_, blo, bhi), (_, tlo, thi), (k0, klo, khi) = sub.m1, sub.b1, sub.delay, sub.K
     res: dict[str, np.ndarray] = {}
     nom = sub.nominal
@@ -65,25 +63,110 @@ def robust_limits(
     if "best" in cases:
         res["max_passive_K_best"] = max_passive_stiffness(sub.params(mlo, bhi, tlo))
     # stable K: monotone in none of m1, b1, τ (a transmission resonance makes more b1
-    # destabilise: tests), a search over all three
-    for case, sense, z in (x for x in (("worst", -1, zooms + 2), ("best", 1, zooms))
-                           if x[0] in cases):  # fmt: skip
-        res[f"max_stable_K_{case}"], _ = box_search(
-            lambda x: stable_stiffness_batch(sub.params(x[..., 0], x[..., 1], x[..., 2])),
-            np.stack([mlo, blo, tlo], 1), np.stack([mhi, bhi, thi], 1), sense=sense,
-            points=points, zooms=z)  # fmt: skip
-    # bandwidth at the rendered K: not monotone in any input (tests): a search over all four
-    for case, sense in (x for x in (("worst", -1), ("best", 1)) if x[0] in cases):
-        res[f"bandwidth_{case}"], _ = box_search(
+    # destabilise: tests). The worst: from the crossings over the box (stable_worst_box),
+    # a bounded search where its scan cannot close; the best: a search over all three
+    lo3, hi3 = np.stack([mlo, blo, tlo], 1), np.stack([mhi, bhi, thi], 1)
+
+    def stable(s: HandBox) -> Callable[[np.ndarray], np.ndarray]:
+        return lambda x: stable_stiffness_batch(s.params(x[..., 0], x[..., 1], x[..., 2]))
+
+    if "worst" in cases:
+        worst, done = stable_worst_box(lo3, hi3, sub.k, sub.b, sub.m2)
+        if not done.all():
+            rest = ~done
+            worst[rest], _ = box_search(stable(_rows(sub, rest)), lo3[rest], hi3[rest],
+                                        sense=-1, points=points, zooms=zooms + 2)  # fmt: skip
+        res["max_stable_K_worst"] = worst
+    if "best" in cases:
+        res["max_stable_K_best"], _ = box_search(stable(sub), lo3, hi3, sense=1,
+                                                 points=points, zooms=zooms)  # fmt: skip
+    # bandwidth at the rendered K: not monotone in any input (tests). The worst: over τ and
+    # K exactly (bandwidth_worst_delay_K), a search over (m1, b1); the best: over all four
+    if "worst" in cases:
+        res["bandwidth_worst"], _ = box_search(
+            lambda x: bandwidth_worst_delay_K(sub, x[..., 0], x[..., 1], (tlo, thi), (klo, khi)),
+            lo3[:, :2], hi3[:, :2], sense=-1, points=points, zooms=zooms + 1)  # fmt: skip
+    if "best" in cases:
+        res["bandwidth_best"], _ = box_search(
             lambda x: bandwidth(sub.params(x[..., 0], x[..., 1], x[..., 2]), x[..., 3]),
             np.stack([mlo, blo, tlo, klo], 1), np.stack([mhi, bhi, thi, khi], 1),
-            sense=sense, points=points, zooms=zooms + 1)  # fmt: skip
+            sense=1, points=points, zooms=zooms + 1)  # fmt: skip
     for key, v in res.items():
         out[key][ok] = v
     return out
 
 
 CASES = ("nominal", "worst", "best")
+
+
+def bandwidth_worst_delay_K(box: HandBox, m1: np.ndarray, b1: np.ndarray,
+                            tau: tuple[np.ndarray, np.ndarray], K: tuple[np.ndarray, np.ndarray]
+                            ) -> np.ndarray:  # fmt: skip
+    """The least bandwidth [Hz] over τ ∈ [τ⁻, τ⁺] and K ∈ [K⁻, K⁺] at each (m1, b1) (arrays
+    (S, M); ``tau``, ``K``: the (S,) ends), exactly: the bandwidth is the first ω where
+    k_eff ≤ 0 (``haptics.bandwidth``), so the least over a set is the first ω where the
+    least k_eff over it is ≤ 0. k_eff = −m2ω² + k − Re(E²/D) + K Re(E e^{−jωτ}/D), E =
+    k + jbω, D = k − m1ω² + j(b1 + b)ω (``_k_eff`` regrouped): linear in K, so its least is
+    at K⁻ or K⁺; over τ, −K|E/D| where some τ ∈ [τ⁻, τ⁺] turns E e^{−jωτ}/D negative real,
+    else at τ⁻ or τ⁺. So the least bandwidth is that of the four corners (τ, K) or the
+    first ω where env(ω) = −m2ω² + k − Re(E²/D) − K⁺|E/D| = 0 with such a τ: env's zeros
+    are those of P1 − K⁺|E||D| (P1 = (k − m2ω²)|D|² − Re(E² D̄)), the roots in u = ω² of
+    P1² − K⁺²|E|²|D|² (degree 6) with P1 ≥ 0. A first crossing where τ reaches an end is
+    that corner's."""
+    sh = np.shape(m1)
+    col = (-1,) + (1,) * (len(sh) - 1)
+    k, b, m2 = (np.broadcast_to(x.reshape(col), sh) for x in (box.k, box.b, box.m2))
+    (ta, tb), (ka, kb) = ((np.broadcast_to(x.reshape(col), sh) for x in t) for t in (tau, K))
+    out = np.full(sh, np.inf)
+    for t in (ta, tb):
+        for kk in (ka, kb):
+            out = np.fmin(out, bandwidth(box.params(m1, b1, t), kk))
+    # env's roots: polynomials in x = u/s (s = k/(m1 + m2), the rigid lever's ω²), ascending
+    s = k / (m1 + m2)
+    bb = b1 + b
+    dm = [k * k, (bb * bb - 2 * k * m1) * s, m1 * m1 * s * s]  # |D|²
+    re = [k**3, (2 * k * b * bb - k * k * m1 - k * b * b) * s, b * b * m1 * s * s]  # Re(E² D̄)
+    p1 = [k * dm[0] - re[0], k * dm[1] - m2 * s * dm[0] - re[1],
+          k * dm[2] - m2 * s * dm[1] - re[2], -m2 * s * dm[2]]  # fmt: skip
+    e2 = [k * k, b * b * s]  # |E|²
+    c = [sum(p1[i] * p1[j - i] for i in range(max(0, j - 3), min(j, 3) + 1)) for j in range(7)]
+    for i in range(2):
+        for j in range(3):
+            c[i + j] = c[i + j] - kb * kb * e2[i] * dm[j]
+    comp = np.zeros((*sh, 6, 6))
+    comp[..., 0, :] = -np.stack(c[5::-1], -1) / c[6][..., None]
+    comp[..., np.arange(1, 6), np.arange(5)] = 1.0
+    x = np.linalg.eigvals(comp)
+    real = (np.abs(x.imag) <= 1e-9 * np.abs(x)) & (x.real > 0)
+    x = np.where(real, x.real, np.nan)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x, p1w, w, phi = _env_roots(x, c, p1, s, k, b, m1, bb)
+    n = np.ceil((w * ta[..., None] - phi) / (2 * np.pi))
+    ok = (p1w >= 0) & (phi + 2 * np.pi * n <= w * tb[..., None])
+    first = np.min(np.where(ok, w, np.inf), axis=-1) / (2 * np.pi)
+    out = np.fmin(out, first)
+    return np.where(np.isinf(out), np.nan, out)
+
+
+def _env_roots(x, c, p1, s, k, b, m1, bb):  # type: ignore[no-untyped-def]
+    """``bandwidth_worst_delay_K``'s roots x polished, P1 there, ω and arg(−E/D) mod 2π."""
+    for _ in range(3):  # Newton on the degree-6 polynomial: the eigenvalues to full accuracy
+        f = sum(ci[..., None] * x**i for i, ci in enumerate(c))
+        df = sum(i * ci[..., None] * x ** (i - 1) for i, ci in enumerate(c) if i)
+        x = x - f / df
+    w = np.sqrt(s[..., None] * x)
+    e = k[..., None] + 1j * b[..., None] * w
+    d = k[..., None] - m1[..., None] * w * w + 1j * bb[..., None] * w
+    p1w = sum(ci[..., None] * x**i for i, ci in enumerate(p1))
+    phi = np.mod(np.angle(-e / d), 2 * np.pi)  # ωτ ≡ arg(−E/D): E e^{−jωτ}/D negative
+    return x, p1w, w, phi
+
+
+def _rows(box: HandBox, sel: np.ndarray) -> HandBox:
+    """The designs ``sel`` (a mask) of ``box``."""
+    return HandBox(*(tuple(x[sel] for x in f) if isinstance(f, tuple) else f[sel]
+                     for f in (box.m1, box.b1, box.delay, box.K, box.k, box.b, box.m2,
+                               box.valid)))  # fmt: skip
 
 
 def robust_columns_batch(

@@ -197,3 +197,227 @@ def box_search(
         half = (b - a) / 4  # (points − 1)/4 cells: each zoom halves the cell
         a, b = np.maximum(arg - half, lo), np.minimum(arg + half, hi)
     return np.where(seen, -sense * best, np.nan), arg
+
+
+# ---- the worst largest stable K over a box, by the frequency of the crossing ----------
+
+
+def _in_cone(z: np.ndarray, w: np.ndarray, t_lo: np.ndarray, t_hi: np.ndarray) -> np.ndarray:
+    """Whether z e^{jωτ} is real and positive for some τ ∈ [τ⁻, τ⁺]: some −arg z + 2πn
+    (n ≥ 0) lies in [ωτ⁻, ωτ⁺]."""
+    phi = np.mod(-np.angle(z), TWO_PI)
+    n = np.ceil((w * t_lo - phi) / TWO_PI)
+    return phi + TWO_PI * n <= w * t_hi
+
+
+def _affine(w: np.ndarray, k: np.ndarray, b: np.ndarray, m2: np.ndarray
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+    """(c, u, v) with G(ω) = −jω Num(jω)/(k + jbω) = c + m1 u + b1 v: Num = (m1 s + b1)T(s)
+    + m2 s(bs + k), T = m2 s² + bs + k (``_num_coeffs`` regrouped), so with H = T/(k + bs)
+    at s = jω: c = m2 ω², u = ω² H, v = −jω H."""
+    s = 1j * w
+    h = ((m2 * s + b) * s + k) / (k + b * s)
+    return m2 * w * w, w * w * h, -s * h
+
+
+def _family(f: int, w: np.ndarray, cuv: tuple[np.ndarray, ...], q: tuple[np.ndarray, ...]
+            ) -> np.ndarray:  # fmt: skip
+    """Family ``f`` of the candidate gains K_c = |G| at ω (``stable_worst_box``): 0–3 the
+    corners of (m1, b1) inside the cone; 4–7 an edge's point nearest 0 inside the cone
+    (τ strictly inside its range); 8–15 an edge met by the ray of τ⁻ or τ⁺. ``cuv``:
+    ``_affine`` at ω; ``q``: (m1⁻, m1⁺, b1⁻, b1⁺, τ⁻, τ⁺, k, b, m2) broadcasting against
+    ω; inf where no crossing."""
+    ta, tb = q[4], q[5]
+    c, u, v = cuv
+    if f < 4:
+        z = c + q[f // 2] * u + q[2 + f % 2] * v
+        return np.where(_in_cone(z, w, ta, tb), np.abs(z), np.inf)
+    e = (f - 4) % 4 if f < 8 else (f - 8) // 2
+    fixed, d = (q[e], v) if e < 2 else (q[e], u)  # m1 fixed (b1 free) or b1 fixed
+    z0 = c + fixed * (u if e < 2 else v)
+    pa, pb = (q[2], q[3]) if e < 2 else (q[0], q[1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        if f < 8:
+            p = -(z0 * np.conj(d)).real / (d * np.conj(d)).real
+            z = z0 + p * d
+            return np.where((p > pa) & (p < pb) & _in_cone(z, w, ta, tb), np.abs(z), np.inf)
+        x = np.exp(1j * w * (ta, tb)[f % 2])
+        p = -(z0 * x).imag / (d * x).imag
+        r = (z0 * x).real + p * (d * x).real
+        return np.where((p >= pa) & (p <= pb) & (r > 0), r, np.inf)
+
+
+def _nearest(w: np.ndarray, q: tuple[np.ndarray, ...]) -> np.ndarray:
+    """The least |G| over the box's (m1, b1) at ω, crossing or not: a corner or an edge's
+    point nearest 0 (0 is outside: ``stable_worst_box``)."""
+    c, u, v = _affine(w, *q[6:])
+    out = [np.abs(c + q[i] * u + q[2 + j] * v) for i in (0, 1) for j in (0, 1)]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for z0, d, pa, pb in (
+            (c + q[0] * u, v, q[2], q[3]),
+            (c + q[1] * u, v, q[2], q[3]),
+            (c + q[2] * v, u, q[0], q[1]),
+            (c + q[3] * v, u, q[0], q[1]),
+        ):
+            p = -(z0 * np.conj(d)).real / (d * np.conj(d)).real
+            out.append(np.where((p > pa) & (p < pb), np.abs(z0 + p * d), np.inf))
+    return np.minimum.reduce(out)
+
+
+#: Families of candidate crossings (``_family``), grid minima of each refined, and zooms of
+#: each refinement (9 points, each zoom a quarter as wide: ω to 2e-10 of a grid cell).
+_FAMILIES, _REFINED, _ZOOMS = 16, 3, 14
+
+
+def stable_worst_box(lo: np.ndarray, hi: np.ndarray, k: np.ndarray, b: np.ndarray,
+                     m2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """The least largest stable K [N/m] over the box (m1, b1, τ) ∈ [lo, hi] (N, 3) of
+    each design, from the crossings themselves rather than a search of the box.
+
+    A design q's limit is min over its crossings ω of |G_q(ω)|, G = −jω Num(jω)/(k + jbω),
+    a crossing where G e^{jωτ} is real positive (``stable_stiffness_batch``). At one ω, G
+    is affine in (m1, b1) (``_affine``): the box's G is a parallelogram P(ω), the
+    crossings its points inside the cone C(ω) = {r e^{−jωτ}: τ ∈ [τ⁻, τ⁺]}, and the worst
+    is the least |z| over P ∩ C and over ω. |z| has no minimum inside P (0 ∉ P: Num's
+    coefficients are positive and a2 a1 > a3 a0, so its zeros are in the left half-plane),
+    so the least lies on P's edges: at a corner, at an edge's point nearest 0, or where a
+    ray of τ⁻ or τ⁺ meets an edge (``_family``). Each is smooth in ω where it exists, and
+    the ends of that are another family's points or a corner's crossing at τ⁻ or τ⁺. So
+    the worst is the least of the 8 corners' ``stable_stiffness_batch`` (exact) and the
+    16 families' minima over ω: each family on the grid of ``stable_stiffness_batch``
+    (300 log points from 1e-4 × ω_a of the corner (m1⁻, b1⁻), a linear step 0.25/τ⁺),
+    its ``_REFINED`` least grid minima refined by ``_ZOOMS`` zooms of 9 points. Every
+    value found is some q's crossing gain, so never below the true worst; a minimum
+    narrower than the grid can be missed (tests bound the answer against the box search
+    and dense sampling).
+
+    The scan ends at ω_top = ω_A, Cauchy's bound on Num's zeros over the box (the positive
+    root of a3⁻ω³ − a2⁺ω² − a1⁺ω − a0⁺); beyond ω_A every |G_q| rises
+    (``stable_stiffness_batch``), so once the least |G| over P(ω_top) exceeds the worst
+    found nothing later is smaller; where it does not yet, a second scan runs to
+    4 ω_A + 3 turns of τ⁺. Returns (worst (N,), done (N,)): ``done`` False
+    where that bound does not hold, τ⁺ ≤ 0 or the grid would pass ``_MAX_LINEAR`` points;
+    the caller searches those otherwise."""
+    lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+    n = lo.shape[0]
+    k, b, m2 = (np.broadcast_to(np.asarray(x, float), (n,)) for x in (k, b, m2))
+    q = (lo[:, 0], hi[:, 0], lo[:, 1], hi[:, 1], lo[:, 2], hi[:, 2], k, b, m2)
+    m1a, m1b, b1a, b1b, tb = (*q[:4], q[5])
+    best = np.full(n, np.inf)
+    # Cauchy's bound [cauchy1829] on |zeros| of Num over the box
+    w_A = _largest_zero(np.stack([m1a * m2, -(m2 * b1b + m1b * b + m2 * b),
+                                  -(b1b * b + (m1b + m2) * k), -b1b * k], 1))  # fmt: skip
+    w_lo = 1e-4 * _largest_zero(np.stack([m1a * m2, m2 * b1a + m1a * b + m2 * b,
+                                          b1a * b + (m1a + m2) * k, b1a * k], 1))  # fmt: skip
+    # a scan to ω_A first; where the bound does not hold there, a longer one
+    todo = np.nonzero(tb > 0)[0]
+    done = np.zeros(n, dtype=bool)
+    for w_top in (w_A * (1.0 + 1e-9), 4.0 * w_A + _TURNS * TWO_PI / np.where(tb > 0, tb, 1.0)):
+        n_lin = np.ceil(w_top[todo] * tb[todo] / _PHASE_STEP) + 2
+        todo = todo[n_lin <= _MAX_LINEAR]
+        best[todo] = np.minimum(best[todo], _scan(todo, w_lo, w_top, q))
+        # the bound at ω_top: the least |G| over P(ω_top) above the worst found
+        ok = _nearest(w_top[todo], tuple(x[todo] for x in q)) > best[todo]
+        done[todo[ok]] = True
+        todo = todo[~ok]
+    return best, done
+
+
+def _scan(rows: np.ndarray, w_lo: np.ndarray, w_top: np.ndarray, q: tuple[np.ndarray, ...]
+          ) -> np.ndarray:  # fmt: skip
+    """The least of the 16 families over [ω_lo, ω_top] of each of ``rows``
+    (``stable_worst_box``: grid, then zooms on each family's least grid minima)."""
+    n_lin = np.ceil(w_top * q[5] / _PHASE_STEP) + 2
+    t = np.linspace(0.0, 1.0, _LOG_POINTS)
+    order = np.argsort(n_lin[rows], kind="stable")  # chunks of like grid sizes
+    best = np.full(rows.size, np.inf)
+    brackets = np.zeros((2, _FAMILIES, rows.size, _REFINED))
+    for a in range(0, order.size, 32):  # 32 rows a chunk: little padding to the longest
+        i = order[a : a + 32]
+        r = rows[i]
+        m = int(np.max(n_lin[r]))
+        g_lo, g_hi = np.log(w_lo[r]), np.log(w_top[r])
+        w_log = np.exp(g_lo[:, None] + (g_hi - g_lo)[:, None] * t)
+        w_lin = w_top[r, None] * np.linspace(0.0, 1.0, m)[1:]
+        w = np.sort(np.concatenate([w_log, w_lin], axis=1), axis=1)
+        qr = tuple(x[r, None] for x in q)
+        # the 8 corners' crossings: limit candidates, and with the midpoints between them
+        # grid points inside every window where a corner or a ray family lives
+        best[i], seeds = _corner_crossings(w, qr)
+        seeds = np.where(np.isnan(seeds), w[:, -1:], seeds)
+        w = np.sort(np.concatenate([w, seeds], axis=1), axis=1)
+        cuv = _affine(w, *qr[6:])
+        fam = np.stack([_family(f, w, cuv, qr) for f in range(_FAMILIES)])  # (F, R, L)
+        # each family's _REFINED least grid minima, each bracketed by its two neighbours
+        pad = np.pad(fam, ((0, 0), (0, 0), (1, 1)), constant_values=np.inf)
+        low = np.where((fam <= pad[..., :-2]) & (fam <= pad[..., 2:]), fam, np.inf)
+        j = np.argpartition(low, _REFINED - 1, axis=2)[..., :_REFINED]  # (F, R, 3)
+        best[i] = np.minimum(best[i], np.min(low, axis=(0, 2)))
+        ii, L = np.arange(r.size)[None, :, None], w.shape[1]
+        brackets[0][:, i] = w[ii, np.maximum(j - 1, 0)]
+        brackets[1][:, i] = w[ii, np.minimum(j + 1, L - 1)]
+    # the refinement, all rows at once: zooms of 9 points on each bracket
+    lo_w, hi_w = brackets
+    q3 = tuple(x[rows, None, None] for x in q)
+    z9 = np.linspace(0.0, 1.0, 9)
+    for _ in range(_ZOOMS):
+        ww = lo_w[..., None] + (hi_w - lo_w)[..., None] * z9  # (F, R, 3, 9)
+        cuv = _affine(ww, *q3[6:])
+        vals = np.stack([_family(f, ww[f], tuple(x[f] for x in cuv), q3)
+                         for f in range(_FAMILIES)])  # fmt: skip
+        jj = np.argmin(vals, axis=3)[..., None]
+        best = np.minimum(best, np.min(vals, axis=(0, 2, 3)))
+        wj = np.take_along_axis(ww, jj, 3)[..., 0]
+        h = (hi_w - lo_w) / 8.0
+        lo_w, hi_w = np.maximum(wj - h, lo_w), np.minimum(wj + h, hi_w)
+    return best
+
+
+def _corner_crossings(w: np.ndarray, q: tuple[np.ndarray, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """The crossings of the 4 corners (m1, b1) at τ⁻ and τ⁺ on the grid ω (R, L) of
+    ``_scan`` (``q``: (R, 1) each): the sign changes of Im G e^{jωτ}, refined by Illinois
+    to 1e-12 as in ``stable_stiffness_batch``. Returns (the least crossing gain Re G e^{jωτ}
+    > 0 of each row (inf: none), the roots and the midpoints between them, (R, M) padded
+    with NaN)."""
+    c, u, v = _affine(w, *q[6:])
+    rot = [np.exp(1j * w * t) for t in q[4:6]]
+    parts = []
+    for i, m1 in enumerate(q[:2]):
+        for j, b1 in enumerate(q[2:4]):
+            z = c + m1 * u + b1 * v
+            for t, e in enumerate(rot):
+                g = (z * e).imag
+                d, col = np.nonzero(g[:, :-1] * g[:, 1:] < 0)
+                parts.append((d, col, g[d, col], g[d, col + 1], np.full(d.size, 4 * i + 2 * j + t)))
+    d, col, g0, g1, which = (np.concatenate(x) for x in zip(*parts, strict=True))
+    m1 = np.where(which >= 4, q[1][d, 0], q[0][d, 0])
+    b1 = np.where(which % 4 >= 2, q[3][d, 0], q[2][d, 0])
+    tau = np.where(which % 2 == 1, q[5][d, 0], q[4][d, 0])
+    kk, bb, mm = (x[d, 0] for x in q[6:])
+
+    def at(act: np.ndarray, x: np.ndarray) -> np.ndarray:
+        cc, uu, vv = _affine(x, kk[act], bb[act], mm[act])
+        return (cc + m1[act] * uu + b1[act] * vv) * np.exp(1j * x * tau[act])
+
+    root = illinois(lambda act, x: at(act, x).imag, w[d, col], w[d, col + 1], g0, g1, 1e-12)
+    x = at(np.arange(d.size), root)
+    ok = (x.real > 0) & (np.abs(x.imag) <= 1e-6 * np.abs(x))
+    kc = np.full(w.shape[0], np.inf)
+    np.minimum.at(kc, d[ok], x.real[ok])
+    # the roots of each row in order, NaN-padded, and the midpoints between them
+    order = np.lexsort((root, d))
+    d, root = d[order], root[order]
+    cnt = np.bincount(d, minlength=w.shape[0])
+    pos = np.arange(d.size) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+    roots = np.full((w.shape[0], max(int(cnt.max(initial=0)), 1)), np.nan)
+    roots[d, pos] = root
+    return kc, np.concatenate([roots, 0.5 * (roots[:, 1:] + roots[:, :-1])], axis=1)
+
+
+def _largest_zero(c: np.ndarray) -> np.ndarray:
+    """The largest |zero| of each cubic (rows of coefficients, highest first)."""
+    n = c.shape[0]
+    comp = np.zeros((n, 3, 3))
+    comp[:, 0, :] = -c[:, 1:] / c[:, :1]
+    comp[:, 1, 0] = comp[:, 2, 1] = 1.0
+    return np.max(np.abs(np.linalg.eigvals(comp)), axis=1)

@@ -1,0 +1,132 @@
+"""The robust sweep columns' cheaper worst cases (issue 40 item 4) against what they
+replace: the worst largest stable K from the crossings over the box
+(``robust_search.stable_worst_box``) against the 3 × 3 × 3 box search with six zooms, and
+the worst bandwidth exact over τ and K (``robust_columns.bandwidth_worst_delay_K``)
+against dense sampling of τ and K."""
+
+import numpy as np
+import pytest
+from test_robust import _random_boxes
+
+from mrclutch.hand_box import HandBox
+from mrclutch.haptics.actuator import HapticParams
+from mrclutch.haptics.model import bandwidth, max_stable_stiffness
+from mrclutch.robust import box_search, robust_limits, stable_stiffness_batch
+from mrclutch.robust_columns import bandwidth_worst_delay_K
+from mrclutch.robust_search import stable_worst_box
+
+
+def _box3(box):
+    lo = np.stack([box.m1[1], box.b1[1], box.delay[1]], 1)
+    hi = np.stack([box.m1[2], box.b1[2], box.delay[2]], 1)
+    return lo, hi
+
+
+def _searched(box, lo, hi):
+    """The search the sweep ran before (robust_limits' worst stable K until issue 40)."""
+    v, _ = box_search(
+        lambda x: stable_stiffness_batch(box.params(x[..., 0], x[..., 1], x[..., 2])),
+        lo, hi, sense=-1, points=3, zooms=5,
+    )  # fmt: skip
+    return v
+
+
+def _one(m1, b1, tau, k=4000.0, b=20.0, m2=14e-3):
+    """A HandBox of one design with these (nominal, low, high) ranges."""
+    return HandBox(*(tuple(np.array([float(x)]) for x in t) for t in (m1, b1, tau, (1, 1, 1))),
+                   np.array([k]), np.array([b]), np.array([m2]), np.array([True]))  # fmt: skip
+
+
+def test_stable_worst_never_above_the_box_search_and_never_far_below():
+    """200 random designs with random ranges (test_robust's): the worst from the crossings
+    is never above the box search's (every point the search tries is inside the box, so
+    its value bounds the least from above) by more than the roots' 1e-9, and never more
+    than 1e-6 below it: where the search's grid holds the worst point, both find it.
+    Design 107 is one whose worst sits on a window of frequency narrower than a grid cell
+    (the ray of one end of the delay across an edge of the box): the corners' crossings
+    put a point inside it (4.0e-6 above the search without them)."""
+    box = _random_boxes(np.random.default_rng(29), 200)
+    lo, hi = _box3(box)
+    got, done = stable_worst_box(lo, hi, box.k, box.b, box.m2)
+    assert done.all()
+    ref = _searched(box, lo, hi)
+    r = got / ref - 1
+    assert np.max(r) <= 1e-9, (np.argmax(r), np.max(r))
+    assert np.min(r) >= -1e-6, (np.argmin(r), np.min(r))
+    assert abs(r[107]) <= 1e-8
+
+
+def test_stable_worst_of_a_point_box_is_the_kernel():
+    """A box of one point: the worst is stable_stiffness_batch there (its crossings, the
+    same grid and refinement), to 1e-9; a box of one (m1, b1) with a delay range: never
+    above the kernel at either end of the delay."""
+    p = HapticParams(np.array([1.5e-3, 4e-3]), np.array([0.3, 1.2]), 4000.0, 20.0, 14e-3,
+                     delay=np.array([1e-3, 3e-3]))  # fmt: skip
+    lo = hi = np.stack([p.m1, p.b1, p.delay], 1)
+    got, done = stable_worst_box(lo, hi, 4000.0, 20.0, 14e-3)
+    assert done.all()
+    np.testing.assert_allclose(got, stable_stiffness_batch(p), rtol=1e-9)
+    hi2 = hi * np.array([1.0, 1.0, 2.0])
+    got2, _ = stable_worst_box(lo, hi2, 4000.0, 20.0, 14e-3)
+    ends = stable_stiffness_batch(HapticParams(p.m1, p.b1, 4000.0, 20.0, 14e-3, delay=hi2[:, 2]))
+    assert np.all(got2 <= np.minimum(got, ends) * (1 + 1e-9))
+
+
+def test_stable_worst_without_a_delay_is_searched():
+    """τ⁺ = 0 (no delay: the exact kernel's case) leaves the crossings' scan undone; the
+    sweep's column then runs the box search: robust_limits gives its value."""
+    box = _one((1.5e-3, 1.4e-3, 1.6e-3), (0.3, 0.2, 0.5), (0.0, 0.0, 0.0))
+    lo, hi = _box3(box)
+    _, done = stable_worst_box(lo, hi, box.k, box.b, box.m2)
+    assert not done[0]
+    lim = robust_limits(box, cases=("worst",))["max_stable_K_worst"]
+    assert lim[0] == _searched(box, lo, hi)[0]
+
+
+def test_bandwidth_worst_over_delay_and_K_against_dense_sampling():
+    """200 random designs at their nominal (m1, b1), τ and K over their ranges: the exact
+    least over (τ, K) is never above a 60 × 7 sampling of them (corners included) by
+    more than the bandwidth's 1e-8, and never below it: here the least is at a corner."""
+    box = _random_boxes(np.random.default_rng(5), 200)
+    m1, b1 = box.m1[0][:, None], box.b1[0][:, None]
+    got = bandwidth_worst_delay_K(box, m1, b1, box.delay[1:], box.K[1:])[:, 0]
+    u, v = np.linspace(0, 1, 60)[None, :, None], np.linspace(0, 1, 7)[None, None, :]
+    (_, tl, th), (_, kl, kh) = box.delay, box.K
+    tau, K = np.broadcast_arrays(tl[:, None, None] + (th - tl)[:, None, None] * u,
+                                 kl[:, None, None] + (kh - kl)[:, None, None] * v)  # fmt: skip
+    p = HapticParams(m1[..., None], b1[..., None], box.k[:, None, None], box.b[:, None, None],
+                     box.m2[:, None, None], delay=tau)  # fmt: skip
+    dense = np.nanmin(bandwidth(p, K).reshape(200, -1), axis=1)
+    np.testing.assert_allclose(got, dense, rtol=1e-8)
+
+
+def test_bandwidth_worst_at_a_delay_inside_its_range():
+    """A light transmission (b = 0.25 N·s/m) and a delay range of 2.5–11.7 ms: the first
+    crossing comes earliest at a delay inside the range (where K·E e^{−jωτ}/D turns
+    negative real), 0.6 % below either end; found exactly (the polynomial's root) and
+    matched by 4000 samples of τ to 1e-6."""
+    m1, b1, k, b, m2, K = 1e-3, 4.07, 700.0, 0.25, 1.44e-3, 276.0
+    box = _one((m1, m1, m1), (b1, b1, b1), (2.5e-3, 2.5e-3, 11.7e-3), k=k, b=b, m2=m2)
+    Ks = (np.array([K]), np.array([K]))
+    got = bandwidth_worst_delay_K(box, np.array([[m1]]), np.array([[b1]]), box.delay[1:], Ks)
+    tau = np.linspace(2.5e-3, 11.7e-3, 4000)
+    dense = bandwidth(HapticParams(m1, b1, k, b, m2, delay=tau), K)
+    ends = dense[[0, -1]]
+    assert got[0, 0] < 0.995 * np.min(ends)
+    assert got[0, 0] <= np.nanmin(dense) * (1 + 1e-9)
+    assert got[0, 0] == pytest.approx(np.nanmin(dense), rel=1e-6)
+
+
+def test_bandwidth_worst_over_K_is_at_an_end():
+    """test_robust's design whose bandwidth falls as K rises (Eq. 1's √K has it rise):
+    over a K range the least is at an end (k_eff is linear in K), here K⁺, not the K⁻
+    Eq. 1 would pick; equal to the least of 200 samples."""
+    p = HapticParams(1e-3, 1.0, 10**2.5, 1.0, 1e-3, delay=1e-2)
+    K0 = 0.5 * max_stable_stiffness(p)
+    box = _one((1e-3, 1e-3, 1e-3), (1.0, 1.0, 1.0), (1e-2, 1e-2, 1e-2), k=10**2.5, b=1.0,
+               m2=1e-3)  # fmt: skip
+    Ks = (np.array([0.01 * K0]), np.array([1.2 * K0]))
+    got = bandwidth_worst_delay_K(box, np.array([[1e-3]]), np.array([[1.0]]), box.delay[1:], Ks)
+    dense = bandwidth(p, np.linspace(0.01 * K0, 1.2 * K0, 200))
+    assert np.argmin(dense) == 199
+    assert got[0, 0] == pytest.approx(np.min(dense), rel=1e-9)
