@@ -38,26 +38,26 @@ DEFAULT_CONVENTION = "mid-line"
 def network_yield_at(net: Network, materials: Mapping[str, Magnetic] | None = None,
                      fluid: MRFluid | None = None, convention: str = DEFAULT_CONVENTION,
                      seed: tuple[FloatArray, FloatArray] | None = None) -> Any:  # fmt: skip
-    """The yield torque (S,) of the network's S designs, each at its own current (S,) A:
-    ``continuous_torque``'s ``torque_at``. Each call's Newton starts from the last call's
-    loop fluxes scaled to the new current (``seed``: (current (S,), loop fluxes (S, 1, ·))
-    of a solve already done, e.g. at the peak), which roughly halves its steps on the
-    chords' nearby currents. The network is packed for the kernel and its films' reading set
-    up once for all calls (``prepare``, ``film_reader``): the same numbers as
-    ``network_torque_and_flux`` at each call."""
+    """The yield torque (S,) of the network's S designs, each at its own current (S,) A, the
+    solve to ``rtol`` (``at(current, rtol=1e-10)``): ``continuous_torque``'s ``torque_at``.
+    Each call's Newton starts from the last call's loop fluxes scaled to the new current
+    (``seed``: (current (S,), loop fluxes (S, 1, ·)) of a solve already done, e.g. at the
+    peak), which roughly halves its steps on the chords' nearby currents. The network is
+    packed for the kernel and its films' reading set up once for all calls (``prepare``,
+    ``film_reader``): the same numbers as ``network_torque_and_flux`` at each call."""
     mats = MATERIALS if materials is None else materials
     state = {} if seed is None else {"i": np.asarray(seed[0], dtype=float)[:, None],
                                      "x": np.asarray(seed[1], dtype=float)}  # fmt: skip
     packed = prepare(net, mats) if net.turns.size else None
     reading = film_reader(net, mats, fluid, convention)
 
-    def at(current: FloatArray) -> FloatArray:
+    def at(current: FloatArray, rtol: float = 1e-10) -> FloatArray:
         cur = np.asarray(current, dtype=float)[:, None]
         start = None
         if state:
             ratio = np.where(state["i"] != 0, cur / np.where(state["i"] != 0, state["i"], 1), 0)
             start = state["x"] * ratio[..., None]
-        x = _solve_packed(net, net.turns[:, None] * cur, packed, mats, start=start)
+        x = _solve_packed(net, net.turns[:, None] * cur, packed, mats, rtol, start=start)
         state.update(i=cur, x=x)
         return reading(x).sum(-1)[:, 0]
 
