@@ -202,12 +202,20 @@ def box_search(
 # ---- the worst largest stable K over a box, by the frequency of the crossing ----------
 
 
-def _in_cone(z: np.ndarray, w: np.ndarray, t_lo: np.ndarray, t_hi: np.ndarray) -> np.ndarray:
-    """Whether z e^{jωτ} is real and positive for some τ ∈ [τ⁻, τ⁺]: some −arg z + 2πn
-    (n ≥ 0) lies in [ωτ⁻, ωτ⁺]."""
-    phi = np.mod(-np.angle(z), TWO_PI)
-    n = np.ceil((w * t_lo - phi) / TWO_PI)
-    return phi + TWO_PI * n <= w * t_hi
+def _in_cone(z: np.ndarray, rot: tuple[np.ndarray, ...]) -> np.ndarray:
+    """Whether z e^{jωτ} is real and positive for some τ ∈ [τ⁻, τ⁺] (``rot``: ``_rot``):
+    as τ rises it turns counterclockwise from y⁻ = z e^{jωτ⁻} through ω(τ⁺ − τ⁻) to y⁺.
+    A turn of at most π passes the positive real axis when Im y⁻ ≤ 0 ≤ Im y⁺; a turn
+    of less than 2π misses it only when the rest of the circle, from y⁺ on to y⁻ (under
+    π), holds it: Im y⁺ < 0 < Im y⁻; a whole turn holds every direction."""
+    ea, eb, span = rot
+    ya, yb = (z * ea).imag, (z * eb).imag
+    return np.where(span <= np.pi, (ya <= 0) & (yb >= 0), (span >= TWO_PI) | ~((yb < 0) & (ya > 0)))
+
+
+def _rot(w: np.ndarray, ta: np.ndarray, tb: np.ndarray) -> tuple[np.ndarray, ...]:
+    """(e^{jωτ⁻}, e^{jωτ⁺}, ω(τ⁺ − τ⁻)): the cone of ``_in_cone`` and the rays of τ⁻, τ⁺."""
+    return np.exp(1j * w * ta), np.exp(1j * w * tb), w * (tb - ta)
 
 
 def _affine(w: np.ndarray, k: np.ndarray, b: np.ndarray, m2: np.ndarray
@@ -225,13 +233,12 @@ def _family(f: int, w: np.ndarray, cuv: tuple[np.ndarray, ...], q: tuple[np.ndar
     """Family ``f`` of the candidate gains K_c = |G| at ω (``stable_worst_box``): 0–3 the
     corners of (m1, b1) inside the cone; 4–7 an edge's point nearest 0 inside the cone
     (τ strictly inside its range); 8–15 an edge met by the ray of τ⁻ or τ⁺. ``cuv``:
-    ``_affine`` at ω; ``q``: (m1⁻, m1⁺, b1⁻, b1⁺, τ⁻, τ⁺, k, b, m2) broadcasting against
-    ω; inf where no crossing."""
-    ta, tb = q[4], q[5]
-    c, u, v = cuv
+    ``_affine`` and ``_rot`` at ω; ``q``: (m1⁻, m1⁺, b1⁻, b1⁺, τ⁻, τ⁺, k, b, m2)
+    broadcasting against ω; inf where no crossing."""
+    c, u, v, *rot = cuv
     if f < 4:
         z = c + q[f // 2] * u + q[2 + f % 2] * v
-        return np.where(_in_cone(z, w, ta, tb), np.abs(z), np.inf)
+        return np.where(_in_cone(z, rot), np.abs(z), np.inf)
     e = (f - 4) % 4 if f < 8 else (f - 8) // 2
     fixed, d = (q[e], v) if e < 2 else (q[e], u)  # m1 fixed (b1 free) or b1 fixed
     z0 = c + fixed * (u if e < 2 else v)
@@ -240,8 +247,8 @@ def _family(f: int, w: np.ndarray, cuv: tuple[np.ndarray, ...], q: tuple[np.ndar
         if f < 8:
             p = -(z0 * np.conj(d)).real / (d * np.conj(d)).real
             z = z0 + p * d
-            return np.where((p > pa) & (p < pb) & _in_cone(z, w, ta, tb), np.abs(z), np.inf)
-        x = np.exp(1j * w * (ta, tb)[f % 2])
+            return np.where((p > pa) & (p < pb) & _in_cone(z, rot), np.abs(z), np.inf)
+        x = rot[f % 2]
         p = -(z0 * x).imag / (d * x).imag
         r = (z0 * x).real + p * (d * x).real
         return np.where((p >= pa) & (p <= pb) & (r > 0), r, np.inf)
@@ -265,8 +272,9 @@ def _nearest(w: np.ndarray, q: tuple[np.ndarray, ...]) -> np.ndarray:
 
 
 #: Families of candidate crossings (``_family``), grid minima of each refined, and zooms of
-#: each refinement (9 points, each zoom a quarter as wide: ω to 2e-10 of a grid cell).
-_FAMILIES, _REFINED, _ZOOMS = 16, 3, 14
+#: each refinement (9 points, each zoom a quarter as wide: ω to 2e-6 of a grid cell; a
+#: window's ends are the corners' crossings, refined by Illinois).
+_FAMILIES, _REFINED, _ZOOMS = 16, 3, 10
 
 
 def stable_worst_box(lo: np.ndarray, hi: np.ndarray, k: np.ndarray, b: np.ndarray,
@@ -346,7 +354,7 @@ def _scan(rows: np.ndarray, w_lo: np.ndarray, w_top: np.ndarray, q: tuple[np.nda
         best[i], seeds = _corner_crossings(w, qr)
         seeds = np.where(np.isnan(seeds), w[:, -1:], seeds)
         w = np.sort(np.concatenate([w, seeds], axis=1), axis=1)
-        cuv = _affine(w, *qr[6:])
+        cuv = (*_affine(w, *qr[6:]), *_rot(w, qr[4], qr[5]))
         fam = np.stack([_family(f, w, cuv, qr) for f in range(_FAMILIES)])  # (F, R, L)
         # each family's _REFINED least grid minima, each bracketed by its two neighbours
         pad = np.pad(fam, ((0, 0), (0, 0), (1, 1)), constant_values=np.inf)
@@ -362,7 +370,7 @@ def _scan(rows: np.ndarray, w_lo: np.ndarray, w_top: np.ndarray, q: tuple[np.nda
     z9 = np.linspace(0.0, 1.0, 9)
     for _ in range(_ZOOMS):
         ww = lo_w[..., None] + (hi_w - lo_w)[..., None] * z9  # (F, R, 3, 9)
-        cuv = _affine(ww, *q3[6:])
+        cuv = (*_affine(ww, *q3[6:]), *_rot(ww, q3[4], q3[5]))
         vals = np.stack([_family(f, ww[f], tuple(x[f] for x in cuv), q3)
                          for f in range(_FAMILIES)])  # fmt: skip
         jj = np.argmin(vals, axis=3)[..., None]
