@@ -9,6 +9,13 @@ from the repository root: ``python -m benchmarks.bench_robust [--designs N] [--j
   max_passive_K_worst_N_per_m --with bandwidth_worst_hz``) on N random designs (seed 0,
   the ranges of examples/random_sweep.toml), median of 3 for the default, 1 for the robust.
 
+``--against-search`` instead compares the sweep's three worst-case columns with what they
+were before issue 40 (the worst largest stable K by ``box_search`` over (m1, b1, τ), 3
+points, six grids; the worst bandwidth by ``box_search`` over (m1, b1, τ, K), 3 points,
+five grids) on the same hand boxes: N designs of the paper preset over its ranges and N
+random boxes (tests/mrclutch/test_robust.py's ``_random_boxes``, seed 29), printing the
+largest relative change of each column and the CPU time of each.
+
 Set OPENBLAS_NUM_THREADS=1 on a shared machine."""
 
 from __future__ import annotations
@@ -39,11 +46,65 @@ def fields(n: int) -> dict[str, np.ndarray]:
     }
 
 
+def _searched_worst(box) -> dict[str, np.ndarray]:  # type: ignore[no-untyped-def]
+    """The worst-case columns as the searches gave them before issue 40."""
+    from mrclutch.haptics.model import bandwidth, max_passive_stiffness
+    from mrclutch.robust_search import box_search, stable_stiffness_batch
+
+    (_, mlo, mhi), (_, blo, bhi), (_, tlo, thi), (_, klo, khi) = box.m1, box.b1, box.delay, box.K
+    s, _ = box_search(
+        lambda x: stable_stiffness_batch(box.params(x[..., 0], x[..., 1], x[..., 2])),
+        np.stack([mlo, blo, tlo], 1), np.stack([mhi, bhi, thi], 1), sense=-1, points=3, zooms=5,
+    )  # fmt: skip
+    b, _ = box_search(
+        lambda x: bandwidth(box.params(x[..., 0], x[..., 1], x[..., 2]), x[..., 3]),
+        np.stack([mlo, blo, tlo, klo], 1), np.stack([mhi, bhi, thi, khi], 1), sense=-1,
+        points=3, zooms=4,
+    )  # fmt: skip
+    p = max_passive_stiffness(box.params(mhi, blo, thi))
+    return {"max_stable_K_worst": s, "max_passive_K_worst": p, "bandwidth_worst": b}
+
+
+def against_search(n: int) -> None:
+    """Print the largest relative change of each worst-case column against the searches."""
+    import time
+
+    from mrclutch.hand_box import hand_box_batch
+    from mrclutch.robust_columns import robust_limits
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "mrclutch"))
+    from test_robust import _random_boxes
+
+    d = design_preset("paper")
+    f = fields(n)
+    boxes = {
+        f"{n} designs of the paper preset over its ranges": hand_box_batch(f, d, d.ranges),
+        f"{n} random boxes (_random_boxes, seed 29)": _random_boxes(np.random.default_rng(29), n),
+    }
+    for name, box in boxes.items():
+        c = time.process_time()
+        new = robust_limits(box, cases=("worst",))
+        t_new = time.process_time() - c
+        c = time.process_time()
+        old = _searched_worst(box)
+        t_old = time.process_time() - c
+        print(f"{name}: now {t_new:.2f} s CPU, the searches {t_old:.2f} s CPU")
+        for q, v in old.items():
+            r = new[q] / v - 1
+            print(f"  {q}: now/before - 1 from {np.nanmin(r):+.2e} to {np.nanmax(r):+.2e}; "
+                  f"largest |change| {np.nanmax(np.abs(r)):.2e}")  # fmt: skip
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--designs", type=int, default=300, help="sweep designs (default 300)")
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--against-search", action="store_true",
+                    help="the worst-case columns against the searches before issue 40")  # fmt: skip
     args = ap.parse_args(argv)
+    if args.against_search:
+        against_search(args.designs)
+        return
     d = design_preset("paper")
     evaluate(d)  # warm the caches (numba kernel, tables) before timing
     one = median_time(lambda: evaluate(d), 3)
