@@ -254,10 +254,12 @@ def _family(f: int, w: np.ndarray, cuv: tuple[np.ndarray, ...], q: tuple[np.ndar
         return np.where((p >= pa) & (p <= pb) & (r > 0), r, np.inf)
 
 
-def _nearest(w: np.ndarray, q: tuple[np.ndarray, ...]) -> np.ndarray:
+def _nearest(w: np.ndarray, q: tuple[np.ndarray, ...], cuv: tuple[np.ndarray, ...] = ()
+             ) -> np.ndarray:  # fmt: skip
     """The least |G| over the box's (m1, b1) at ω, crossing or not: a corner or an edge's
-    point nearest 0 (0 is outside: ``stable_worst_box``)."""
-    c, u, v = _affine(w, *q[6:])
+    point nearest 0 (0 is outside: ``stable_worst_box``). ``cuv``: ``_affine`` at ω if
+    already computed."""
+    c, u, v = cuv[:3] if cuv else _affine(w, *q[6:])
     out = [np.abs(c + q[i] * u + q[2 + j] * v) for i in (0, 1) for j in (0, 1)]
     with np.errstate(divide="ignore", invalid="ignore"):
         for z0, d, pa, pb in (
@@ -275,6 +277,9 @@ def _nearest(w: np.ndarray, q: tuple[np.ndarray, ...]) -> np.ndarray:
 #: each refinement (9 points, each zoom a quarter as wide: ω to 2e-6 of a grid cell; a
 #: window's ends are the corners' crossings, refined by Illinois).
 _FAMILIES, _REFINED, _ZOOMS = 16, 3, 10
+#: Where the families are scanned and refined: the least |G| there below _MARGIN × the
+#: least crossing gain found so far (values between grid points may dip below both).
+_MARGIN = 1.1
 
 
 def stable_worst_box(lo: np.ndarray, hi: np.ndarray, k: np.ndarray, b: np.ndarray,
@@ -339,7 +344,7 @@ def _scan(rows: np.ndarray, w_lo: np.ndarray, w_top: np.ndarray, q: tuple[np.nda
     t = np.linspace(0.0, 1.0, _LOG_POINTS)
     order = np.argsort(n_lin[rows], kind="stable")  # chunks of like grid sizes
     best = np.full(rows.size, np.inf)
-    brackets = np.zeros((2, _FAMILIES, rows.size, _REFINED))
+    brackets = np.zeros((3, _FAMILIES, rows.size, _REFINED))  # (ω⁻, ω⁺, grid value)
     for a in range(0, order.size, 32):  # 32 rows a chunk: little padding to the longest
         i = order[a : a + 32]
         r = rows[i]
@@ -355,7 +360,14 @@ def _scan(rows: np.ndarray, w_lo: np.ndarray, w_top: np.ndarray, q: tuple[np.nda
         seeds = np.where(np.isnan(seeds), w[:, -1:], seeds)
         w = np.sort(np.concatenate([w, seeds], axis=1), axis=1)
         cuv = (*_affine(w, *qr[6:]), *_rot(w, qr[4], qr[5]))
-        fam = np.stack([_family(f, w, cuv, qr) for f in range(_FAMILIES)])  # (F, R, L)
+        # the families only where the least |G| over the box, crossing or not, could beat
+        # the corners' crossings (with a margin of _MARGIN for the refinement between points)
+        rr, ll = np.nonzero(_nearest(w, qr, cuv) < _MARGIN * best[i][:, None])
+        fam = np.full((_FAMILIES, *w.shape), np.inf)
+        qa = tuple(x[rr, 0] for x in qr)
+        cuv_a = tuple(x[rr, ll] for x in cuv)
+        for f in range(_FAMILIES):
+            fam[f, rr, ll] = _family(f, w[rr, ll], cuv_a, qa)
         # each family's _REFINED least grid minima, each bracketed by its two neighbours
         pad = np.pad(fam, ((0, 0), (0, 0), (1, 1)), constant_values=np.inf)
         low = np.where((fam <= pad[..., :-2]) & (fam <= pad[..., 2:]), fam, np.inf)
@@ -364,18 +376,24 @@ def _scan(rows: np.ndarray, w_lo: np.ndarray, w_top: np.ndarray, q: tuple[np.nda
         ii, L = np.arange(r.size)[None, :, None], w.shape[1]
         brackets[0][:, i] = w[ii, np.maximum(j - 1, 0)]
         brackets[1][:, i] = w[ii, np.minimum(j + 1, L - 1)]
-    # the refinement, all rows at once: zooms of 9 points on each bracket
-    lo_w, hi_w = brackets
-    q3 = tuple(x[rows, None, None] for x in q)
+        brackets[2][:, i] = np.take_along_axis(low, j, 2)
+    # the refinement of the brackets whose grid value could beat the least found, all rows
+    # at once: zooms of 9 points on each
+    fi, ri, mi = np.nonzero(brackets[2] < _MARGIN * best[None, :, None])
+    lo_w, hi_w = brackets[0][fi, ri, mi], brackets[1][fi, ri, mi]
+    qb = tuple(x[rows[ri], None] for x in q)
+    groups = [np.nonzero(fi == f)[0] for f in range(_FAMILIES)]
     z9 = np.linspace(0.0, 1.0, 9)
     for _ in range(_ZOOMS):
-        ww = lo_w[..., None] + (hi_w - lo_w)[..., None] * z9  # (F, R, 3, 9)
-        cuv = (*_affine(ww, *q3[6:]), *_rot(ww, q3[4], q3[5]))
-        vals = np.stack([_family(f, ww[f], tuple(x[f] for x in cuv), q3)
-                         for f in range(_FAMILIES)])  # fmt: skip
-        jj = np.argmin(vals, axis=3)[..., None]
-        best = np.minimum(best, np.min(vals, axis=(0, 2, 3)))
-        wj = np.take_along_axis(ww, jj, 3)[..., 0]
+        ww = lo_w[:, None] + (hi_w - lo_w)[:, None] * z9  # (brackets, 9)
+        cuv = (*_affine(ww, *qb[6:]), *_rot(ww, qb[4], qb[5]))
+        vals = np.full(ww.shape, np.inf)
+        for f, g in enumerate(groups):
+            if g.size:
+                vals[g] = _family(f, ww[g], tuple(x[g] for x in cuv), tuple(x[g] for x in qb))
+        jj = np.argmin(vals, axis=1)
+        np.minimum.at(best, ri, vals[np.arange(ri.size), jj])
+        wj = ww[np.arange(ri.size), jj]
         h = (hi_w - lo_w) / 8.0
         lo_w, hi_w = np.maximum(wj - h, lo_w), np.minimum(wj + h, hi_w)
     return best
