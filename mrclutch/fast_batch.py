@@ -23,11 +23,7 @@ from magnetics.dynamics import supply_current, torque_response
 from magnetics.error_map import error_bound
 from magnetics.network import network_from_regions
 from magnetics.network_bound import FEATURES, solution_features
-from magnetics.torque import (
-    continuous_torque,
-    network_torque_and_flux,
-    network_yield_at,
-)
+from magnetics.torque import continuous_torque, network_yield_at
 from mrclutch.at_hand import mr_at_hand
 from mrclutch.batch import batch_fields
 from mrclutch.clutch import dynamic_range_db, fluid_limit
@@ -163,10 +159,12 @@ def evaluate_batch(
         with np.errstate(divide="ignore", invalid="ignore"):
             gain = flux / linear_flux(path, ni)
         gain = np.where(np.isfinite(gain) & (gain > 0), gain, 1.0)
-        t_peak, x_peak = network_torque_and_flux(ladder, current[rows][:, None], gain=gain)
-        out["yield_torque"] = t_peak.sum(-1)[:, 0]
+        # the peak and the continuous torque's chords on one packed network and reading
+        # (``network_yield_at``: each chord starts from the last solve's loop fluxes)
+        at = network_yield_at(ladder)
+        out["yield_torque"] = at(current[rows], gain=gain)
         # the network's error bound reads its solution at the peak (no second solve)
-        for k, v in solution_features(ladder, x_peak).items():
+        for k, v in solution_features(ladder, at.flux).items():
             out[f"bound_{k}"] = v[:, 0]
         resp = torque_response(rg, current[rows], base.amplifier, base.laminations, path=path,
                                coil_temperature=op.coil_temperature,
@@ -176,7 +174,7 @@ def evaluate_batch(
         net = thermal.network(rg, op.ambient_temperature, limit)
         out["continuous_torque"] = continuous_torque(
             net, path, op.input_speed, out["off_torque"], op.wire_temperature_limit,
-            limit, torque_at=network_yield_at(ladder, seed=(current[rows], x_peak)),
+            limit, torque_at=at,
         )[1]  # fmt: skip
         return out
 

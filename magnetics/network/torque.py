@@ -11,7 +11,6 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Callable, Mapping
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -37,31 +36,47 @@ DEFAULT_CONVENTION = "mid-line"
 
 def network_yield_at(net: Network, materials: Mapping[str, Magnetic] | None = None,
                      fluid: MRFluid | None = None, convention: str = DEFAULT_CONVENTION,
-                     seed: tuple[FloatArray, FloatArray] | None = None) -> Any:  # fmt: skip
+                     seed: tuple[FloatArray, FloatArray] | None = None) -> YieldAt:  # fmt: skip
     """The yield torque (S,) of the network's S designs, each at its own current (S,) A, the
     solve to ``rtol`` (``at(current, rtol=1e-10)``): ``continuous_torque``'s ``torque_at``.
     Each call's Newton starts from the last call's loop fluxes scaled to the new current
     (``seed``: (current (S,), loop fluxes (S, 1, ·)) of a solve already done, e.g. at the
-    peak), which roughly halves its steps on the chords' nearby currents. The network is
-    packed for the kernel and its films' reading set up once for all calls (``prepare``,
+    peak), which roughly halves its steps on the chords' nearby currents; a call with
+    ``gain`` starts afresh, from the linear start scaled by it (``solve_network``: the
+    sweep's peak, whose loop fluxes ``at.flux`` then hands to the error bound). The network
+    is packed for the kernel and its films' reading set up once for all calls (``prepare``,
     ``film_reader``): the same numbers as ``network_torque_and_flux`` at each call."""
-    mats = MATERIALS if materials is None else materials
-    state = {} if seed is None else {"i": np.asarray(seed[0], dtype=float)[:, None],
-                                     "x": np.asarray(seed[1], dtype=float)}  # fmt: skip
-    packed = prepare(net, mats) if net.turns.size else None
-    reading = film_reader(net, mats, fluid, convention)
+    return YieldAt(net, MATERIALS if materials is None else materials, fluid, convention, seed)
 
-    def at(current: FloatArray, rtol: float = 1e-10) -> FloatArray:
+
+class YieldAt:
+    """``network_yield_at``'s callable: the network packed and its reading set up once."""
+
+    def __init__(self, net: Network, mats: Mapping[str, Magnetic], fluid: MRFluid | None,
+                 convention: str, seed: tuple[FloatArray, FloatArray] | None) -> None:  # fmt: skip
+        self._net, self._mats = net, mats
+        self._state = {} if seed is None else {"i": np.asarray(seed[0], dtype=float)[:, None],
+                                               "x": np.asarray(seed[1], dtype=float)}  # fmt: skip
+        self._packed = prepare(net, mats) if net.turns.size else None
+        self._reading = film_reader(net, mats, fluid, convention)
+
+    @property
+    def flux(self) -> FloatArray:
+        """The loop fluxes (S, 1, ``Network.unknowns``) of the last call (or the seed's)."""
+        return self._state["x"]
+
+    def __call__(self, current: ArrayLike, rtol: float = 1e-10,
+                 gain: ArrayLike | None = None) -> FloatArray:  # fmt: skip
+        net, state = self._net, self._state
         cur = np.asarray(current, dtype=float)[:, None]
         start = None
-        if state:
+        if state and gain is None:
             ratio = np.where(state["i"] != 0, cur / np.where(state["i"] != 0, state["i"], 1), 0)
             start = state["x"] * ratio[..., None]
-        x = _solve_packed(net, net.turns[:, None] * cur, packed, mats, rtol, start=start)
+        x = _solve_packed(net, net.turns[:, None] * cur, self._packed, self._mats, rtol,
+                          start=start, gain=gain)  # fmt: skip
         state.update(i=cur, x=x)
-        return reading(x).sum(-1)[:, 0]
-
-    return at
+        return self._reading(x).sum(-1)[:, 0]
 
 
 def network_gap_torque(

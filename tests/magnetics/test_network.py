@@ -668,6 +668,25 @@ def test_yield_at_is_the_torque_and_flux_solve_at_each_call(convention):
         last = cur
 
 
+def test_yield_at_solves_the_peak_afresh_with_a_gain_and_hands_its_flux_over():
+    """The sweep's row (mrclutch.fast_batch) solves its peak with ``network_yield_at``'s
+    first call (``gain``: from the circuit-scaled linear start) and hands ``at.flux`` to the
+    error bound: the torques and loop fluxes of ``network_torque_and_flux`` with that gain,
+    bit for bit; a later call with a gain starts afresh too (not from the last fluxes)."""
+    f = {k: np.full(4, float(v)) for k, v in vars(replace(PAPER, n_drums=2)).items()}
+    f["gap"] = np.linspace(0.2e-3, 0.8e-3, 4)
+    net = network_from_regions(evaluate(broadcast_fields(f), 2))
+    peak, gain = np.full(4, 7.0), np.array([[0.2], [0.3], [0.4], [0.5]])
+    t, x = network_torque_and_flux(net, peak[:, None], gain=gain)
+    at = network_yield_at(net)
+    np.testing.assert_array_equal(at(peak, gain=gain), t.sum(-1)[:, 0])
+    np.testing.assert_array_equal(at.flux, x)
+    at(peak * 0.3)
+    t2, x2 = network_torque_and_flux(net, peak[:, None] * 0.5, gain=gain)
+    np.testing.assert_array_equal(at(peak * 0.5, gain=gain), t2.sum(-1)[:, 0])
+    np.testing.assert_array_equal(at.flux, x2)
+
+
 # ---- against the stored FEM reference (measured, not tuned) ------------------------------
 
 
