@@ -91,19 +91,20 @@ class _KeffSign:
         return a + b * np.cos(th) + c * np.sin(th)
 
     def slope(self, d: np.ndarray, w: np.ndarray) -> np.ndarray:
-        (_, b, c), (a1, b1, c1) = self._ev(self.P, d, w), self._ev(self.D1, d, w)
+        (b, c), (a1, b1, c1) = self._ev(self.P[1:], d, w), self._ev(self.D1, d, w)
         t = self._tau(d)
         cs, sn = np.cos(w * t), np.sin(w * t)
         return a1 + (b1 + c * t) * cs + (c1 - b * t) * sn
 
     def bound1(self, d: Any, w: np.ndarray) -> np.ndarray:
-        """max |N'| over [0, ω]."""
-        (_, b0, c0), (a1, b1, c1) = (self._ev(X, d, w) for X in self.abs[:2])
+        """max |N'| over [0, ω] (|A| itself not needed: A's derivative's, B's, C's)."""
+        (b0, c0), (a1, b1, c1) = self._ev(self.abs[0][1:], d, w), self._ev(self.abs[1], d, w)
         return a1 + b1 + c1 + self._tau(d) * (b0 + c0)
 
     def bound2(self, d: Any, w: np.ndarray) -> np.ndarray:
-        """max |N''| over [0, ω]."""
-        (_, b0, c0), (_, b1, c1), (a2, b2, c2) = (self._ev(X, d, w) for X in self.abs)
+        """max |N''| over [0, ω] (nor |A|, |A'|)."""
+        (b0, c0), (b1, c1) = (self._ev(X[1:], d, w) for X in self.abs[:2])
+        a2, b2, c2 = self._ev(self.abs[2], d, w)
         t = self._tau(d)
         return a2 + b2 + c2 + 2 * t * (b1 + c1) + t * t * (b0 + c0)
 
