@@ -3,12 +3,77 @@
 from __future__ import annotations
 
 import os
+import re
 import tempfile
 from pathlib import Path
 
 import pytest
 
 from mrclutch import docs_figures
+
+#: The heaviest work units of the last full run (``CI=1 python -m pytest --durations=25``,
+#: 766 s on 2 workers: the install test 166 s, test_one_answer's members 47 s + 23 s, the
+#: optimiser's figures 42 s, ...), heaviest first. xdist hands the units out in collection
+#: order (``--no-loadscope-reorder``; its default, most tests first, sent these few-test
+#: files last, where one of them ran alone on one worker at the end); a unit not named
+#: here follows, those holding more ``slow`` tests first. Only the order changes.
+HEAVY_FIRST = (
+    "tests/test_install.py",
+    "tests/mrclutch/test_one_answer.py",
+    "tests/magnetics/test_onelab.py",
+    "tests/mrclutch/test_optimize_pareto.py",
+    "figures:mrclutch optimize --no-verify --json",
+    "tests/mrclutch/test_sweep_scaleout.py",
+    "tests/mrclutch/test_robust.py",
+    "tests/magnetics/test_network_kernel.py",
+    "tests/mrclutch/test_json_walk.py",
+    "figures:mrclutch fidelity --preset paper --out {tmp}/fidelity",
+    "tests/mrclutch/test_output_faults.py",
+    "tests/mrclutch/test_sweep_categorical.py",
+    "tests/mrclutch/test_report.py",
+)
+
+
+def _unit(item: pytest.Item, commands: dict[str, str]) -> str:
+    """The xdist work unit of a test (``--dist loadgroup``): its file, except that the
+    docs' figure checks go by the command they run (one unit a command, so each command
+    still runs once in the session, and test_doc_figures.py's 18 commands spread over the
+    workers instead of pinning one)."""
+    path = item.nodeid.split("::", 1)[0]
+    callspec = getattr(item, "callspec", None)
+    if path.endswith("test_doc_figures.py") and item.name.startswith(
+        "test_quoted_figure_matches_its_command["
+    ):
+        return "figures:" + commands[callspec.params["key"]]
+    return path
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Each test gets its work unit as an ``xdist_group`` (tryfirst: before xdist's worker
+    reads the marks into the node ids), and the units are ordered heaviest first
+    (``HEAVY_FIRST``), each unit's tests kept together and in their order. Only in an
+    xdist worker (the order it reports is the order the units are handed out): a serial
+    run (``-n 0``, the mutation runs' ``-x``) keeps pytest's order."""
+    if not hasattr(config, "workerinput"):
+        return
+    commands = {k: f.command for k, f in docs_figures.load_registry().items()}
+    units: dict[str, list[pytest.Item]] = {}
+    for item in items:
+        if item.get_closest_marker("xdist_group") is None:
+            unit = _unit(item, commands)
+            item.add_marker(pytest.mark.xdist_group(re.sub(r"[@\[\]]", "_", unit)))
+        else:
+            unit = str(item.get_closest_marker("xdist_group").args[0])
+        units.setdefault(unit, []).append(item)
+
+    def rank(unit: str) -> tuple[int, int]:
+        if unit in HEAVY_FIRST:
+            return HEAVY_FIRST.index(unit), 0
+        return len(HEAVY_FIRST), -sum(bool(i.get_closest_marker("slow")) for i in units[unit])
+
+    items[:] = [i for unit in sorted(units, key=rank) for i in units[unit]]
+
 
 #: What pytest_configure changed in os.environ, restored by pytest_unconfigure.
 _ENV_SAVED: dict[str, str | None] = {}
