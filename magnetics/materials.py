@@ -115,6 +115,9 @@ class BHCurve:
     b_table: tuple[float, ...]
     h_table: tuple[float, ...]
     source: str
+    # The dense tables below are built on first use (``__getattr__``), not at construction:
+    # the registry's nine curves cost ~20–40 ms of every command's import, and a command
+    # that reads no B–H curve (haptic, compare, inertia) never pays it (issue 40).
     _b: FloatArray = field(init=False, repr=False, compare=False)
     _h: FloatArray = field(init=False, repr=False, compare=False)
     _dhdb: FloatArray = field(init=False, repr=False, compare=False)
@@ -133,6 +136,20 @@ class BHCurve:
             raise ParameterError(f"{self.name}: B–H table must be positive, strictly increasing")
         if np.any(np.diff(b) / np.diff(h) < MU0 * (1 - 1e-9)):
             raise ParameterError(f"{self.name}: B–H table has a slope below μ0 (unphysical)")
+
+    def __getattr__(self, name: str) -> Any:
+        """Builds the dense tables the first time one is read (only then is an attribute
+        missing: once set they are plain instance attributes, so the hot paths pay no more
+        than an eager build)."""
+        if name not in _TABLES or name in self.__dict__:
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        self._build()
+        return self.__dict__[name]
+
+    def _build(self) -> None:
+        """The dense PCHIP table, its μ0 extension and the uniform-grid copy."""
+        b = np.asarray(self.b_table, dtype=float)
+        h = np.asarray(self.h_table, dtype=float)
         bb = np.concatenate([[0.0], b])
         hh = np.concatenate([[0.0], h])
         grid = np.linspace(0.0, b[-1], _DENSE)
@@ -220,6 +237,8 @@ class BHCurve:
 
 
 Magnetic = LinearMaterial | BHCurve
+#: The tables ``BHCurve._build`` sets on first use.
+_TABLES = frozenset(("_b", "_h", "_dhdb", "_inv_step", "_hu", "_slope", "_icpt", "_gcpt"))
 
 # ---- the registry: one data file per material (geometry/data/materials, sources there) ----
 _CARLSON_BH_H = np.geomspace(2e3, 4e5, 40)  # A/m: where Carlson's B(H) is tabulated
