@@ -288,7 +288,12 @@ def by_drum_count(n_drums: np.ndarray, ok: np.ndarray | None = None) -> dict[int
     """Row indices of each drum count (rows not ``ok`` left out): one batch per topology."""
     n = np.asarray(n_drums)
     keep = np.ones(n.shape, bool) if ok is None else np.asarray(ok, bool)
-    return {int(v): np.flatnonzero(keep & (n == v)) for v in np.unique(n[keep])}
+    # the distinct counts, sorted: what np.unique does, without the numpy.ma it imports
+    # (~30 ms of an interactive command, issue 40)
+    s = np.sort(n[keep], axis=None)
+    first = np.ones(s.shape, bool)
+    np.not_equal(s[1:], s[:-1], out=first[1:])
+    return {int(v): np.flatnonzero(keep & (n == v)) for v in s[first]}
 
 
 def by_topology(
