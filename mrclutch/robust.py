@@ -26,7 +26,8 @@ box:
   counter-examples for each). The worst: exact over τ and K
   (``robust_columns.bandwidth_worst_delay_K``: k_eff is linear in K and a cosine in ωτ,
   so the first crossing over them is a corner's or a root of a degree-6 polynomial),
-  searched over (m1, b1); the best: the search over all four.
+  searched over the edges of (m1, b1) (k_eff is harmonic in (k − m1ω²) + j(b1 + b)ω at
+  one ω, τ, K: its least lies on the edges); the best: the search over all four.
 
 The searches are checked against 1000 random samples of the ranges of 200 random designs
 (the reported worst is never above the sampled one, and within 2 % of it).

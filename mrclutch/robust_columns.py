@@ -80,11 +80,12 @@ def robust_limits(
     if "best" in cases:
         res["max_stable_K_best"], _ = box_search(stable(sub), lo3, hi3, sense=1,
                                                  points=points, zooms=zooms)  # fmt: skip
-    # bandwidth at the rendered K: not monotone in any input (tests). The worst: over τ and
-    # K exactly (bandwidth_worst_delay_K), a search over (m1, b1); the best: over all four
+    # bandwidth at the rendered K: not monotone in any input (tests). The worst: exact over
+    # τ and K (bandwidth_worst_delay_K), searched over the edges of (m1, b1); the best: a
+    # search over all four
     if "worst" in cases:
         res["bandwidth_worst"], _ = box_search(
-            lambda x: bandwidth_worst_delay_K(sub, x[..., 0], x[..., 1], (tlo, thi), (klo, khi)),
+            lambda x: _on_edges(sub, x, lo3[:, :2], hi3[:, :2], (tlo, thi), (klo, khi)),
             lo3[:, :2], hi3[:, :2], sense=-1, points=points, zooms=zooms + 1)  # fmt: skip
     if "best" in cases:
         res["bandwidth_best"], _ = box_search(
@@ -97,6 +98,30 @@ def robust_limits(
 
 
 CASES = ("nominal", "worst", "best")
+
+
+def _on_edges(box: HandBox, x: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+              tau: tuple[np.ndarray, np.ndarray], K: tuple[np.ndarray, np.ndarray]
+              ) -> np.ndarray:  # fmt: skip
+    """``bandwidth_worst_delay_K`` at the points x (S, M, 2) of (m1, b1) on an edge of
+    their box [lo, hi] (to 1e-9 of its width); NaN (no value) inside it. At one ω, τ, K
+    k_eff = −m2ω² + k + Re(α/D), α = K E e^{−jωτ} − E², is harmonic in D = k − m1ω² +
+    j(b1 + b)ω (Im D > 0: D ≠ 0) over the rectangle (m1, b1) spans, so its least there lies
+    on the edges ([evans2010] §2.2.3, the maximum principle), and so does the first ω where it
+    is ≤ 0: the least bandwidth over the box is its least over the edges."""
+    span = (hi - lo)[:, None, :]
+    edge = np.any((x - lo[:, None, :] <= 1e-9 * span) | (hi[:, None, :] - x <= 1e-9 * span), 2)
+    rr, mm = np.nonzero(edge)
+    on = _rows(box, rr)
+    out = np.full(x.shape[:2], np.nan)
+    out[rr, mm] = bandwidth_worst_delay_K(
+        on,
+        x[rr, mm, 0][:, None],
+        x[rr, mm, 1][:, None],
+        (tau[0][rr], tau[1][rr]),
+        (K[0][rr], K[1][rr]),
+    )[:, 0]
+    return out
 
 
 def bandwidth_worst_delay_K(box: HandBox, m1: np.ndarray, b1: np.ndarray,

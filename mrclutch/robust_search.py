@@ -317,7 +317,7 @@ def stable_worst_box(lo: np.ndarray, hi: np.ndarray, k: np.ndarray, b: np.ndarra
     q = (lo[:, 0], hi[:, 0], lo[:, 1], hi[:, 1], lo[:, 2], hi[:, 2], k, b, m2)
     m1a, m1b, b1a, b1b, tb = (*q[:4], q[5])
     best = np.full(n, np.inf)
-    # Cauchy's bound [cauchy1829] on |zeros| of Num over the box
+    # Cauchy's bound ([marden1966] §27) on |zeros| of Num over the box
     w_A = _largest_zero(np.stack([m1a * m2, -(m2 * b1b + m1b * b + m2 * b),
                                   -(b1b * b + (m1b + m2) * k), -b1b * k], 1))  # fmt: skip
     w_lo = 1e-4 * _largest_zero(np.stack([m1a * m2, m2 * b1a + m1a * b + m2 * b,

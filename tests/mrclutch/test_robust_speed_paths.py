@@ -162,3 +162,17 @@ def test_stable_worst_at_an_edges_point_nearest_zero():
     box = _one((lo[0, 0], lo[0, 0], hi[0, 0]), (lo[0, 1], lo[0, 1], hi[0, 1]),
                (lo[0, 2], lo[0, 2], hi[0, 2]), k=k, b=b, m2=m2)  # fmt: skip
     assert got[0] < (1 - 2e-4) * _searched(box, lo, hi)[0]
+
+
+def test_bandwidth_worst_searched_on_the_edges_is_below_every_inside_point():
+    """The worst bandwidth searches only the edges of (m1, b1) (k_eff is harmonic in D
+    there: its least lies on the edges): on 100 random boxes no point of a 9 × 9 grid of
+    (m1, b1), inside included, with τ and K over their ranges, is below it."""
+    box = _random_boxes(np.random.default_rng(31), 100)
+    worst = robust_limits(box, cases=("worst",))["bandwidth_worst"]
+    t = np.linspace(0.0, 1.0, 9)
+    (_, ml, mh), (_, bl, bh) = box.m1, box.b1
+    m1 = (ml[:, None, None] + (mh - ml)[:, None, None] * t[:, None]).repeat(9, 2).reshape(100, -1)
+    b1 = (bl[:, None, None] + (bh - bl)[:, None, None] * t[None, :]).repeat(9, 1).reshape(100, -1)
+    grid = bandwidth_worst_delay_K(box, m1, b1, box.delay[1:], box.K[1:])
+    assert np.all(worst <= np.nanmin(grid, axis=1) * (1 + 1e-9))
