@@ -32,8 +32,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "compare": (_HAPTIC, "the paper's equal-force comparison: MR pair vs Maxon 136206 "
                 "(Fig. 7c)"),
     "export": (_GEOMETRY, "write clutch.step and one STL per part"),
-    "inertia": (_GEOMETRY, "rotor inertia and masses (analytic, mesh, brep), or weigh a "
-                "STEP/STL file"),
+    "inertia": ("mrclutch.cli.commands.inertia", "rotor inertia and masses (analytic, mesh, "
+                "brep), or weigh a STEP/STL file"),
     "view": (_GEOMETRY, "3-D view cut in half; --screenshot works headless"),
     "torque": (_MAGNETICS, "torque against coil current (network, circuit or FEM)"),
     "field": (_MAGNETICS, "FEM flux-density map over the section at one current"),
