@@ -190,8 +190,17 @@ def _crossings_hands(
     else:
         nz = np.where(mags > 1e-12 * w_a[:, None], mags, np.inf).min(axis=1)
         hands_on = np.any(rows != 0.0, axis=1)
-        # a slow hand mode; without a hand, below limits.quiet_below no crossing lies
-        w_lo = np.where(hands_on, 1e-2 * nz, quiet_below(nz, tau))
+        # Below limits.quiet_below no crossing lies. With a hand, X = −P_h/((k + jbω)E):
+        # k_h > 0 gives arg X = π + arg P_h + ωτ − atan(bω/k), real positive only once
+        # arg P_h + ωτ ≥ π; k_h = 0 gives P_h = s P̃ and arg X = −π/2 + arg P̃ + ωτ −
+        # atan(bω/k), once arg P̃ + ωτ ≥ π/2. P_h's nonzero zeros (≤ 4, none nearer 0
+        # than nz) lie in the closed left half-plane (Z_p + Z_h positive real), so
+        # quiet_below(nz, τ, 4) bounds both. 1e-2 nz alone (a slow hand mode) missed the
+        # slow delayed mode when nz τ > ~150 (a 1 mg mass-only hand: 9895 N/m against
+        # the equal lever's 471); the lower of the two keeps the presets' grids.
+        w_lo = np.where(
+            hands_on, np.minimum(1e-2 * nz, quiet_below(nz, tau, 4)), quiet_below(nz, tau)
+        )
         hid, wc = _scan_hands(p, c, w_a, w_lo, X, k_stop)
     xv = X(hid, wc)
     ok = (xv.real > 0) & (np.abs(xv.imag) <= 1e-6 * np.abs(xv))

@@ -143,15 +143,17 @@ def _scan_imaginary_axis(
     return np.concatenate(found)
 
 
-def quiet_below(w_z: Any, tau: Any) -> Any:
+def quiet_below(w_z: Any, tau: Any, n_zeros: int = 3) -> Any:
     """A frequency [rad/s] below which Im X < 0, so no crossing lies there: half of
     min(w_z/2, (π/2)/(4/w_z + τ)), w_z the smallest |zero| of Num (Hurwitz), τ the delay
     (plus half the hold). For ω ≤ w_z/2 each zero turns arg Num(jω) by at most (4/3)ω/w_z
     (a real one atan(ω/σ); a pair atan(2σω/(|z|² − ω²)) ≤ (8/3)ω/|z|), so arg X =
     −π/2 + arg Num(jω) + ωτ − atan(bω/k) stays in (−π, 0) while ω(4/w_z + τ) < π/2.
     The scans start no higher (a low, delay-driven crossing near √(K/(m1 + m2)) lies far
-    below 10⁻⁴ ω_a where b1 is small and b/m1 large). Vectorised."""
-    return 0.5 * np.minimum(0.5 * w_z, 0.5 * math.pi / (4.0 / w_z + tau))
+    below 10⁻⁴ ω_a where b1 is small and b/m1 large). ``n_zeros``: how many zeros (in the
+    closed left half-plane, none nearer 0 than w_z) turn the phase: 4/w_z becomes
+    (n_zeros/3)·4/w_z (the loop with a hand, ``hand_scan``: 4). Vectorised."""
+    return 0.5 * np.minimum(0.5 * w_z, 0.5 * math.pi / ((n_zeros / 3.0) * 4.0 / w_z + tau))
 
 
 def _crossings(

@@ -40,7 +40,8 @@ and the delay's roots coming from Re s = −∞. Roots cross the imaginary axis 
 ρ = −jω Num(jω)/[(k + jbω) E(jω) (c + jσω)] is real and positive; each crossing moves 2
 roots (a conjugate pair) in the direction sign Re(ds/dρ). Without delay or hold the
 crossing frequencies are the positive real roots of a polynomial; otherwise sign changes
-of the imaginary part on a grid fine against the delay's phase period, up to a frequency
+of the imaginary part on a grid fine against the delay's phase period, from below
+``limits.quiet_below`` (no crossing lies lower, ``_ray_crossings``), up to a frequency
 beyond which ρ(ω) ≥ m1 m2 ω (ω − ω_a)³ / [(k + bω)(c + σω)] (ω_a the largest |root| of
 Num; this bound is increasing for ω > ω_a) exceeds the point's ρ. **Certified**: for a pure
 delay, the count is exact up to the grid scan for sign changes of Im ρ(ω) (two crossings
@@ -62,7 +63,7 @@ from geometry.numerics import illinois
 from geometry.validation import ParameterError
 from mrclutch.haptics.actuator import HapticParams
 from mrclutch.haptics.impedance import _hold, _num_coeffs
-from mrclutch.haptics.limits import _scan_imaginary_axis
+from mrclutch.haptics.limits import _scan_imaginary_axis, quiet_below
 
 __all__ = [
     "ZWIDTH_KEYS",
@@ -404,7 +405,8 @@ def _ray_crossings(p: HapticParams, c: float, sg: float, rho_stop: float) -> tup
     """Crossing gains ρ_c (ascending) and directions of χ along (K, B) = ρ (c, sg), every
     crossing with ρ_c ≤ ``rho_stop`` (module docstring)."""
     a = _num_coeffs(p)
-    w_a = float(np.max(np.abs(np.roots(a))))
+    roots = np.roots(a)
+    w_a = float(np.max(np.abs(roots)))
     tau = p.delay + 0.5 * p.sample_period
 
     def X(w: Any) -> Any:  # ρ(ω)·e^{jφ}: a crossing where X is real and > 0
@@ -424,7 +426,12 @@ def _ray_crossings(p: HapticParams, c: float, sg: float, rho_stop: float) -> tup
         def lower(w: float) -> float:  # |ρ(ω)| past ω_a (|H| ≤ 1, |jω − r| ≥ ω − |r|)
             return a[0] * w * max(w - w_a, 0.0) ** 3 / ((p.k + p.b * w) * (c + sg * w))
 
-        wc = _scan_imaginary_axis(X, w_a, tau, lower, rho_stop)
+        # No crossing lies below limits.quiet_below: there arg Num(jω) + ωτ < π/2 (its
+        # derivation), so arg X = −π/2 + arg Num + ωτ − atan(bω/k) − atan(σω/c) lies in
+        # (−3π/2, 0) (each atan in [0, π/2]) and X is never real positive. A fixed start
+        # (10⁻⁴ ω_a) missed the slow delayed mode of a light, strongly coupled lever.
+        w_z = float(np.min(np.abs(roots)))  # the slowest zero of Num
+        wc = _scan_imaginary_axis(X, w_a, tau, lower, rho_stop, w_lo=quiet_below(w_z, tau))
     xv = X(wc)
     ok = (xv.real > 0) & (np.abs(xv.imag) <= 1e-6 * np.abs(xv))
     wc, rc = wc[ok], xv.real[ok]
