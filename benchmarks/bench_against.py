@@ -12,7 +12,7 @@ rounds keep the ratio honest on a shared, noisy machine.
 columns (``RobustBatchEvaluator`` with the three worst-case columns, what ``sweep --with
 max_stable_K_worst_N_per_m …`` runs) against the default columns (``BatchEvaluator``) on
 the same N designs (bench_robust's), and prints robust/default of each tree (issue 40's
-goal: ≤ 10×), CPU time (the machine is shared).
+goal: ≤ 10×), CPU time (the machine is shared): medians of three interleaved rounds.
 """
 
 from __future__ import annotations
@@ -62,8 +62,10 @@ def cpu(fn):
     c = time.process_time()
     fn(f)
     return time.process_time() - c
-t_plain = sorted(cpu(plain) for _ in range(3))[1]
-print(t_plain, cpu(robust))
+# three rounds, each the default (median of 3) then the robust once: medians of each (the
+# two interleaved, so a change of load on a shared machine moves both)
+rounds = [(sorted(cpu(plain) for _ in range(3))[1], cpu(robust)) for _ in range(3)]
+print(*(sorted(x)[1] for x in zip(*rounds)))
 """
 
 HELP = r"""
