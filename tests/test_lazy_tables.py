@@ -127,3 +127,23 @@ def test_the_interactive_commands_build_no_table_and_skip_numpy_ma() -> None:
                        cwd=ROOT, timeout=300)  # fmt: skip
     assert p.returncode == 0, p.stderr[-2000:]
     assert p.stdout.split("\n")[-2] == "[] False True"
+
+
+def test_the_analytic_inertia_loads_no_hand_off_nor_the_viewer() -> None:
+    """``inertia`` has its own command module: ``inertia --method analytic`` imports neither
+    ``export``'s hand-offs (mrclutch.handoff, and with them the pipeline and the FEM
+    hand-off writers) nor ``view``'s renderer, and still answers."""
+    code = (
+        "import sys, io, contextlib\nfrom mrclutch.cli.main import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()) as out:\n"
+        "    assert main(['inertia', '--preset', 'paper', '--method', 'analytic']) == 0\n"
+        "assert 'rotor inertia' in out.getvalue()\n"
+        "print(sorted(m for m in ('mrclutch.handoff', 'mrclutch.cli.view', 'mrclutch.pipeline',"
+        " 'mrclutch.cli.commands.handoff', 'magnetics.export', 'mrclutch.inertia')"
+        " if m in sys.modules))"
+    )
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                       cwd=ROOT, timeout=300)  # fmt: skip
+    assert p.returncode == 0, p.stderr[-2000:]
+    assert p.stdout.strip() == "['mrclutch.inertia']"
