@@ -320,8 +320,14 @@ def stable_worst_box(lo: np.ndarray, hi: np.ndarray, k: np.ndarray, b: np.ndarra
     # Cauchy's bound ([marden1966] §27) on |zeros| of Num over the box
     w_A = _largest_zero(np.stack([m1a * m2, -(m2 * b1b + m1b * b + m2 * b),
                                   -(b1b * b + (m1b + m2) * k), -b1b * k], 1))  # fmt: skip
-    w_lo = 1e-4 * _largest_zero(np.stack([m1a * m2, m2 * b1a + m1a * b + m2 * b,
-                                          b1a * b + (m1a + m2) * k, b1a * k], 1))  # fmt: skip
+    # the grid's start: as stable_stiffness_batch's, below every q's quiet_below (it rises
+    # with the slowest zero, at least 1/R, R Cauchy's bound on the zeros of the reversed
+    # cubic over the box, and falls with τ)
+    r_z = 1.0 / _largest_zero(np.stack([b1a * k, -(b1b * b + (m1b + m2) * k),
+                                        -(m2 * b1b + m1b * b + m2 * b), -m1b * m2], 1))  # fmt: skip
+    w_a = _largest_zero(np.stack([m1a * m2, m2 * b1a + m1a * b + m2 * b,
+                                  b1a * b + (m1a + m2) * k, b1a * k], 1))  # fmt: skip
+    w_lo = np.minimum(1e-4 * w_a, quiet_below(r_z, tb))
     # a scan to ω_A first; where the bound does not hold there, a longer one
     todo = np.nonzero(tb > 0)[0]
     done = np.zeros(n, dtype=bool)

@@ -176,3 +176,22 @@ def test_bandwidth_worst_searched_on_the_edges_is_below_every_inside_point():
     b1 = (bl[:, None, None] + (bh - bl)[:, None, None] * t[None, :]).repeat(9, 1).reshape(100, -1)
     grid = bandwidth_worst_delay_K(box, m1, b1, box.delay[1:], box.K[1:])
     assert np.all(worst <= np.nanmin(grid, axis=1) * (1 + 1e-9))
+
+
+def test_stable_worst_finds_the_slow_delayed_mode_below_the_old_start():
+    """test_mutation_survivors_robust's rigid lever at a 1 ms delay (a linear grid the
+    scan takes itself): a light actuator (0.1 g) on a stiff, damped coupling puts Num's
+    largest zero near 4.8e5 rad/s, and the slow delayed mode crosses at 5 rad/s, below
+    10⁻⁴ of it. The crossings' scan starts below every point's ``quiet_below`` over the box
+    (as stable_stiffness_batch does): a point box and a box around it give that limit,
+    M ω_c²/cos(ω_c τ) = 5.00256 N/m to the coupling's O(K/k) (it read 7.9e6 N/m when the
+    scan started at 10⁻⁴ ω_a)."""
+    m1, m2, tau, wc = 1e-4, 0.2, 1e-3, 5.0
+    M = m1 + m2
+    b1 = M * wc * np.tan(wc * tau)
+    kc = M * wc**2 / np.cos(wc * tau)
+    lo = np.array([[m1, b1, tau]])
+    got, done = stable_worst_box(lo, lo, 1e6, 50.0, m2)
+    assert done[0] and got[0] == pytest.approx(kc, rel=1e-5)
+    wide, done = stable_worst_box(lo, lo * np.array([[1.2, 1.5, 1.5]]), 1e6, 50.0, m2)
+    assert done[0] and wide[0] <= got[0] * (1 + 1e-9)
