@@ -10,10 +10,11 @@ those of s Num (left half-plane) with the rigid-body root moved from 0 to ≈ �
 reach the right half-plane only by crossing the imaginary axis (χ is retarded), at jω with
 K E(jω) = −jω Num(jω)/(k + jbω) =: K(ω)·E — i.e. where X(ω) = −jω Num/((k+jbω)E) is real
 and positive, with K_c = X. Every crossing frequency is found (polynomial roots when there
-is no delay; otherwise sign changes of Im X on a grid fine against the delay's phase
-period, from below ``quiet_below`` (no crossing lies lower), refined by Illinois regula
-falsi, up to a frequency beyond which the lower bound
-ω|Num(jω)|/|k+jbω| ≤ K(ω), increasing there, exceeds the best K_c), with its crossing
+is no delay; otherwise sign changes of Im X on a grid over whose cells arg X turns by at
+most π/16 (the delay's phase and each mode's, ``_phase_refine``), from below
+``quiet_below`` (no crossing lies lower), refined by Illinois regula falsi, up to a
+frequency beyond which the lower bound ω|Num(jω)|/|k+jbω| ≤ K(ω), increasing there,
+exceeds the best K_c), with its crossing
 direction sign Re(ds/dK) = Re[−E (bs+k)/χ'(s)]. The number of right-half-plane roots at K
 is 2 Σ sign over crossings with K_c < K: stable iff it is 0. The largest stable K is the
 first K_c where that count turns positive.
@@ -106,6 +107,7 @@ def _scan_imaginary_axis(
     lower: Callable[[float], float],
     limit: float | None,
     w_lo: float | None = None,
+    roots: Any = (),
 ) -> np.ndarray:
     """Frequencies ω > 0 [rad/s] where Im X(ω) changes sign (D-subdivision: a crossing of
     the imaginary axis where X, the gain that puts a root at jω, is real and > 0).
@@ -114,13 +116,21 @@ def _scan_imaginary_axis(
     doubling span with a step fine against both the delay's phase period π/(16τ) and the
     modes, each bracket refined by regula falsi. ``lower(ω)``: an increasing lower bound
     on |X| for ω ≥ ω_a; the scan stops once it exceeds ``limit`` (None: the smallest real
-    positive X found so far, i.e. up to the first crossing) or at 10⁴ (ω_a + 1/τ)."""
+    positive X found so far, i.e. up to the first crossing) or at 10⁴ (ω_a + 1/τ).
+
+    Every grid is then refined (``_phase_refine``) until no cell turns arg X by more than
+    π/16, counting the delay (ωτ) and ``roots``, the zeros and poles of X's rational part
+    (closed left half-plane): a 2.3 % log cell below ω_a turns the delay's phase by
+    0.023 ω_aτ (9 rad at ω_aτ = 403) and steps over a mode whose damping is below the cell,
+    so a crossing could fall between two points of the same sign."""
     step = min(w_a / 50.0, math.pi / (16.0 * tau))
+    r = np.asarray(roots, dtype=complex).ravel()
     grid = w_a * np.logspace(-4, 0, 401)
     if w_lo is not None and w_lo < grid[0]:  # a slow mode below the grid: start lower
         grid = np.concatenate([np.geomspace(w_lo, grid[0], 101)[:-1], grid])
     found, best = [], math.inf
     while True:
+        grid = _phase_refine(grid, tau, r)
         xi = X(grid).imag
         sc = np.nonzero(np.sign(xi[:-1]) * np.sign(xi[1:]) < 0)[0]
         w = illinois(lambda _, x: X(x).imag, grid[sc], grid[sc + 1], xi[sc], xi[sc + 1], 1e-13)
@@ -141,6 +151,57 @@ def _scan_imaginary_axis(
             )
         grid = np.linspace(w_end, 2 * w_end, n)
     return np.concatenate(found)
+
+
+#: Most turn of arg X [rad] one cell of the crossing scan may hold (``_phase_refine``).
+PHASE_STEP = math.pi / 16.0
+
+
+def _phase_bound(w: np.ndarray, tau: float, roots: np.ndarray) -> np.ndarray:
+    """Φ(ω) = ωτ + Σ_r atan2(ω − Im r, −Re r): increasing for Re r ≤ 0, and
+    |Δ arg X| ≤ ΔΦ over any interval, arg X being ±π/2 + ωτ ± Σ_r arg(jω − r)
+    (each arg(jω − r) = atan2(ω − Im r, −Re r) increasing; the sum of the terms'
+    variations bounds the variation of their signed sum)."""
+    turns = np.arctan2(w[..., None] - roots.imag, -roots.real)
+    return w * tau + np.sum(turns, axis=-1)
+
+
+def _phase_refine(grid: np.ndarray, tau: float, roots: np.ndarray) -> np.ndarray:
+    """``grid`` (ascending) with each cell split evenly until Φ (``_phase_bound``) rises
+    by at most PHASE_STEP over every cell, so arg X turns by at most π/16 between two
+    neighbours: Im X cannot change sign twice in a cell unless arg X touches 0 or π and
+    turns back within π/16 (a near-tangent pair of crossings). StabilitySearchError
+    beyond MAX_GRID points (the count is checked before a grid is built)."""
+    for _ in range(60):  # each pass splits the cells still over the step
+        phi = _phase_bound(grid, tau, roots)
+        parts = np.ceil(np.diff(phi) / PHASE_STEP)
+        wide = parts > 1
+        if not wide.any():
+            return grid
+        parts = np.where(wide, parts, 1.0)
+        total = float(np.sum(parts)) + 1
+        if total > MAX_GRID:  # an absurd delay or mode: refuse rather than fill memory
+            raise StabilitySearchError(
+                f"stability search: delay {tau:.3g} s and modes need more than "
+                f"{MAX_GRID:.0e} frequencies per scan step; not a haptic loop"
+            )
+        cells = np.nonzero(wide)[0]
+        n = parts[cells].astype(int)
+        # the inner points of each wide cell: lo + i (hi − lo)/n, i = 1 … n − 1
+        i = np.arange(int(np.sum(n - 1))) - np.repeat(np.cumsum(n - 1) - (n - 1), n - 1) + 1
+        lo, hi = np.repeat(grid[cells], n - 1), np.repeat(grid[cells + 1], n - 1)
+        new = lo + i * (hi - lo) / np.repeat(n, n - 1)
+        finer = np.insert(grid, np.repeat(cells + 1, n - 1), new)  # ascending: in its cell
+        finer = finer[np.concatenate([[True], np.diff(finer) > 0])]  # repeats at float res.
+        if finer.size == grid.size:  # cells at the float resolution: nothing left to split
+            return grid
+        grid = finer
+    return grid
+
+
+def _poles_and_zeros(roots: np.ndarray, p: HapticParams, *extra: complex) -> np.ndarray:
+    """The zeros of Num and the pole −k/b of X (where b > 0), with ``extra`` roots."""
+    return np.array([*roots, *([-p.k / p.b] if p.b > 0 else []), *extra], dtype=complex)
 
 
 def quiet_below(w_z: Any, tau: Any, n_zeros: int = 3) -> Any:
@@ -190,7 +251,8 @@ def _crossings(
             return abs(1j * w * np.polyval(a, 1j * w)) / abs(p.k + p.b * 1j * w)
 
         w_z = float(np.min(np.abs(roots)))  # the slowest zero of Num
-        wc = _scan_imaginary_axis(X, w_a, tau, lower, k_stop, w_lo=quiet_below(w_z, tau))
+        rz = _poles_and_zeros(roots, p)
+        wc = _scan_imaginary_axis(X, w_a, tau, lower, k_stop, w_lo=quiet_below(w_z, tau), roots=rz)
     xv = X(wc)
     ok = real_positive(xv)
     wc, Kc = wc[ok], xv.real[ok]

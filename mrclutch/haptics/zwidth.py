@@ -63,7 +63,7 @@ from geometry.numerics import illinois
 from geometry.validation import ParameterError
 from mrclutch.haptics.actuator import HapticParams
 from mrclutch.haptics.impedance import _hold, _num_coeffs
-from mrclutch.haptics.limits import _scan_imaginary_axis, quiet_below
+from mrclutch.haptics.limits import _poles_and_zeros, _scan_imaginary_axis, quiet_below
 
 __all__ = [
     "ZWIDTH_KEYS",
@@ -431,7 +431,10 @@ def _ray_crossings(p: HapticParams, c: float, sg: float, rho_stop: float) -> tup
         # (−3π/2, 0) (each atan in [0, π/2]) and X is never real positive. A fixed start
         # (10⁻⁴ ω_a) missed the slow delayed mode of a light, strongly coupled lever.
         w_z = float(np.min(np.abs(roots)))  # the slowest zero of Num
-        wc = _scan_imaginary_axis(X, w_a, tau, lower, rho_stop, w_lo=quiet_below(w_z, tau))
+        rz = _poles_and_zeros(roots, p, *([-c / sg] if sg > 0 else []))  # X's, on the ray
+        wc = _scan_imaginary_axis(
+            X, w_a, tau, lower, rho_stop, w_lo=quiet_below(w_z, tau), roots=rz
+        )
     xv = X(wc)
     ok = (xv.real > 0) & (np.abs(xv.imag) <= 1e-6 * np.abs(xv))
     wc, rc = wc[ok], xv.real[ok]

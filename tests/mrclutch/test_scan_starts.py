@@ -10,6 +10,8 @@ import pytest
 
 from mrclutch.haptics.actuator import HapticParams
 from mrclutch.haptics.hand import Hand, max_stable_stiffness_coupled
+from mrclutch.haptics.impedance import _num_coeffs
+from mrclutch.haptics.limits import PHASE_STEP, _phase_bound, _phase_refine
 from mrclutch.haptics.model import max_stable_stiffness
 from mrclutch.haptics.zwidth import _ray_crossings, is_stable_spring_damper
 
@@ -67,3 +69,56 @@ def test_a_light_hand_does_not_hide_the_slow_delayed_mode_of_the_lever():
     got = max_stable_stiffness_coupled(p, Hand(m=mh))
     assert got == pytest.approx(k_c, rel=1e-6)
     assert got == pytest.approx(max_stable_stiffness(replace(p, m2=m2 + mh)), rel=1e-9)
+
+
+def _newton_root(p: HapticParams, K: float, B: float, s: complex) -> tuple[complex, float]:
+    """A root of the exact χ(s) = s Num(s) + (K + Bs) e^{−sτ} (bs + k) by Newton from ``s``
+    (analytic derivative), with its residual relative to |s Num(s)|."""
+    a = _num_coeffs(p)
+    da, tau = np.polyder(a), p.delay
+    for _ in range(60):
+        E, num = np.exp(-s * tau), np.polyval(a, s)
+        chi = s * num + (K + B * s) * E * (p.b * s + p.k)
+        d = num + s * np.polyval(da, s)
+        d += E * (B * (p.b * s + p.k) + (K + B * s) * (p.b - tau * (p.b * s + p.k)))
+        s = s - chi / d
+    E = np.exp(-s * tau)
+    res = abs(s * np.polyval(a, s) + (K + B * s) * E * (p.b * s + p.k))
+    return complex(s), float(res / abs(s * np.polyval(a, s)))
+
+
+def test_the_scan_resolves_the_delay_phase_below_the_largest_mode():
+    """A lightly damped mode (Num's zeros −20.86 ± 9117j) behind a long delay
+    (ω_aτ = 403): the old scan sampled [10⁻⁴ ω_a, ω_a] on a log grid of 2.3 % cells, which
+    turn the delay's phase by ~9 rad near ω_a and step over the mode (width ~21 rad/s), and
+    called (K, B) = (21.2585, 1.27692) stable. Newton on the exact characteristic equation,
+    started at the missed crossing (9106.9 rad/s), finds a root at 3.08 + 9106.2j
+    (independent of the scan); along the ray the first crossing is ρ_c = 16.41969 (not
+    21.318, the old first one), with the root 0.1 % either side of ρ_c on either side of
+    the axis. The refined grid turns arg X by at most π/16 a cell (``_phase_refine``)."""
+    m1, b1, k = 0.01682534063979713, 0.9625700289298509, 291105.6071298039
+    b, m2, tau = 0.10442872762128229, 0.004422746527719626, 0.044206561244483515
+    p = HapticParams(m1, b1, k, b, m2, delay=tau)
+    K, B = 21.2585, 1.27692
+    s, res = _newton_root(p, K, B, 9106.9j)
+    assert s.real == pytest.approx(3.08, abs=0.01) and res < 1e-10
+    assert not is_stable_spring_damper(p, K, B)
+    rho = math.hypot(K, B)
+    c, sg = K / rho, B / rho
+    rho_c = _first_destabilising(*_ray_crossings(p, c, sg, rho))
+    assert rho_c == pytest.approx(16.41969, rel=1e-6)
+    for f, side in ((0.999, -1.0), (1.001, 1.0)):
+        s, res = _newton_root(p, f * rho_c * c, f * rho_c * sg, 9106.9j)
+        assert side * s.real > 0 and abs(s.imag - 9106.9) < 1.0 and res < 1e-10
+        assert is_stable_spring_damper(p, f * rho_c * c, f * rho_c * sg) == (side < 0)
+
+
+def test_phase_refine_bounds_the_turn_of_every_cell():
+    """Every cell of a refined grid turns Φ (delay + each root's atan2) by at most π/16,
+    even across a mode 10⁴ times narrower than the log cells, and keeps the old points."""
+    roots = np.array([-0.05 + 5000j, -0.05 - 5000j, -30.0, -2e5])
+    grid = 5000.0 * np.logspace(-4, 0.5, 401)
+    fine = _phase_refine(grid, 0.01, roots)
+    assert np.all(np.diff(_phase_bound(fine, 0.01, roots)) <= PHASE_STEP * (1 + 1e-12))
+    assert np.all(np.isin(grid, fine)) and np.all(np.diff(fine) > 0)
+    assert np.any(np.abs(fine - 5000.0) < 0.05)  # a point inside the mode's width
