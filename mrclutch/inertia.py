@@ -3,7 +3,7 @@
 inertia of a CAD file (STEP: per part, densities from the options or the export's materials
 sidecar solid by solid; STL: one part, one density).
 
-The CLI (mrclutch/cli/commands/geometry.py) parses the options (the densities among them),
+The CLI (mrclutch/cli/commands/inertia.py) parses the options (the densities among them),
 calls these and formats. build123d and trimesh load with the geometry functions.
 """
 
