@@ -3,9 +3,12 @@ D-subdivision of χ_h(s) = P_h(s) + K E(s)(bs + k) for every hand row (m_h, b_h,
 design in one pass. The same procedure as ``limits._crossings`` and
 ``limits._scan_imaginary_axis`` (hand.py's module docstring says why it holds), row by row
 on the same grid: delay-free, the positive real roots of Im[−P_h(jω)(k − jbω)] (companion
-matrices, as ``np.roots``); delayed or sampled, sign changes of Im X on the log grid and
-the linear chunks of doubling span, refined by Illinois regula falsi [dowell-jarratt1971].
-Rows are padded by repeating an end point, which makes no sign change. SI units."""
+matrices, as ``np.roots``); delayed or sampled, sign changes of Im X on limits' grids (the
+log grid and the linear chunks of doubling span, ``limits._start_grid``/``_chunk_grid``),
+each refined until no cell turns arg X by more than π/16 (``limits._phase_refine``, with
+the row's zeros of P_h and the pole −k/b), refined by Illinois regula falsi
+[dowell-jarratt1971]. Rows are padded by repeating an end point, which makes no sign
+change. SI units."""
 
 from __future__ import annotations
 
@@ -17,7 +20,7 @@ import numpy as np
 from geometry.numerics import illinois
 from mrclutch.haptics.actuator import HapticParams
 from mrclutch.haptics.impedance import _hold, _num_coeffs
-from mrclutch.haptics.limits import MAX_GRID, StabilitySearchError, quiet_below
+from mrclutch.haptics.limits import _chunk_grid, _phase_refine_rows, _start_grid, quiet_below
 
 
 def _p_hands(p: HapticParams, rows: np.ndarray) -> np.ndarray:
@@ -54,25 +57,24 @@ def _scan_hands(
     w_lo: np.ndarray,
     X: Any,
     k_stop: float | None,
+    roots: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """``limits._scan_imaginary_axis`` for every hand at once (rows of ``c``; the same
-    grid per hand, rows padded by repeating an end point, which makes no sign change):
-    (hand index, ω) of every sign change of Im X, refined by Illinois regula falsi."""
+    """``limits._scan_imaginary_axis`` for every hand at once (rows of ``c``): each
+    row's grid is the one that scan builds (``limits._start_grid``, ``_chunk_grid``,
+    refined by ``_phase_refine`` until no cell turns arg X by more than π/16, counting
+    the delay and the row's ``roots``, X's zeros and poles), rows padded by repeating an
+    end point, which makes no sign change: (hand index, ω) of every sign change of Im X,
+    refined by Illinois regula falsi."""
     tau = p.delay + 0.5 * p.sample_period
     step = np.minimum(w_a / 50.0, math.pi / (16.0 * tau))
-    grid = w_a[:, None] * np.logspace(-4, 0, 401)
-    low = ~np.isnan(w_lo) & (w_lo < grid[:, 0])  # a slow mode below the grid: start lower
-    if low.any():
-        pre = np.repeat(grid[:, :1], 100, axis=1)
-        pre[low] = np.geomspace(w_lo[low], grid[low, 0], 101, axis=1)[:, :-1]
-        grid = np.concatenate([pre, grid], axis=1)
     rows = np.arange(c.shape[0])
+    grids = _refined([_start_grid(float(w_a[i]), float(w_lo[i])) for i in rows], tau, roots)
     best = np.full(c.shape[0], math.inf)
     limit = None if k_stop is None else float(k_stop)
     hids, ws = [], []
-    grid_of, ncol, w_last = (lambda a, b: grid[a:b]), grid.shape[1], grid[:, -1]
     while True:
-        r, lo, hi, f_lo, f_hi = _sign_changes(X, rows, grid_of, ncol)
+        ncol = max(g.size for g in grids)
+        r, lo, hi, f_lo, f_hi = _sign_changes(X, rows, _padded(grids, ncol), ncol)
         hid = rows[r]
         w = illinois(lambda act, x, hid=hid: X(hid[act], x).imag, lo, hi, f_lo, f_hi, 1e-13)
         hids.append(hid)
@@ -80,7 +82,7 @@ def _scan_hands(
         xv = X(hid, w)
         ok = (xv.real > 0) & (np.abs(xv.imag) <= 1e-6 * np.abs(xv))
         np.minimum.at(best, hid[ok], xv.real[ok])
-        w_end, wa = w_last, w_a[rows]
+        w_end, wa = np.array([g[-1] for g in grids]), w_a[rows]
         # |jω − r| ≥ ω − |r|, |E| ≤ 1: a lower bound on |X|, increasing past ω_a
         lower = c[rows, 0] * np.maximum(w_end - wa, 0.0) ** 4 / (p.k + p.b * w_end)
         target = best[rows] if limit is None else limit
@@ -88,33 +90,46 @@ def _scan_hands(
         rows, w_end = rows[~done], w_end[~done]
         if rows.size == 0:
             break
-        n = np.ceil(w_end / step[rows]).astype(int) + 1
-        if n.max() > MAX_GRID:  # an absurd delay or stiffness: refuse rather than fill memory
-            raise StabilitySearchError(
-                f"stability search: delay {tau:.3g} s needs more than {MAX_GRID:.0e} "
-                "frequencies per scan step; not a haptic loop"
-            )
-        grid_of = _doubling(w_end, n)
-        ncol, w_last = int(n.max()), 2 * w_end
+        chunks = [
+            _chunk_grid(float(w), float(step[i]), tau) for i, w in zip(rows, w_end, strict=True)
+        ]
+        grids = _refined(chunks, tau, roots[rows])
     return np.concatenate(hids), np.concatenate(ws)
 
 
 #: Most grid values one evaluation of X holds (rows × frequencies): the hands are scanned
 #: in chunks of rows under it (one row at least), so the scan's memory is that of one
 #: hand's scan, not of all 28 at once (a 0.01 gearing once took 1.7 GB batched, 0.11 GB
-#: hand by hand).
+#: hand by hand). The grids' refinement batches rows under it too (``_refined``).
 MAX_CELLS = 1 << 18
 
 
-def _doubling(w_end: np.ndarray, n: np.ndarray) -> Any:
-    """Rows a:b of the next step's grid: np.linspace(w_end, 2 w_end, n) per row, padded
-    with its end 2 w_end (built per chunk, never whole)."""
+def _refined(grids: list[np.ndarray], tau: float, roots: np.ndarray) -> list[np.ndarray]:
+    """Each row's grid refined as ``limits._phase_refine`` does (row ``i`` with
+    ``roots[i]``), rows batched in passes of at most MAX_CELLS points."""
+    out: list[np.ndarray] = []
+    a = 0
+    while a < len(grids):
+        b, size = a + 1, grids[a].size
+        while b < len(grids) and size + grids[b].size <= MAX_CELLS:
+            size += grids[b].size
+            b += 1
+        row = np.repeat(np.arange(b - a), [g.size for g in grids[a:b]])
+        flat, row = _phase_refine_rows(np.concatenate(grids[a:b]), row, tau, roots[a:b])
+        out.extend(np.split(flat, np.flatnonzero(np.diff(row)) + 1))
+        a = b
+    return out
+
+
+def _padded(grids: list[np.ndarray], ncol: int) -> Any:
+    """Rows a:b of the rows' grids as one (b − a, ncol) array, each padded with its end
+    point (built per chunk, never whole)."""
 
     def grid_of(a: int, b: int) -> np.ndarray:
-        we, nn = w_end[a:b], n[a:b]
-        i = np.arange(nn.max())[None, :]
-        g = we[:, None] + i * (we / (nn - 1))[:, None]
-        return np.where(i >= (nn - 1)[:, None], 2 * we[:, None], g)
+        out = np.empty((len(grids[a:b]), ncol))
+        for j, g in enumerate(grids[a:b]):
+            out[j, : g.size], out[j, g.size :] = g, g[-1]
+        return out
 
     return grid_of
 
@@ -170,7 +185,8 @@ def _crossings_hands(
     comp = np.zeros((c.shape[0], 4, 4))  # companion matrices, as np.roots builds them
     comp[:, 0, :] = -c[:, 1:] / c[:, :1]
     comp[:, [1, 2, 3], [0, 1, 2]] = 1.0
-    mags = np.abs(np.linalg.eigvals(comp))
+    zeros = np.linalg.eigvals(comp)  # P_h's zeros (closed left half-plane)
+    mags = np.abs(zeros)
     w_a = mags.max(axis=1)
     tau = p.delay + 0.5 * p.sample_period
 
@@ -201,7 +217,11 @@ def _crossings_hands(
         w_lo = np.where(
             hands_on, np.minimum(1e-2 * nz, quiet_below(nz, tau, 4)), quiet_below(nz, tau)
         )
-        hid, wc = _scan_hands(p, c, w_a, w_lo, X, k_stop)
+        # X's zeros and poles for the grid's phase bound: P_h's zeros (one at 0 turns
+        # nothing) and the pole −k/b
+        pole = np.full((c.shape[0], 1 if p.b > 0 else 0), -p.k / p.b if p.b > 0 else 0.0)
+        roots = np.concatenate([zeros, pole], axis=1)
+        hid, wc = _scan_hands(p, c, w_a, w_lo, X, k_stop, roots)
     xv = X(hid, wc)
     ok = (xv.real > 0) & (np.abs(xv.imag) <= 1e-6 * np.abs(xv))
     hid, wc, Kc = hid[ok], wc[ok], xv.real[ok]

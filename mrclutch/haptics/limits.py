@@ -125,12 +125,9 @@ def _scan_imaginary_axis(
     so a crossing could fall between two points of the same sign."""
     step = min(w_a / 50.0, math.pi / (16.0 * tau))
     r = np.asarray(roots, dtype=complex).ravel()
-    grid = w_a * np.logspace(-4, 0, 401)
-    if w_lo is not None and w_lo < grid[0]:  # a slow mode below the grid: start lower
-        grid = np.concatenate([np.geomspace(w_lo, grid[0], 101)[:-1], grid])
+    grid = _phase_refine(_start_grid(w_a, w_lo), tau, r)
     found, best = [], math.inf
     while True:
-        grid = _phase_refine(grid, tau, r)
         xi = X(grid).imag
         sc = np.nonzero(np.sign(xi[:-1]) * np.sign(xi[1:]) < 0)[0]
         w = illinois(lambda _, x: X(x).imag, grid[sc], grid[sc + 1], xi[sc], xi[sc + 1], 1e-13)
@@ -143,14 +140,30 @@ def _scan_imaginary_axis(
             w_end > 1e4 * (w_a + 1 / tau)
         ):
             break
-        n = math.ceil(w_end / step) + 1
-        if n > MAX_GRID:  # an absurd delay or stiffness: refuse rather than fill memory
-            raise StabilitySearchError(
-                f"stability search: delay {tau:.3g} s needs more than {MAX_GRID:.0e} "
-                "frequencies per scan step; not a haptic loop"
-            )
-        grid = np.linspace(w_end, 2 * w_end, n)
+        grid = _phase_refine(_chunk_grid(w_end, step, tau), tau, r)
     return np.concatenate(found)
+
+
+def _start_grid(w_a: float, w_lo: float | None) -> np.ndarray:
+    """The crossing scan's first grid [rad/s] before ``_phase_refine``: 401 points log
+    spaced over [10⁻⁴ ω_a, ω_a], 100 more from ``w_lo`` if lower (None or NaN: none).
+    Shared with ``hand_scan`` (one grid per hand row)."""
+    grid = w_a * np.logspace(-4, 0, 401)
+    if w_lo is not None and w_lo < grid[0]:  # a slow mode below the grid: start lower
+        grid = np.concatenate([np.geomspace(w_lo, grid[0], 101)[:-1], grid])
+    return grid
+
+
+def _chunk_grid(w_end: float, step: float, tau: float) -> np.ndarray:
+    """The scan's next chunk [w_end, 2 w_end], ``step`` apart, before ``_phase_refine``;
+    StabilitySearchError beyond MAX_GRID points. Shared with ``hand_scan``."""
+    n = math.ceil(w_end / step) + 1
+    if n > MAX_GRID:  # an absurd delay or stiffness: refuse rather than fill memory
+        raise StabilitySearchError(
+            f"stability search: delay {tau:.3g} s needs more than {MAX_GRID:.0e} "
+            "frequencies per scan step; not a haptic loop"
+        )
+    return np.linspace(w_end, 2 * w_end, n)
 
 
 #: Most turn of arg X [rad] one cell of the crossing scan may hold (``_phase_refine``).
@@ -172,15 +185,25 @@ def _phase_refine(grid: np.ndarray, tau: float, roots: np.ndarray) -> np.ndarray
     neighbours: Im X cannot change sign twice in a cell unless arg X touches 0 or π and
     turns back within π/16 (a near-tangent pair of crossings). StabilitySearchError
     beyond MAX_GRID points (the count is checked before a grid is built)."""
-    for _ in range(60):  # each pass splits the cells still over the step
-        phi = _phase_bound(grid, tau, roots)
-        parts = np.ceil(np.diff(phi) / PHASE_STEP)
+    return _phase_refine_rows(grid, np.zeros(grid.size, int), tau, roots[None, :])[0]
+
+
+def _phase_refine_rows(
+    grid: np.ndarray, row: np.ndarray, tau: float, roots: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """``_phase_refine`` of several grids at once (``hand_scan``: one per hand): ``grid``
+    the rows' grids end to end, ``row`` each point's row (non-decreasing), ``roots``
+    (rows, n) each row's; returns the refined (grid, row). MAX_GRID bounds each row."""
+    phi = _phase_bound(grid, tau, roots[row])
+    for _ in range(60):  # each pass splits the cells still over the step (Φ of new points)
+        same = row[1:] == row[:-1]  # cells within a row
+        parts = np.where(same, np.ceil(np.diff(phi) / PHASE_STEP), 1.0)
         wide = parts > 1
         if not wide.any():
-            return grid
+            return grid, row
         parts = np.where(wide, parts, 1.0)
-        total = float(np.sum(parts)) + 1
-        if total > MAX_GRID:  # an absurd delay or mode: refuse rather than fill memory
+        total = np.bincount(row[:-1][same], parts[same], minlength=roots.shape[0]) + 1
+        if float(np.max(total)) > MAX_GRID:  # an absurd delay or mode: refuse
             raise StabilitySearchError(
                 f"stability search: delay {tau:.3g} s and modes need more than "
                 f"{MAX_GRID:.0e} frequencies per scan step; not a haptic loop"
@@ -191,12 +214,18 @@ def _phase_refine(grid: np.ndarray, tau: float, roots: np.ndarray) -> np.ndarray
         i = np.arange(int(np.sum(n - 1))) - np.repeat(np.cumsum(n - 1) - (n - 1), n - 1) + 1
         lo, hi = np.repeat(grid[cells], n - 1), np.repeat(grid[cells + 1], n - 1)
         new = lo + i * (hi - lo) / np.repeat(n, n - 1)
-        finer = np.insert(grid, np.repeat(cells + 1, n - 1), new)  # ascending: in its cell
-        finer = finer[np.concatenate([[True], np.diff(finer) > 0])]  # repeats at float res.
+        at = np.repeat(cells + 1, n - 1)
+        rnew = np.repeat(row[cells], n - 1)
+        finer = np.insert(grid, at, new)  # ascending: in its cell
+        rfiner = np.insert(row, at, rnew)
+        pfiner = np.insert(phi, at, _phase_bound(new, tau, roots[rnew]))
+        # repeats at float resolution dropped (within a row)
+        keep = np.concatenate([[True], (np.diff(finer) > 0) | (np.diff(rfiner) != 0)])
+        finer, rfiner, pfiner = finer[keep], rfiner[keep], pfiner[keep]
         if finer.size == grid.size:  # cells at the float resolution: nothing left to split
-            return grid
-        grid = finer
-    return grid
+            return grid, row
+        grid, row, phi = finer, rfiner, pfiner
+    return grid, row
 
 
 def _poles_and_zeros(roots: np.ndarray, p: HapticParams, *extra: complex) -> np.ndarray:

@@ -122,3 +122,35 @@ def test_phase_refine_bounds_the_turn_of_every_cell():
     assert np.all(np.diff(_phase_bound(fine, 0.01, roots)) <= PHASE_STEP * (1 + 1e-12))
     assert np.all(np.isin(grid, fine)) and np.all(np.diff(fine) > 0)
     assert np.any(np.abs(fine - 5000.0) < 0.05)  # a point inside the mode's width
+
+
+def _newton_root_hand(p: HapticParams, h: Hand, K: float, s: complex) -> tuple[complex, float]:
+    """A root of the exact coupled χ_h(s) = s Num(s) + (m_h s² + b_h s + k_h) D1(s)
+    + K e^{−sτ}(bs + k), D1 = m1 s² + (b1 + b) s + k, by Newton from ``s`` (analytic
+    derivative), with its residual relative to |P_h(s)|."""
+    d1 = [p.m1, p.b1 + p.b, p.k]
+    ph = np.polyadd(np.polymul(_num_coeffs(p), [1.0, 0.0]), np.polymul([h.m, h.b, h.k], d1))
+    dph, tau = np.polyder(ph), p.delay
+    for _ in range(80):
+        E = np.exp(-s * tau)
+        chi = np.polyval(ph, s) + K * E * (p.b * s + p.k)
+        s = s - chi / (np.polyval(dph, s) + K * E * (p.b - tau * (p.b * s + p.k)))
+    res = abs(np.polyval(ph, s) + K * np.exp(-s * tau) * (p.b * s + p.k))
+    return complex(s), float(res / abs(np.polyval(ph, s)))
+
+
+def test_the_hand_scan_resolves_a_sharp_hand_mode_behind_a_long_delay():
+    """A stiff, undamped hand (1 g, 10⁵ N/m) on a light lever behind 64 ms: P_h has a
+    sharp pair of zeros at −1.355 ± 8318.4j (width ~3 rad/s) and ω_aτ = 2140, so the
+    old 2.3 % log cells (~190 rad/s there) stepped over the mode and hand_scan read
+    14238.6 N/m. Its grids are now ``limits``' own, refined until no cell turns arg X by
+    more than π/16 (the hand's zeros among the roots). Newton on the exact coupled
+    characteristic equation (independent of the scan) puts a root on either side of the
+    axis at 0.999 and 1.001 × the limit 43.2417 N/m."""
+    p = HapticParams(1.36637e-5, 1.05461e-3, 14992.7, 0.712563, 4.30745e-4, delay=0.0642861)
+    h = Hand(m=1e-3, b=0.0, k=1e5)
+    got = max_stable_stiffness_coupled(p, h)
+    assert got == pytest.approx(43.24174, rel=1e-6)
+    for f, side in ((0.999, -1.0), (1.001, 1.0)):
+        s, res = _newton_root_hand(p, h, f * got, 8319.7j)
+        assert side * s.real > 0 and abs(s.imag - 8319.7) < 1.0 and res < 1e-10
