@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import os
 import re
+import subprocess
+import sys
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -124,3 +127,22 @@ def figures_runner(tmp_path_factory):
     """One docs_figures.Runner for the session (each command the docs' figures quote runs
     once a worker: ``mrclutch fidelity``'s full run, a minute, feeds docs/fidelity.md's table)."""
     return docs_figures.Runner(tmp_path_factory.mktemp("figures"))
+
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture
+def fresh_python() -> Callable[[str], subprocess.CompletedProcess]:
+    """Runs code in a fresh interpreter on this checkout (``PYTHONPATH`` its root, cwd
+    there): what a command imports is only seen in a process that imported nothing yet.
+    Returns the finished process (text output), its exit status checked to be 0."""
+
+    def run(code: str) -> subprocess.CompletedProcess:
+        env = {**os.environ, "PYTHONPATH": str(ROOT)}
+        p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                           env=env, cwd=ROOT, timeout=300)  # fmt: skip
+        assert p.returncode == 0, p.stderr[-2000:]
+        return p
+
+    return run

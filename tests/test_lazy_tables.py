@@ -5,10 +5,7 @@ numpy.ma. Both must give what the eager versions gave, to the bit."""
 from __future__ import annotations
 
 import copy
-import os
 import pickle
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -109,7 +106,7 @@ def test_drum_count_groups_of_nothing_and_of_one() -> None:
     assert rows.tolist() == [0]
 
 
-def test_the_interactive_commands_build_no_table_and_skip_numpy_ma() -> None:
+def test_the_interactive_commands_build_no_table_and_skip_numpy_ma(fresh_python) -> None:
     """``haptic``, ``compare`` and the analytic ``inertia`` read no B–H curve, so they build
     none of the nine tables, and none of them imports numpy.ma (~30 ms)."""
     code = (
@@ -122,14 +119,11 @@ def test_the_interactive_commands_build_no_table_and_skip_numpy_ma() -> None:
         "built = [n for n, m in MATERIALS.items() if _TABLES & set(vars(m))]\n"
         "print(built, 'numpy.ma' in sys.modules, 'mrclutch.pipeline' in sys.modules)"
     )
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
-                       cwd=ROOT, timeout=300)  # fmt: skip
-    assert p.returncode == 0, p.stderr[-2000:]
+    p = fresh_python(code)
     assert p.stdout.split("\n")[-2] == "[] False True"
 
 
-def test_the_analytic_inertia_loads_no_hand_off_nor_the_viewer() -> None:
+def test_the_analytic_inertia_loads_no_hand_off_nor_the_viewer(fresh_python) -> None:
     """``inertia`` has its own command module: ``inertia --method analytic`` imports neither
     ``export``'s hand-offs (mrclutch.handoff, and with them the pipeline and the FEM
     hand-off writers) nor ``view``'s renderer, and still answers."""
@@ -142,8 +136,5 @@ def test_the_analytic_inertia_loads_no_hand_off_nor_the_viewer() -> None:
         " 'mrclutch.cli.commands.handoff', 'magnetics.export', 'mrclutch.inertia')"
         " if m in sys.modules))"
     )
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
-                       cwd=ROOT, timeout=300)  # fmt: skip
-    assert p.returncode == 0, p.stderr[-2000:]
+    p = fresh_python(code)
     assert p.stdout.strip() == "['mrclutch.inertia']"

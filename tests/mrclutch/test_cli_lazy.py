@@ -119,7 +119,7 @@ HEAVY = ("scipy", "numba", "llvmlite", "matplotlib", "build123d", "OCP", "pyvist
          "trimesh", "pandas", "pyarrow", "dask")  # fmt: skip
 
 
-def test_the_interactive_commands_load_nothing_heavy() -> None:
+def test_the_interactive_commands_load_nothing_heavy(fresh_python) -> None:
     """``haptic``, ``torque``, ``compare``, ``evaluate`` (with its uncertainty) and the
     analytic ``inertia`` on the paper preset, one after another in one interpreter: not one
     of them imports scipy, numba, matplotlib or a CAD kernel (the network's single-design
@@ -133,10 +133,7 @@ def test_the_interactive_commands_load_nothing_heavy() -> None:
         "    assert main(argv) == 0, argv\n"
         "print('\\n'.join(sys.modules), file=sys.stderr)"
     )
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
-                       cwd=ROOT, timeout=300)  # fmt: skip
-    assert p.returncode == 0, p.stderr[-2000:]
+    p = fresh_python(code)
     loaded = set(p.stderr.split())
     assert "numpy" in loaded and "mrclutch.pipeline" in loaded  # the commands ran
     assert not {n for n in loaded if n.split(".")[0] in HEAVY}, sorted(
