@@ -32,7 +32,9 @@ leaves with ds/dK = −1/(b1 + b_h) < 0. Roots reach the right half-plane only b
 imaginary axis at jω where X(ω) = −P_h(jω)/((k + jbω) E(jω)) is real and positive (then
 K_c = X); each crossing moves a conjugate pair in the direction sign Re[−E (bs+k)/χ_h'(s)].
 Without delay or hold the crossing frequencies are the positive real roots of the
-polynomial Im[−P_h(jω)(k − jbω)]; otherwise sign changes of Im X on model's grid, refined
+polynomial Im[−P_h(jω)(k − jbω)]; otherwise sign changes of Im X on ``limits``' grid (each
+cell refined until the phase bound turns by at most π/16: ``limits._phase_refine_rows``,
+with P_h's zeros and the pole −k/b), refined
 by Illinois regula falsi [dowell-jarratt1971], up to a frequency beyond which the
 increasing lower bound |lead|(ω − ω_a)⁴/(k + bω) ≤ |X(ω)| (ω_a the largest |root| of P_h,
 |E| ≤ 1) exceeds the gains sought. The stable K form (0, K_lim]: K_lim is the first K_c
