@@ -217,6 +217,8 @@ INF_MEANS: dict[str, str] = {
 NAN_MEANS.update(DUTY_NULLS)  # issue 41's figures (mrclutch.duty)
 INF_MEANS.update(DUTY_INFS)
 _UNBOUNDED = "unbounded (inf): no finite limit exists; JSON has no infinity"
+#: The ends of a figure's range over the uncertain inputs (the ``robust`` block).
+RANGE_ENDS = frozenset({"nominal", "worst", "best"})
 
 
 def null_notes(data: Mapping[str, Any]) -> dict[str, str]:
@@ -237,10 +239,12 @@ def null_notes(data: Mapping[str, Any]) -> dict[str, str]:
             for x in v:
                 walk(x, path, note)
             return
-        if v is None:
-            why = note or NAN_MEANS.get(path[-1])
-        elif isinstance(v, (float, np.floating)) and math.isnan(v):
-            why = note or NAN_MEANS.get(path[-1])
+        # a range's end (robust/<figure>/nominal|worst|best) means what its figure's NaN does
+        meaning = NAN_MEANS.get(path[-1]) or (
+            NAN_MEANS.get(path[-2]) if len(path) > 1 and path[-1] in RANGE_ENDS else None
+        )
+        if v is None or (isinstance(v, (float, np.floating)) and math.isnan(v)):
+            why = note or meaning
         elif isinstance(v, (float, np.floating)) and math.isinf(v):
             why = INF_MEANS.get(path[-1], _UNBOUNDED)
         else:

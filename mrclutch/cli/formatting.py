@@ -29,7 +29,7 @@ def format_robust(r: dict) -> list[str]:
             ("Z-width area (N²·s/m²)", "zwidth_area_N2_s_per_m2", 1.0))  # fmt: skip
     for label, key, sc in rows:
         v = r[key]
-        lines.append(f"  {label:<38}" + "".join(f"{v[c] * sc:>10.4g}" for c in
+        lines.append(f"  {label:<38}" + "".join(f"{_g(v[c] * sc):>10}" for c in
                                                  ("nominal", "worst", "best")))  # fmt: skip
     words = {"always": "yes, for every value", "never": "no, for any value",
              "depends": "depends on the inputs"}  # fmt: skip
@@ -140,7 +140,7 @@ def format_response(r: dict) -> list[str]:
         f"  {'fluid (assumed)':<30}{ms(r['fluid_time_constant_s']):>10} ms",
         f"  {'equivalent delay Σ T':<30}{ms(r['torque_delay_s']):>10} ms  (typed: "
         f"{ms(r['typed_delay_s'])} ms); −3 dB at {r['torque_bandwidth_hz']:.3g} Hz",
-        f"  largest stable K: {r['max_stable_K_typed_delay_N_per_m']:.4g} N/m with the typed "
+        f"  largest stable K: {_g(r['max_stable_K_typed_delay_N_per_m'])} N/m with the typed "
         f"delay, {_g(r['max_stable_K_torque_delay_N_per_m'])} with Σ T, "
         f"{_g(r['max_stable_K_lags_N_per_m'])} with the lags themselves",
     ]
@@ -148,8 +148,8 @@ def format_response(r: dict) -> list[str]:
 
 
 def _g(v: float | None, spec: str = ".4g") -> str:
-    """A figure, or — where it is unavailable (None; the output says why)."""
-    return "—" if v is None else format(v, spec)
+    """A figure, or — where it is unavailable (None or NaN; the output says why)."""
+    return "—" if v is None or (isinstance(v, float) and math.isnan(v)) else format(v, spec)
 
 
 def _bounded(v: float | None, side: dict | None = None) -> str:

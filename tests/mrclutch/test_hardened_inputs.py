@@ -257,6 +257,30 @@ def _walk(v, path=""):
         yield path, v
 
 
+def test_a_loop_the_stability_scan_cannot_resolve_prints_no_nan(tmp_path, capsys):
+    """At the edges of the accepted bench ranges (m1 = 1 mg, b1 = 10⁴ N·s/m: a mode at
+    b1/m1 = 10¹⁰ rad/s behind the 1 ms delay) the scan would need more than MAX_GRID
+    frequencies: the largest stable K is unknown. The text says so with "—" in every table
+    (the robust block, the torque response's line), never "nan", and the JSON explains the
+    robust block's nulls with the same reason as haptic's."""
+    import re
+
+    f = tmp_path / "x.toml"
+    f.write_text('[clutch]\nbase = "paper"\n[measured]\nuse_in_model = true\n'
+                 "m1_g = 1e-3\nb1_N_s_per_m = 1e4\n")  # fmt: skip
+    assert main(["evaluate", str(f), "--fidelity", "fast"]) == 0
+    text = capsys.readouterr().out
+    assert not re.search(r"\bnan\b", text), [ln for ln in text.splitlines() if "nan" in ln]
+    rows = [ln for ln in text.splitlines() if ln.strip().startswith("largest stable K (N/m)")]
+    assert any(ln.count("—") == 3 for ln in rows), rows  # the robust block: nominal, worst, best
+    assert main(["evaluate", str(f), "--fidelity", "fast", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    why = data["nulls"]["haptic/max_stable_K_N_per_m"]
+    assert why.startswith("unknown: the stability scan cannot resolve")
+    assert all(data["nulls"][f"robust/max_stable_K_N_per_m/{end}"] == why
+               for end in ("nominal", "worst", "best"))  # fmt: skip
+
+
 @pytest.mark.parametrize(
     "extra",
     ["",
