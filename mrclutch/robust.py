@@ -278,15 +278,19 @@ def headline(r: dict[str, Any]) -> str:
     v = r["verdicts"]
     ks, kp = r["max_stable_K_N_per_m"], r["max_passive_K_N_per_m"]
     words = {"stable": ("stable", "unstable"), "passive": ("passive", "not passive")}
-    always = [n for n in ("stable", "passive") if v[n]["holds"] == "always"]
-    never = [n for n in ("stable", "passive") if v[n]["holds"] == "never"]
+    unresolved = math.isnan(ks.get("nominal", 0.0))  # NaN: the scan cannot resolve it
+    told = ("passive",) if unresolved else ("stable", "passive")
+    always = [n for n in told if v[n]["holds"] == "always"]
+    never = [n for n in told if v[n]["holds"] == "never"]
     parts = []
     if always:
         parts.append(" and ".join(words[n][0] for n in always) + " for every value of the ranges")
     if never:
         parts.append(" and ".join(words[n][1] for n in never) + " for every value of the ranges")
+    if unresolved:
+        parts.append("stability unknown (the stability scan cannot resolve this loop)")
     for n in ("stable", "passive"):
-        if v[n]["holds"] != "depends":
+        if v[n]["holds"] != "depends" or (n == "stable" and unresolved):
             continue
         th = {f: t for f, t in v[n]["thresholds"].items() if _inside(t)}
         cond = (" or ".join(_fmt_threshold(f, t) for f, t in th.items())
@@ -294,9 +298,11 @@ def headline(r: dict[str, Any]) -> str:
                 "lies inside its range)")  # fmt: skip
         nominal = words[n][0] if v[n]["nominal"] else words[n][1]
         parts.append(f"{nominal} at nominal values, {words[n][0]} only if {cond}")
+    stable_range = ("unknown" if unresolved
+                    else f"{ks['worst']:.4g}–{ks['best']:.4g} N/m")  # fmt: skip
     return (f"Robust verdict at K = {K:.4g} N/m: " + "; ".join(parts)
             + f" (each input alone, the others nominal); over the ranges the largest stable K "
-            f"is {ks['worst']:.4g}–{ks['best']:.4g} N/m, the largest passive K "
+            f"is {stable_range}, the largest passive K "
             f"{kp['worst']:.4g}–{kp['best']:.4g} N/m.")  # fmt: skip
 
 

@@ -173,9 +173,14 @@ def verdict_of(data: dict[str, Any]) -> dict[str, Any]:
     parts = []
     if status == "pass":
         parts.append(f"stable and passive {scope}")
+    ks = h.get("max_stable_K_N_per_m")  # NaN: the scan cannot resolve this loop (inf: none)
+    unresolved = ks is None or math.isnan(ks)
     for n in ("stable", "passive") if status != "pass" else ():
         yes, no = words[n]
-        if holds[n] == "always":
+        if n == "stable" and unresolved:  # not met, but not shown unstable either
+            parts.append("stability unknown (the stability scan cannot resolve this loop: an "
+                         "extreme transmission or delay), not taken as stable")  # fmt: skip
+        elif holds[n] == "always":
             parts.append(f"{yes} {scope}")
         elif holds[n] == "never":
             parts.append(f"{no} {scope}")

@@ -261,8 +261,9 @@ def test_a_loop_the_stability_scan_cannot_resolve_prints_no_nan(tmp_path, capsys
     """At the edges of the accepted bench ranges (m1 = 1 mg, b1 = 10⁴ N·s/m: a mode at
     b1/m1 = 10¹⁰ rad/s behind the 1 ms delay) the scan would need more than MAX_GRID
     frequencies: the largest stable K is unknown. The text says so with "—" in every table
-    (the robust block, the torque response's line), never "nan", and the JSON explains the
-    robust block's nulls with the same reason as haptic's."""
+    (the robust block, the torque response's line), never "nan"; the verdict says the
+    stability is unknown (not "unstable", nor a pass); the JSON explains the robust
+    block's nulls with the same reason as haptic's."""
     import re
 
     f = tmp_path / "x.toml"
@@ -273,12 +274,17 @@ def test_a_loop_the_stability_scan_cannot_resolve_prints_no_nan(tmp_path, capsys
     assert not re.search(r"\bnan\b", text), [ln for ln in text.splitlines() if "nan" in ln]
     rows = [ln for ln in text.splitlines() if ln.strip().startswith("largest stable K (N/m)")]
     assert any(ln.count("—") == 3 for ln in rows), rows  # the robust block: nominal, worst, best
+    verdict = next(ln for ln in text.splitlines() if ln.startswith("VERDICT:"))
+    assert "stability unknown" in verdict and "unstable" not in verdict, verdict
+    assert not verdict.startswith("VERDICT: PASS"), verdict  # unknown is not taken as stable
     assert main(["evaluate", str(f), "--fidelity", "fast", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     why = data["nulls"]["haptic/max_stable_K_N_per_m"]
     assert why.startswith("unknown: the stability scan cannot resolve")
     assert all(data["nulls"][f"robust/max_stable_K_N_per_m/{end}"] == why
                for end in ("nominal", "worst", "best"))  # fmt: skip
+    head = data["robust"]["headline"]
+    assert "stability unknown" in head and "unstable" not in head and "nan" not in head, head
 
 
 @pytest.mark.parametrize(
