@@ -188,7 +188,8 @@ NAN_MEANS: dict[str, str] = {
     "damping grid (B_N_s_per_m null)",
     "bandwidth_gain": "one side has no bandwidth (the motor unavailable, or no crossing)",
     "max_stable_K_N_per_m": "unknown: the stability scan cannot resolve this loop (it would "
-    "need more than 2e6 frequencies a step: an extreme transmission or delay)",
+    "need more than 2e5 phase-resolved frequencies, or 2e6 a step: an extreme transmission "
+    "or delay)",
     "max_stable_K_torque_delay_N_per_m": "unknown: the stability scan cannot resolve this "
     "loop with that delay, or the lags are not finite",
     "bandwidth_gain_lumped": "one side has no bandwidth (the motor unavailable)",

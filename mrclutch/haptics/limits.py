@@ -36,6 +36,13 @@ from mrclutch.haptics.impedance import TWO_PI, _check_K, _hold, _num_coeffs
 
 #: Most frequencies one step of the crossing search may take (memory: 8 bytes each).
 MAX_GRID = 2_000_000
+#: Most frequencies a phase-refined grid may hold (``_phase_refine_rows``): the phase bound
+#: Φ rises by ~ω_a·τ across the first grid, so this is ω_a·τ ≲ 4·10⁴ (the presets: ~10,
+#: a 1 g hand behind 64 ms: 2·10³, a 10 µg lever on 10⁵ N/m behind 0.1 s: 10⁴); beyond
+#: it the loop is refused (StabilitySearchError) rather than scanned for a fifth of a
+#: second per call (1.2–1.6·10⁶ points a scan, 80 s an evaluate's robust search, for a
+#: 0.01 gearing behind a 1 V supply's delay).
+MAX_REFINED = 200_000
 
 
 def max_passive_stiffness(p: HapticParams) -> Any:
@@ -184,7 +191,7 @@ def _phase_refine(grid: np.ndarray, tau: float, roots: np.ndarray) -> np.ndarray
     by at most PHASE_STEP over every cell, so arg X turns by at most π/16 between two
     neighbours: Im X cannot change sign twice in a cell unless arg X touches 0 or π and
     turns back within π/16 (a near-tangent pair of crossings). StabilitySearchError
-    beyond MAX_GRID points (the count is checked before a grid is built)."""
+    beyond MAX_REFINED points (the count is checked before a grid is built)."""
     return _phase_refine_rows(grid, np.zeros(grid.size, int), tau, roots[None, :])[0]
 
 
@@ -193,7 +200,7 @@ def _phase_refine_rows(
 ) -> tuple[np.ndarray, np.ndarray]:
     """``_phase_refine`` of several grids at once (``hand_scan``: one per hand): ``grid``
     the rows' grids end to end, ``row`` each point's row (non-decreasing), ``roots``
-    (rows, n) each row's; returns the refined (grid, row). MAX_GRID bounds each row."""
+    (rows, n) each row's; returns the refined (grid, row). MAX_REFINED bounds each row."""
     phi = _phase_bound(grid, tau, roots[row])
     for _ in range(60):  # each pass splits the cells still over the step (Φ of new points)
         same = row[1:] == row[:-1]  # cells within a row
@@ -203,10 +210,10 @@ def _phase_refine_rows(
             return grid, row
         parts = np.where(wide, parts, 1.0)
         total = np.bincount(row[:-1][same], parts[same], minlength=roots.shape[0]) + 1
-        if float(np.max(total)) > MAX_GRID:  # an absurd delay or mode: refuse
+        if float(np.max(total)) > MAX_REFINED:  # an absurd delay or mode: refuse
             raise StabilitySearchError(
                 f"stability search: delay {tau:.3g} s and modes need more than "
-                f"{MAX_GRID:.0e} frequencies per scan step; not a haptic loop"
+                f"{MAX_REFINED:.0e} frequencies per scan step; not a haptic loop"
             )
         cells = np.nonzero(wide)[0]
         n = parts[cells].astype(int)

@@ -57,15 +57,16 @@ def test_a_light_hand_does_not_hide_the_slow_delayed_mode_of_the_lever():
     b1 = Mω_c tan(ω_cτ). ω_c = 15.65 rad/s, τ = 0.1 s (ω_cτ = 1.565, near π/2),
     M = 0.111 g: b1 = 0.29970 N·s/m, K_c = 4.690307 N/m. Num's slowest zero ≈ b1/M ≈ 2700
     rad/s, so the hand rows' old start 10⁻² × the slowest zero (27 rad/s) lay above the
-    crossing, and a 1 mg hand read 23.46 N/m. The stiff coupling (k = 10⁶ N/m,
-    b = 1 N·s/m) moves the limit by ~2.5e-8: rtol 1e-6; the same as the hand-free lever
-    with m2 + m_h (``limits``' scan, its own start) to 1e-9."""
+    crossing, and a 1 mg hand read 23.46 N/m. The stiff coupling (k = 10⁵ N/m,
+    b = 1 N·s/m) moves the limit by ~2.5e-7: rtol 1e-6; the same as the hand-free lever
+    with m2 + m_h (``limits``' scan, its own start) to 1e-9. (k = 10⁶ puts a mode at
+    3·10⁵ rad/s behind the 0.1 s delay: past ``limits.MAX_REFINED``, refused.)"""
     m1, m2, mh, tau, wc = 1e-5, 1e-4, 1e-6, 0.1, 15.65
     M = m1 + m2 + mh
     b1 = M * wc * math.tan(wc * tau)
     k_c = M * wc**2 / math.cos(wc * tau)
     assert (b1, k_c) == pytest.approx((0.29970, 4.690307), abs=1e-5)
-    p = HapticParams(m1, b1, 1e6, 1.0, m2, delay=tau)
+    p = HapticParams(m1, b1, 1e5, 1.0, m2, delay=tau)
     got = max_stable_stiffness_coupled(p, Hand(m=mh))
     assert got == pytest.approx(k_c, rel=1e-6)
     assert got == pytest.approx(max_stable_stiffness(replace(p, m2=m2 + mh)), rel=1e-9)
