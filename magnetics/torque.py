@@ -35,7 +35,7 @@ from magnetics.drag import ROOM_TEMPERATURE, Drag, Support, clutch_drag
 from magnetics.fem import MESHES, build_grid, solve_fem
 from magnetics.fluid import MRFluid
 from magnetics.materials import FLUIDS, MATERIALS, Magnetic, magnetic
-from magnetics.network import network_from_regions
+from magnetics.network import Network, network_from_regions
 from magnetics.network.torque import (  # noqa: F401  (the network's torque, importable here)
     CONVENTIONS,
     DEFAULT_CONVENTION,
@@ -64,14 +64,18 @@ def rpm_to_rad_s(rpm: float) -> float:
     return rpm * 2 * math.pi / 60.0
 
 
-def _fluid(section: Section, fluid: MRFluid | None) -> MRFluid:
-    if fluid is not None:
-        return fluid
+def section_fluid(section: Section) -> MRFluid:
+    """The fluid of the section's films (its first gap's); ParameterError without rheology
+    data."""
     name = section.region(f"gap{section.gaps[0].index}").material
     try:
         return FLUIDS[name]
     except KeyError:
         raise ParameterError(f"fluid = {name!r}: no rheology data") from None
+
+
+def _fluid(section: Section, fluid: MRFluid | None) -> MRFluid:
+    return fluid if fluid is not None else section_fluid(section)
 
 
 @dataclass(frozen=True)
@@ -125,10 +129,13 @@ def torque_curve(
     support: Support | None = None,
     fem_mesh: str = "uniform",
     convention: str = DEFAULT_CONVENTION,
+    network: Network | None = None,
 ) -> TorqueCurve:
     """Torque of ``clutch`` (or its already built section) at ``currents`` (A) by the
     circuit, the network or the FEM (``METHODS``), the drag at ``speed_rpm`` and fluid
-    ``temperature`` (°C) added.
+    ``temperature`` (°C) added. ``network``: the section's reluctance network already
+    built with ``materials`` (``network_from_regions``; mrclutch.design_network keeps one
+    per design), solved in place of building it again.
     ``fem_mesh``: the FEM's "uniform" grid (the error map's reference) or its "graded" one
     (as accurate at the same ``fem_size`` on the paper preset with ~3× fewer unknowns,
     magnetics.fem.grid; benchmarks/bench_fem_speed.py). ``convention``: how each gap's
@@ -151,7 +158,7 @@ def torque_curve(
     elif method == "network":
         if section.table is None:
             raise ParameterError("section: built by hand, without a region table; no network")
-        net = network_from_regions(section.table, materials)
+        net = network if network is not None else network_from_regions(section.table, materials)
         per = network_gap_torque(net, cur[None, :], materials, fluid, convention)[0]
         labels = tuple(f"{f}_{z}" for z in ("A", "B") for f in net.film_name)
     else:

@@ -4,9 +4,8 @@ continuous rating's chords (``mrclutch.clutch``), the feel's loop (``mrclutch.fe
 the duty's cold curve (``mrclutch.duty``) each solved on the same network instead of each
 building its own (a build is ≈ 20 ms in Python, a single design's solve a few).
 
-``network_curve`` is ``magnetics.torque.torque_curve``'s network branch on that network:
-the same calls in the same order, so the same numbers to the last digit
-(tests/mrclutch/test_design_network.py).
+``network_curve`` is ``magnetics.torque.torque_curve`` on that network (its ``network``
+argument): the same numbers to the last digit (tests/mrclutch/test_design_network.py).
 """
 
 from __future__ import annotations
@@ -19,11 +18,9 @@ from numpy.typing import ArrayLike
 from geometry.materials import DEFAULT_CHOICE, MaterialChoice
 from geometry.params import DrumClutch
 from geometry.section import Section, build_section
-from magnetics.drag import ROOM_TEMPERATURE, Support, clutch_drag
-from magnetics.fluid import MRFluid
-from magnetics.materials import FLUIDS
+from magnetics.drag import ROOM_TEMPERATURE, Support
 from magnetics.network import Network, network_from_regions
-from magnetics.torque import TorqueCurve, network_gap_torque, rpm_to_rad_s
+from magnetics.torque import TorqueCurve, network_gap_torque, section_fluid, torque_curve
 
 #: Designs whose network a process keeps (an evaluation reads one; a few for a script
 #: that evaluates some designs in turn).
@@ -39,11 +36,6 @@ def section_network(
     are pure functions of the two frozen inputs, and their readers do not write to them."""
     section = build_section(clutch, materials)
     return section, network_from_regions(section.table)
-
-
-def section_fluid(section: Section) -> MRFluid:
-    """The fluid of the section's films, as ``torque_curve`` reads it (its first gap's)."""
-    return FLUIDS[section.region(f"gap{section.gaps[0].index}").material]
 
 
 def network_yield(section: Section, net: Network, currents: ArrayLike) -> np.ndarray:
@@ -63,11 +55,5 @@ def network_curve(
 ) -> TorqueCurve:
     """``torque_curve(section, currents, "network", speed_rpm, temperature=…, support=…)``
     on ``net``, the section's network already built (``section_network``)."""
-    cur = np.atleast_1d(np.asarray(currents, dtype=float))
-    fluid = section_fluid(section)
-    per = network_gap_torque(net, cur[None, :], None, fluid)[0]
-    labels = tuple(f"{f}_{z}" for z in ("A", "B") for f in net.film_name)
-    ty = per.sum(axis=-1)
-    drag = clutch_drag(section.table, rpm_to_rad_s(speed_rpm), temperature, support, fluid)
-    return TorqueCurve("network", cur, ty + drag.torque, ty, labels, per, speed_rpm,
-                       drag.torque, drag.damping, drag)  # fmt: skip
+    return torque_curve(section, currents, "network", speed_rpm, temperature=temperature,
+                        support=support, network=net)  # fmt: skip
