@@ -94,6 +94,12 @@ _LIMITS: dict[str, Callable[[HapticParams], Any]] = {
 }
 
 
+#: The limits whose kernel is vectorised over designs row by row (``max_passive_stiffness``:
+#: each row's value is the scalar call's, bit for bit), so a threshold's 13-point grid is
+#: one call (issue 40); ``max_stable_stiffness`` runs design by design anyway.
+_VECTORISED = frozenset({"passive"})
+
+
 def _holds(worst: float, best: float, K: float) -> str:
     """ "always" (K within the limit at every value of the ranges), "never", or "depends"."""
     if K <= worst:
@@ -128,7 +134,11 @@ def threshold(p: HapticParams, K: float, verdict: str, field: str) -> dict[str, 
 
     lo, hi = math.log(x0 * 1e-3), math.log(min(x0 * 1e3, 1.0) if field == "delay" else x0 * 1e3)
     us = np.linspace(lo, hi, 13)
-    gs = [g(u) for u in us]
+    if verdict in _VECTORISED:  # the grid in one call: its rows are the scalar calls' bits
+        vs = limit(replace(p, **{field: np.array([math.exp(u) for u in us])}))
+        gs = [math.log(min(float(v), 1e12) / K) for v in vs]
+    else:
+        gs = [g(u) for u in us]
     # the crossing nearest the value in p
     u0 = math.log(x0)
     best = None
@@ -224,8 +234,9 @@ def robust_verdicts(ev: Any, uncertainty: Uncertainty | None = None,
         ("rendering_area_dB_decade", area, rendering_area(nom, K)),
         ("zwidth_area_N2_s_per_m2", zw, zwidth_of(nom)["zwidth_area_N2_s_per_m2"]),
     ):
-        w, _ = box_search(fn, lo3, hi3, sense=-1, points=3, zooms=2)
-        b, _ = box_search(fn, lo3, hi3, sense=1, points=3, zooms=2)
+        once = _same_points(fn)  # the worst's and the best's first grid is one grid
+        w, _ = box_search(once, lo3, hi3, sense=-1, points=3, zooms=2)
+        b, _ = box_search(once, lo3, hi3, sense=1, points=3, zooms=2)
         out[key] = {"nominal": float(np.ravel(nominal)[0]), "worst": float(w[0]),
                     "best": float(b[0])}  # fmt: skip
     verdicts: dict[str, Any] = {}
@@ -257,6 +268,22 @@ def robust_verdicts(ev: Any, uncertainty: Uncertainty | None = None,
     out["uncertainty"] = {k: v for k, v in vars(unc).items()}
     out["headline"] = headline(out)
     return out
+
+
+def _same_points(fn: Callable[[np.ndarray], np.ndarray]) -> Callable[[np.ndarray], np.ndarray]:
+    """``fn`` (pure) answering points it was already asked (the same array, bit for bit)
+    from a dict of its answers, for one read-out: the worst and the best ``box_search`` over
+    one box start on the same 3 × 3 × 3 grid (issue 40: 2 of the 12 area and Z-width
+    evaluations of a ``robust_verdicts``)."""
+    seen: dict[tuple[tuple[int, ...], bytes], np.ndarray] = {}
+
+    def once(x: np.ndarray) -> np.ndarray:
+        key = (x.shape, np.ascontiguousarray(x).tobytes())
+        if key not in seen:
+            seen[key] = np.asarray(fn(x), dtype=float)
+        return seen[key].copy()
+
+    return once
 
 
 def _inside(t: dict[str, Any]) -> bool:
