@@ -113,9 +113,9 @@ def hand_box_batch(
     names = {}  # the material columns, one name a row, for the corners' fast-path runs
     if not isinstance(mats, MaterialChoice):
         names = {k: np.array([getattr(m, k) for m in mats], object) for k in SLOTS if k in fields}
-    rows0 = nominal if nominal is not None else evaluate_batch({**p, **names}, base)
-    m1_0, b1_0, f_0, teq_0, ok = _hand_of(rows0, base)
-    stack = [x[None] for x in (m1_0, b1_0, f_0, teq_0)]
+    at = {**p, **names}
+    size = np.asarray(p["gap"]).size
+    corner_rows = None
     if unc.gap_tolerance > 0 or unc.drum_thickness_tolerance > 0:
         # the four corners as one batch of 4 S designs (one fast-path call, not four)
         corners = [
@@ -123,10 +123,20 @@ def hand_box_batch(
             for dg in (-unc.gap_tolerance, unc.gap_tolerance)
             for dt in (-unc.drum_thickness_tolerance, unc.drum_thickness_tolerance)
         ]
-        q = {k: np.tile(v, 4) for k, v in {**p, **names}.items()}
+        q = {k: np.tile(v, 4) for k, v in at.items()}
         q["gap"] = np.concatenate([p["gap"] + dg for dg, _ in corners])
         q["drum_thickness"] = np.concatenate([p["drum_thickness"] + dt for _, dt in corners])
-        hand = _hand_of(evaluate_batch(q, base), base)[:4]
+        if nominal is None:  # the nominal rows in the same call (a row's figures are its own)
+            both = evaluate_batch({k: np.concatenate([at[k], q[k]]) for k in q}, base)
+            nominal = {k: v[:size] for k, v in both.items()}
+            corner_rows = {k: v[size:] for k, v in both.items()}
+        else:
+            corner_rows = evaluate_batch(q, base)
+    rows0 = nominal if nominal is not None else evaluate_batch(at, base)
+    m1_0, b1_0, f_0, teq_0, ok = _hand_of(rows0, base)
+    stack = [x[None] for x in (m1_0, b1_0, f_0, teq_0)]
+    if corner_rows is not None:
+        hand = _hand_of(corner_rows, base)[:4]
         stack = [np.concatenate([s, c.reshape(4, -1)]) for s, c in zip(stack, hand, strict=True)]
     # hull over the corners; a corner the validation refuses (NaN) is left out
     (m1_lo, b1_lo, f_lo, teq_lo), (m1_hi, b1_hi, f_hi, teq_hi) = (

@@ -1,0 +1,67 @@
+"""One design's evaluation without work done twice (issue 40 item 1): each shortcut gives
+the answer of the path it replaces, bit for bit (the commands' outputs are byte-identical
+before and after; benchmarks/bench_waits.py times them)."""
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from mrclutch import robust
+from mrclutch.design import ClutchDesign
+from mrclutch.fast_batch import evaluate_batch
+from mrclutch.hand_box import hand_box_batch
+from mrclutch.haptics.actuator import TABLE2_MR
+from mrclutch.robust_search import box_search
+
+
+@pytest.mark.parametrize("field", ["b1", "delay"])
+@pytest.mark.parametrize("scale", [0.3, 1.0, 4.0])
+def test_passive_threshold_grid_in_one_call_is_the_scalar_calls(monkeypatch, field, scale):
+    """The passive threshold's 13-point grid in one vectorised call (robust._VECTORISED)
+    gives the value and sense of 13 scalar calls exactly (a K between the grid's limits,
+    so a crossing is root-found from the grid's values)."""
+    p = replace(TABLE2_MR, m1=float(TABLE2_MR.m1) * scale, delay=2e-3)
+    K = 0.7 * float(robust.max_passive_stiffness(p))
+    fast = robust.threshold(p, K, "passive", field)
+    monkeypatch.setattr(robust, "_VECTORISED", frozenset())
+    slow = robust.threshold(p, K, "passive", field)
+    assert fast is not None and slow is not None
+    assert fast == slow  # value and sense, to the bit
+
+
+def test_same_points_answers_a_repeated_grid_once():
+    """The worst and the best search over one box share their first grid: fn runs once
+    for it, and both results equal those of the searches without the memo."""
+    calls = []
+
+    def fn(x):
+        calls.append(x.shape)
+        return np.sin(3 * x[..., 0]) + x[..., 1] * np.cos(2 * x[..., 2])
+
+    lo, hi = np.array([[0.0, -1.0, 0.5]]), np.array([[2.0, 1.0, 1.5]])
+    ref = [box_search(fn, lo, hi, sense=s, points=3, zooms=2) for s in (-1, 1)]
+    plain = len(calls)
+    calls.clear()
+    once = robust._same_points(fn)
+    got = [box_search(once, lo, hi, sense=s, points=3, zooms=2) for s in (-1, 1)]
+    assert len(calls) == plain - 1  # the best's first grid answered from memory
+    for (v, a), (rv, ra) in zip(got, ref, strict=True):
+        assert np.array_equal(v, rv) and np.array_equal(a, ra)
+
+
+def test_hand_box_nominal_rows_in_the_corners_call_are_their_own():
+    """hand_box_batch solves the nominal rows in the corners' fast-path call: the box is
+    the one built from a separate nominal call, bit for bit (each row's figures are its
+    own), for three designs at once."""
+    base = ClutchDesign()
+    f = {k: np.full(3, float(v)) for k, v in vars(base.clutch).items()}
+    f["gap"] = f["gap"] * np.array([0.8, 1.0, 1.25])
+    merged = hand_box_batch(f, base)
+    separate = hand_box_batch(f, base, nominal=evaluate_batch(f, base))
+    for name in ("m1", "b1", "delay", "K"):
+        for a, b in zip(getattr(merged, name), getattr(separate, name), strict=True):
+            assert np.array_equal(a, b, equal_nan=True), name
+    assert np.array_equal(merged.valid, separate.valid)
+    assert math.isfinite(float(merged.K[0][1])) and float(merged.K[2][0]) > float(merged.K[1][0])
