@@ -13,9 +13,11 @@ def pareto_front(objectives: np.ndarray, maximize: Sequence[bool]) -> np.ndarray
 
     A row is dominated when another is at least as good in every objective and better in
     one. Sorted sweep on the first objective, each candidate checked against the front
-    (a row equal to an earlier one is left out with it). The rows go in blocks of
-    ``_FRONT_BLOCK``: a block is checked against the front so far and against itself at
-    once (10⁵ rows: a fraction of a second rather than one NumPy call per row, issue 40).
+    (a row equal to an earlier one is left out with it). Two objectives: a row of that
+    order is on the front when its second objective beats every earlier row's (one running
+    maximum, 10⁵ rows in ~10 ms). More: the rows go in blocks of ``_FRONT_BLOCK``, a block
+    checked against the front so far and against itself at once (10⁵ rows: a fraction of a
+    second rather than one NumPy call per row, issue 40).
     """
     obj = np.asarray(objectives, dtype=float)
     sign = np.where(np.asarray(maximize), 1.0, -1.0)
@@ -23,8 +25,15 @@ def pareto_front(objectives: np.ndarray, maximize: Sequence[bool]) -> np.ndarray
     ok = np.all(np.isfinite(x), axis=1)
     idx = np.flatnonzero(ok)
     order = idx[np.lexsort(tuple(-x[idx, j] for j in reversed(range(x.shape[1]))))]
+    mask = np.zeros(obj.shape[0], dtype=bool)
+    if x.shape[1] == 2 and order.size:  # earlier rows are ≥ in the first objective
+        second = x[order, 1]
+        best_before = np.maximum.accumulate(np.concatenate(([-np.inf], second[:-1])))
+        mask[order[second > best_before]] = True
+        return mask
     front: list[int] = []
     fx = np.empty((order.size, x.shape[1]))  # the front's rows, the first len(front) used
+    below = np.tri(_FRONT_BLOCK, k=-1, dtype=bool)  # [j, i]: i < j
     for lo in range(0, order.size, _FRONT_BLOCK):
         block = order[lo : lo + _FRONT_BLOCK]
         if front:  # weakly dominated by the front so far: out
@@ -32,12 +41,11 @@ def pareto_front(objectives: np.ndarray, maximize: Sequence[bool]) -> np.ndarray
         # within the block, a row weakly dominated by an earlier one is out (checking all
         # earlier rows is checking the front: a dominated dominator's own is earlier still)
         xb = x[block]
-        earlier = np.tril(np.ones((block.size, block.size), dtype=bool), -1)  # [j, i]: i < j
+        earlier = below[: block.size, : block.size]
         covered = ((xb[None, :] >= xb[:, None]).all(-1) & earlier).any(-1)
         keep = block[~covered]
         fx[len(front) : len(front) + keep.size] = x[keep]
         front.extend(keep.tolist())
-    mask = np.zeros(obj.shape[0], dtype=bool)
     mask[front] = True
     return mask
 

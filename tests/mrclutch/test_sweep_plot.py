@@ -49,6 +49,44 @@ def test_front_in_blocks_is_the_front_of_the_definition():
     assert pareto_front(two, [True, True]).tolist() == [True, False, False]
 
 
+def test_front_of_two_objectives_is_the_block_sweeps_front_with_ties():
+    """Two objectives take a running maximum, more take blocks: on integer rows (many
+    ties, equal rows) the 2-D front equals the front of the same rows with a constant
+    third objective (which changes no dominance), 1 to 3000 rows, mixed directions."""
+    rng = np.random.default_rng(11)
+    for n in (1, 2, 7, 300, 3000):
+        x = rng.integers(0, 9, size=(n, 2)).astype(float)
+        x[rng.random(n) < 0.03, 1] = np.nan
+        for mx in ([True, True], [True, False], [False, False]):
+            three = np.column_stack([x, np.zeros(n)])
+            got = pareto_front(x, mx)
+            np.testing.assert_array_equal(got, pareto_front(three, [*mx, True]))
+            assert got.sum() >= 1
+    assert pareto_front(np.empty((0, 2)), [True, True]).shape == (0,)
+
+
+def test_binned_mean_is_the_mean_of_numpys_2d_histograms():
+    """One pass of bincount over numpy.histogram's cells: the same edges, counts and means
+    as numpy.histogram2d's count and weighted sum, on points on the cells' edges (the last
+    edge in the last cell), a NaN point, and an axis of one value (its span ±0.5)."""
+    rng = np.random.default_rng(5)
+    for same in (False, True):
+        x = np.repeat(np.linspace(0.0, 1.0, 11), 30)  # on the edges of 10 cells
+        x = np.full_like(x, 2.0) if same else x
+        y = rng.integers(0, 5, size=x.size).astype(float)
+        c = rng.random(x.size)
+        y[3] = np.nan
+        ok = np.isfinite(y)
+        mean, xe, ye = binned_mean(x, y, c, bins=(10, 4))
+        n, xe2, ye2 = np.histogram2d(x[ok], y[ok], bins=(10, 4))
+        total, _, _ = np.histogram2d(x[ok], y[ok], bins=[xe2, ye2], weights=c[ok])
+        np.testing.assert_array_equal(xe, xe2)
+        np.testing.assert_array_equal(ye, ye2)
+        np.testing.assert_array_equal(mean.mask, (n == 0).T)
+        np.testing.assert_allclose(mean.filled(0), np.where(n > 0, total / np.maximum(n, 1),
+                                                            0).T, rtol=1e-12)  # fmt: skip
+
+
 def test_sample_lines_keeps_ends_and_at_most_the_limit():
     order = np.arange(10_000)[::-1]
     s = sample_lines(order)

@@ -75,10 +75,21 @@ def binned_mean(x: np.ndarray, y: np.ndarray, c: np.ndarray, bins: tuple[int, in
     them (rows: y, columns: x, as an image), masked where a cell holds none; and the cell
     edges in x and y. Non-finite points are left out."""
     ok = np.isfinite(x) & np.isfinite(y) & np.isfinite(c)
-    n, xe, ye = np.histogram2d(x[ok], y[ok], bins=bins)
-    total, _, _ = np.histogram2d(x[ok], y[ok], bins=[xe, ye], weights=c[ok])
+    x, y, c = x[ok], y[ok], c[ok]
+    (ix, xe), (iy, ye) = _cells(x, bins[0]), _cells(y, bins[1])
+    cell = ix * bins[1] + iy  # one pass of bincount, not two 2-D histograms (issue 40)
+    n = np.bincount(cell, minlength=bins[0] * bins[1]).reshape(bins)
+    total = np.bincount(cell, weights=c, minlength=bins[0] * bins[1]).reshape(bins)
     mean = np.ma.masked_where(n == 0, total / np.maximum(n, 1))
     return mean.T, xe, ye
+
+
+def _cells(v: np.ndarray, bins: int) -> tuple[np.ndarray, np.ndarray]:
+    """The cell of each value of ``v`` among ``bins`` equal cells spanning it, and their
+    edges: numpy.histogram's (a cell holds its left edge, the last one its right edge too;
+    one value: a span of ±0.5 around it)."""
+    edges = np.histogram_bin_edges(v, bins=bins)
+    return np.minimum(np.searchsorted(edges, v, side="right") - 1, bins - 1), edges
 
 
 def _span(values: np.ndarray, unit: str) -> str:
@@ -101,9 +112,10 @@ def pareto_plot(results: str | Path, out: str | Path,
     ``PLOT_STEPS`` (read, fronts, drawn, written)."""
     import matplotlib
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    matplotlib.use("Agg")  # whatever imports pyplot after: never a window
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.collections import LineCollection
+    from matplotlib.figure import Figure
 
     step = progress if progress is not None else (lambda _n: None)
     r = plot_columns(results)
@@ -113,7 +125,9 @@ def pareto_plot(results: str | Path, out: str | Path,
     damp, mass = r["drag_damping_N_m_s"][ok] * 1e6, r["clutch_mass_kg"][ok] * 1e3
     front = pareto_front(np.column_stack([bw, tq, damp]), [True, True, False])
     step(2)
-    fig, axes = plt.subplots(3, 1, figsize=(6, 11), constrained_layout=True)
+    fig = Figure(figsize=(6, 11), layout="constrained")  # no pyplot: nothing to manage
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(3, 1)
     binned = bw.size > MAX_POINTS
     span = {"vmin": np.nanmin(mass), "vmax": np.nanmax(mass)} if mass.size else {}  # all rows'
     for ax, x, label, big in ((axes[0], tq, "max torque (N·m; more is better)", True),
