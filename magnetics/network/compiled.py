@@ -20,11 +20,7 @@ import types
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from magnetics.materials import magnetic
 from magnetics.network import kernels
-from magnetics.network.kernels import _PACKED, _tables
 
 _COMPILE_NOTICE_S = 1.0  # a first compile longer than this says so on stderr
 _COMPILE_ESTIMATE_S = 10  # CPU seconds of a kernel's first compile (benchmarks/bench_waits.py)
@@ -101,72 +97,136 @@ def _kernels() -> dict[str, Any]:
     return ns
 
 
-def load(kernel: Any, what: str, warm: Any) -> Any:
-    """``kernel`` (a numba dispatcher) with its one overload compiled or loaded by
-    ``warm(kernel)`` (a call on no design). A compile (numba's cache holds no index of it
-    yet) that runs past ``_COMPILE_NOTICE_S`` says so on stderr while it runs, and its
-    time after."""
-    cold = _cold(kernel)
-    timer = threading.Timer(_COMPILE_NOTICE_S, _notice, (what,))
-    timer.daemon = True
-    t0 = time.perf_counter()
-    if cold:
-        timer.start()
-    try:
-        warm(kernel)
-    finally:
-        timer.cancel()
-    took = time.perf_counter() - t0
-    missed = len(kernel.stats.cache_misses) if hasattr(kernel, "stats") else 0
-    if missed and took > _COMPILE_NOTICE_S:
-        print(f"mrclutch: compiled in {took:.0f} s (cached in {cache_dir()}: later runs load "
-              "it)", file=sys.stderr)  # fmt: skip
+#: Each kernel's one signature (numba's types; arrays C-contiguous, as every caller passes
+#: them), in the order they compile: each after the kernels it calls. A kernel compiled for
+#: its signature alone, then closed to more (``load``), so no call compiles a second overload
+#: (a literal material row or a read-only array would: 32 overloads of 13 kernels before).
+_F1, _I1, _F2, _F3 = "float64[::1]", "int64[::1]", "float64[:, ::1]", "float64[:, :, ::1]"
+_MAT = f"{_F3}, {_F1}, {_I1}"  # a material table, its 1/step and its segments (``_tables``)
+_SIGNATURES = {
+    "_jac_layout": "UniTuple(int64, 8)(int64)",
+    "_segment": f"int64({_F1}, {_I1}, int64, float64)",
+    "_h_dh": f"UniTuple(float64, 2)({_MAT}, int64, float64)",
+    "_h_mean_dh": f"UniTuple(float64, 2)({_MAT}, int64, float64)",
+    "_odd": f"UniTuple(float64, 2)({_MAT}, int64, float64, float64, float64, boolean)",
+    "_pair": f"UniTuple(float64, 5)({_MAT}, int64, {', '.join(['float64'] * 6)}, boolean)",
+    "_band": f"UniTuple(float64, 3)({_MAT}, {', '.join(['float64'] * 5)}, boolean)",
+    "_residual": f"void({_F1}, {_I1}, int64, int64, {_MAT}, {_F1}, float64, {_F1}, boolean, "
+    f"{_F1}, {_F1}, {_F2})",
+    "_solve_ladder": f"void(int64, {_F1}, int64, int64, {_F2}, {_F2})",
+    "_solve": f"void(int64, {_F1}, {_F1}, {_F1}, {_F2})",
+    "_workspace": f"{_F2}(int64)",
+    "_newton": f"Tuple((boolean, int64))({_F1}, {_I1}, int64, int64, {_MAT}, float64, {_F1}, "
+    f"boolean, float64, float64, int64, {_F1}, {_F2})",
+    "_solve_rows": f"void({_F2}, {_I1}, int64, int64, {_MAT}, {_F2}, int64[:, ::1], {_F3}, "
+    f"boolean, {_F2}, float64, int64, {_F3}, boolean[::1])",
+    "_tangent_rows": f"void({_F2}, {_I1}, int64, int64, {_MAT}, {_F3}, {_F2}, {_F1}, {_F3})",
+}
+
+
+@functools.cache
+def _calls(name: str) -> tuple[str, ...]:
+    """The kernels ``name`` calls, directly or through others, in ``_SIGNATURES``' order."""
+    seen, todo = set(), [name]
+    while todo:
+        for called in vars(kernels)[todo.pop()].__code__.co_names:
+            if called in _SIGNATURES and called not in seen:
+                seen.add(called)
+                todo.append(called)
+    return tuple(k for k in _SIGNATURES if k in seen and k != name)
+
+
+def load(kernel: Any, signature: str, what: str, before: tuple[tuple[Any, str], ...] = ()) -> Any:
+    """``kernel`` (a numba dispatcher) with its one overload, ``signature``, loaded from
+    numba's cache or, where the cache holds none, compiled, after ``before`` (the kernels it
+    calls: (dispatcher, signature) pairs, each compiled or loaded for its own signature
+    first, so the kernel's calls find them and compile no overload of their own); every one
+    then closed to more overloads (a call of another type is an error, never a compile). A
+    compile says so on stderr once it runs past ``_COMPILE_NOTICE_S``, with an estimate of
+    its time (``_Clock``), and its time after."""
+    if not hasattr(kernel, "stats"):  # NUMBA_DISABLE_JIT: the Python function
+        return kernel
+    from numba.core.event import install_listener
+
+    clock = _listener()(kernel, what, before)
+    with install_listener("numba:compile", clock):
+        _one(kernel, signature)
+    clock.done()
     return kernel
 
 
-def _warm_solve(kernel: Any) -> None:
-    tab, inv, nseg = _tables(magnetic("steel_1018"), magnetic("mrf_132dg"))
-    e2, e3 = np.zeros((0, 1)), np.zeros((0, 1, 8))
-    off = np.zeros(len(_PACKED), np.int64)
-    kernel(e2, off, 1, 6, tab, inv, nseg, e2, np.zeros((0, 1), np.int64), e3, False, e2, 1e-10,
-           60, e3, np.zeros(0, np.bool_))  # fmt: skip
+def _one(kernel: Any, signature: str) -> None:
+    """``kernel`` compiled (or loaded) for ``signature`` unless it holds it, then closed."""
+    from numba.core.sigutils import normalize_signature
+
+    if tuple(normalize_signature(signature)[0]) not in kernel.overloads:
+        kernel.compile(signature)
+    kernel.disable_compile()
 
 
-def _warm_tangent(kernel: Any) -> None:
-    tab, inv, nseg = _tables(magnetic("steel_1018"), magnetic("mrf_132dg"))
-    e2, e3 = np.zeros((0, 1)), np.zeros((0, 1, 8))
-    kernel(e2, np.zeros(len(_PACKED), np.int64), 1, 6, tab, inv, nseg, e3, e2, np.zeros(8), e3)
+@functools.cache
+def _listener() -> type:
+    """``_Clock`` as numba's event listener (numba imported by then)."""
+    from numba.core.event import Listener
+
+    return type("Clock", (_Clock, Listener), {})
 
 
-_WARM = {"_solve_rows": (_warm_solve, "the reluctance network's solver"),
-         "_tangent_rows": (_warm_tangent, "the network's flux linkage")}  # fmt: skip
+class _Clock:
+    """A listener of numba's compile events while ``load`` runs: on the kernel's compile (a
+    cache miss) it compiles ``before`` first and times every compile; past
+    ``_COMPILE_NOTICE_S`` the notice, and the time after (``done``)."""
+
+    def __init__(self, kernel: Any, what: str, before: tuple[tuple[Any, str], ...]) -> None:
+        self.kernel, self.what, self.before = kernel, what, before
+        self.t0: float | None = None
+        self.times: dict[str, float] = {}
+        self.timer = threading.Timer(_COMPILE_NOTICE_S, self.notice)
+        self.timer.daemon = True
+        self._open: list[tuple[str, float]] = []
+
+    def on_start(self, ev: Any) -> None:
+        disp = ev.data["dispatcher"]
+        self._open.append((disp.py_func.__name__, time.process_time()))
+        if disp is self.kernel and self.t0 is None:
+            self.t0 = time.perf_counter()
+            self.timer.start()
+            for d, sig in self.before:
+                _one(d, sig)
+
+    def on_end(self, ev: Any) -> None:
+        name, t = self._open.pop()
+        self.times[name] = self.times.get(name, 0.0) + time.process_time() - t
+
+    def notice(self) -> None:
+        print(f"mrclutch: compiling {self.what} (numba, once on this machine; ~"
+              f"{_COMPILE_ESTIMATE_S} s of CPU) …", file=sys.stderr, flush=True)  # fmt: skip
+
+    def done(self) -> None:
+        self.timer.cancel()
+        if self.t0 is None:
+            return
+        took = time.perf_counter() - self.t0
+        if took > _COMPILE_NOTICE_S:
+            print(f"mrclutch: compiled in {took:.0f} s (cached in {cache_dir()}: later runs load "
+                  "it)", file=sys.stderr)  # fmt: skip
 
 
 def _entry(name: str, rows: int) -> Any:
     """The kernel ``name`` (``_solve_rows``, ``_tangent_rows``) to run ``rows`` rows with:
     the module's own Python function while ``uncompiled`` allows, else the compiled one
-    (loaded once a process, ``load``)."""
+    (loaded once a process, ``load``: what it calls compiled first where the cache misses)."""
     if uncompiled("network", rows, _PY_ROWS):
         return vars(kernels)[name]
-    kernel = _kernels()[name]
+    ns = _kernels()
+    kernel = ns[name]
     if name not in _loaded:
-        if hasattr(kernel, "stats"):
-            warm, what = _WARM[name]
-            load(kernel, what, warm)
+        before = tuple((ns[k], _SIGNATURES[k]) for k in _calls(name))
+        load(kernel, _SIGNATURES[name], _WHAT[name], before)
         _loaded.add(name)
         _loaded.add("network")
     return kernel
 
 
-def _cold(kernel: Any) -> bool:
-    """Whether numba's cache holds no index of ``kernel`` yet (its first compile on this
-    machine); False on the debug path (no dispatcher)."""
-    if not hasattr(kernel, "stats"):
-        return False
-    name = f"{kernel.py_func.__module__.rpartition('.')[2]}.{kernel.py_func.__name__}-*.nbi"
-    return not any(Path(kernel.stats.cache_path).glob(name))
-
-
-def _notice(what: str = "the reluctance network's solver") -> None:
-    print(f"mrclutch: compiling {what} (numba, once on this machine; ~{_COMPILE_ESTIMATE_S} s "
-          "of CPU) …", file=sys.stderr, flush=True)  # fmt: skip
+_WHAT = {"_solve_rows": "the reluctance network's solver",
+         "_tangent_rows": "the network's flux linkage"}  # fmt: skip

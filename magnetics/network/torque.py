@@ -181,6 +181,7 @@ def film_reader(
     length = np.ascontiguousarray(length, dtype=float)
     mid = np.ascontiguousarray(0.5 * (r0 + r1))
     r0, r1 = np.ascontiguousarray(r0), np.ascontiguousarray(r1)
+    w_end, scale = np.ascontiguousarray(w_end), np.ascontiguousarray(scale)  # one overload
 
     def reading(x: FloatArray) -> FloatArray:
         xl, xe = x[..., : net.m], x[..., net.leaks]
@@ -281,18 +282,16 @@ def _reader(cells: int = _PY_CELLS + 1):  # type: ignore[no-untyped-def]
 @functools.cache
 def _compiled_reader():  # type: ignore[no-untyped-def]
     read = numba_module().njit(cache=True, error_model="numpy")(_read_rows)
-    if hasattr(read, "stats"):
-        load(read, "the network's torque reading", _warm_reader)
-    return read
+    return load(read, _READ_SIGNATURE, "the network's torque reading")
 
 
-def _warm_reader(read):  # type: ignore[no-untyped-def]
-    e2, e3, ends = np.zeros((0, 1)), np.zeros((0, 1, 1)), np.zeros((0, 1, 2))
-    g = np.zeros(_AXIAL_POINTS)
-    tab, inv, nseg = _tables(MATERIALS["steel_1018"], MATERIALS["mrf_132dg"])
-    q_inf, s_at, d_at = _carlson_s_table()
-    read(e3, e3, e2, e2, ends, ends, np.zeros((1, 2)), g, g, tab, inv, nseg, 1.0, 1.0, q_inf,
-         s_at, d_at, 0.0, 1.0, 2.0, e3)  # fmt: skip
+#: ``_read_rows``' one signature (``compiled.load``): its arrays C-contiguous, as ``film_reader``
+#: passes them.
+_READ_SIGNATURE = ("void(float64[:, :, ::1], float64[:, :, ::1], float64[:, ::1], float64[:, ::1], "
+                   "float64[:, :, ::1], float64[:, :, ::1], float64[:, ::1], float64[::1], "
+                   "float64[::1], float64[:, :, ::1], float64[::1], int64[::1], float64, float64, "
+                   "float64, float64[::1], float64[::1], float64, float64, float64, "
+                   "float64[:, :, ::1])")  # fmt: skip
 
 
 _AXIAL_POINTS = 4  # Gauss–Legendre points along the zone, where the film's B_z builds up
