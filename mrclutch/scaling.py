@@ -18,6 +18,7 @@ the torque, so it rises with it). Each route's ``note`` says so when the first i
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -32,6 +33,10 @@ from mrclutch.pipeline import evaluate_batch
 MAX_DRUMS = next(hi for name, _, hi in INT_RANGES if name == "n_drums")
 #: Paper §IV-B: "2X scaling increase by 14 % the total reflected inertia of MR system".
 PAPER_TOTAL_INERTIA_INCREASE_2X = 0.14
+#: The study's steps, as ``scaling_study`` reports them done: the base design, the three
+#: routes' searches, the routes' figures.
+STEPS = ("the base design", "more drums", "longer drums", "larger diameter",
+         "the routes' figures")  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -52,14 +57,20 @@ def _figures(design: ClutchDesign, fields: dict[str, Any]) -> dict[str, float]:
 
 
 def scaling_study(
-    design: ClutchDesign, factor: float = 2.0
-) -> tuple[dict[str, float], list[Route]]:
-    """Base figures and the three routes to ``factor`` × the base torque."""
+    design: ClutchDesign,
+    factor: float = 2.0,
+    progress: Callable[[int, str], None] | None = None,
+) -> tuple[dict[str, float], list[Route], list[str]]:
+    """Base figures and the three routes to ``factor`` × the base torque, and the notes on
+    routes out of reach. ``progress(n, what)``: called as each of the ``STEPS`` ends, with
+    the steps done and the one about to start ("" after the last)."""
     from scipy.optimize import brentq
 
     check_range("factor", factor, 1.0, 10.0, lo_open=True)
+    done = _steps(progress)
     c = design.clutch
     base = _figures(design, {})
+    done()
     target = factor * base["max_torque_N_m"]
 
     def torque(name: str, value: float) -> float:
@@ -76,6 +87,7 @@ def scaling_study(
             f"(the most drums a design takes); the row is at {n} drums"
         )
     routes.append(("more drums", "n_drums", n))
+    done()
     for name, route, hi in (
         ("zone_length", "longer drums", 0.1),
         ("drum_inner_diameter", "larger diameter", 0.1),
@@ -85,6 +97,7 @@ def scaling_study(
             routes.append(
                 (route, name, brentq(lambda v, nm=name: torque(nm, v), v0, hi, rtol=1e-10))
             )
+            done()
             continue
         # not reachable: report the best this route can do (the steel saturates)
         grid = np.linspace(v0, hi, 200)  # one batch, not 200 single designs (issue 40)
@@ -95,6 +108,7 @@ def scaling_study(
             f"{route}: {factor:g}× torque is out of reach — the magnetic circuit saturates; "
             f"the most it gives is at {name} = {best * 1e3:.3g} mm"
         )
+        done()
     out = []
     m_tot0 = base["m1_kg"] + design.transmission.m2
     for route, name, value in routes:
@@ -120,7 +134,21 @@ def scaling_study(
                 bandwidth_note(changes, base["K_N_per_m"], f["K_N_per_m"]),
             )
         )
+    done()
     return base, out, notes
+
+
+def _steps(progress: Callable[[int, str], None] | None) -> Callable[[], None]:
+    """A ``done()`` that reports the next of ``STEPS`` ended to ``progress`` (nothing
+    without it)."""
+    count = [0]
+
+    def done() -> None:
+        count[0] += 1
+        if progress is not None:
+            progress(count[0], STEPS[count[0]] if count[0] < len(STEPS) else "")
+
+    return done
 
 
 def bandwidth_note(changes: dict[str, float], k_base: float, k_own: float) -> str | None:

@@ -1,12 +1,14 @@
-"""``mrclutch scale``: the paper's scaling study (Fig. 7b) with real geometry."""
+"""``mrclutch scale``: the paper's scaling study (Fig. 7b) with real geometry; a bar of its
+steps with its estimate on stderr (issue 40: a job over ~2 s says how long)."""
 
 from __future__ import annotations
 
 import argparse
 
 from mrclutch.cli.commands._common import add_design_args, load_design_args, print_json
+from mrclutch.cli.progress import bar
 from mrclutch.pipeline import source_label
-from mrclutch.scaling import PAPER_TOTAL_INERTIA_INCREASE_2X, as_json, scaling_study
+from mrclutch.scaling import PAPER_TOTAL_INERTIA_INCREASE_2X, STEPS, as_json, scaling_study
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -20,12 +22,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_design_args(p)
     p.add_argument("--factor", type=float, default=2.0, help="torque factor (default 2)")
     p.add_argument("--json", action="store_true")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.set_defaults(func=_scale)
 
 
 def _scale(args: argparse.Namespace) -> int:
     design = load_design_args(args)
-    base, routes, notes = scaling_study(design, args.factor)
+    with bar(len(STEPS), "scale", "step", not args.no_progress) as done:
+        done(0, f"scale: {STEPS[0]}")
+        base, routes, notes = scaling_study(
+            design, args.factor, lambda n, what: done(n, f"scale: {what}" if what else None)
+        )
     if args.json:
         print_json(as_json(base, routes, notes, design))
         return 0
