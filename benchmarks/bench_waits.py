@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import re
 import resource
 import shutil
 import statistics
@@ -78,6 +79,12 @@ f = {k: np.full(1000, float(v)) for k, v in vars(preset("paper")).items()}
 f["gap"] = np.linspace(0.3e-3, 0.5e-3, 1000)
 print(float(network_torque_batch(f, [2.0, 7.0]).sum()))
 """
+
+
+#: A progress bar with an estimate, as mrclutch.cli.progress draws it (tqdm): "NN%|…| n/N
+#: [elapsed<remaining" with a remaining time (not "?", the bar before its first count).
+#: Not any "eta" in the text: that word is in "metadata", "details", "beta".
+ESTIMATE = re.compile(r"\d+%\|[^|\n]*\| *\d+/\d+ \[[\d:]+<[\d:]+")
 
 
 def _cpu() -> float:
@@ -208,7 +215,7 @@ def main() -> None:
         if not a.skip_long:
             for name, (cmd, goal) in LONG.items():
                 took, err, cpu = _run(_mrclutch(cmd, tmp), env, ROOT)
-                said = "progress on stderr" if ("%|" in err or "eta" in err.lower()) else ""
+                said = "progress on stderr" if ESTIMATE.search(err) else "NO progress on stderr"
                 verdict = "" if goal is None else (
                     f"≤ {goal:g} s {'met' if took <= goal else 'NOT met'}")  # fmt: skip
                 extra = f"  plot alone: {_plot_wait(tmp, env)}" if name.startswith("sweep") else ""
