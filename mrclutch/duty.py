@@ -72,24 +72,6 @@ class Duty:
         check_range("on_fraction", self.on_fraction, 0.0, 1.0)
 
 
-#: Why a figure of ``evaluation_duty`` is null (None or NaN), by key (pipeline.NAN_MEANS).
-DUTY_NULLS: dict[str, str] = {
-    "duty": "no duty torque asked: give --duty NM:S or a design's [duty] torque_N_m",
-    "tau_y_coefficient_per_K": "the fluid gives no carrier expansion: τy(T) not modelled",
-    "lifetime_energy_J_per_m3": "the fluid gives no lifetime dissipated energy",
-    "life_h": "the fluid gives no lifetime dissipated energy: no life figure",
-    "life_off_h": "the fluid gives no lifetime dissipated energy: no life figure",
-    "duty_fluid_temperature_C": "no duty torque asked: no duty hold to compare",
-    "covered": "no duty torque asked: no duty hold to compare",
-}
-#: What an infinite figure of ``evaluation_duty`` means (pipeline.INF_MEANS).
-DUTY_INFS: dict[str, str] = {
-    "life_h": "never: the duty dissipates no power in the fluid",
-    "life_off_h": "never: the off clutch dissipates no power (no slip)",
-    "time_at_duty_s": "never: no duty torque asked (give --duty NM:S), or at the duty torque "
-    "the coil and the fluid stay below their temperature limits",
-}
-
 #: design-file key → (field, factor to SI)
 DUTY_KEYS: dict[str, tuple[str, float]] = {
     "torque_N_m": ("torque", 1.0),

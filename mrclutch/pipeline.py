@@ -13,16 +13,16 @@ with the same lever, geared (G = F_max,MR / F_max,EM) so both render the same fo
 — the *equal-force* comparison of the paper's Fig. 7c made exact — at the same virtual
 stiffness K = K_max of the MR system.
 
-This module is the single-design path (``evaluate``, ``rendered``, the ``Evaluation`` and
-what its null figures mean). Its stages live by what they compute: the clutch figures in
-``mrclutch.clutch``, the pair and the motor at the hand in ``mrclutch.at_hand``, the batch
-path of sweeps and the optimiser in ``mrclutch.fast_batch``.
+This module is the single-design path (``evaluate``, ``rendered``, the ``Evaluation``);
+what its null figures mean is ``mrclutch.nulls`` (re-exported here). Its stages live by
+what they compute: the clutch figures in ``mrclutch.clutch``, the pair and the motor at
+the hand in ``mrclutch.at_hand``, the batch path of sweeps and the optimiser in
+``mrclutch.fast_batch``.
 """
 
 from __future__ import annotations
 
 import functools
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
@@ -57,7 +57,7 @@ from mrclutch.clutch import (
     fluid_limit,
 )
 from mrclutch.design import ClutchDesign
-from mrclutch.duty import DUTY_INFS, DUTY_NULLS, evaluation_duty
+from mrclutch.duty import evaluation_duty
 from mrclutch.fast_batch import BatchEvaluator, evaluate_batch
 from mrclutch.feel import feel_figures
 from mrclutch.haptics.actuator import (
@@ -73,6 +73,7 @@ from mrclutch.haptics.model import (
 )
 from mrclutch.haptics.zwidth import ZWIDTH_KEYS
 from mrclutch.haptics.zwidth import zwidth as zwidth_of
+from mrclutch.nulls import INF_MEANS, NAN_MEANS, null_notes
 
 #: The application's evaluation API: the single-design path defined here and, from the
 #: modules of its stages (mrclutch.clutch, mrclutch.at_hand, mrclutch.fast_batch), the
@@ -176,86 +177,6 @@ class Evaluation:
         }
         out["nulls"] = null_notes(out)
         return out
-
-
-#: Why a figure is NaN (null in JSON) where that is its documented meaning, by key.
-NAN_MEANS: dict[str, str] = {
-    "resonance_hz": "no resonance: the free lever is overdamped (every zero of Eq. 2 is "
-    "real; mrclutch.haptics.model.resonance)",
-    "B_N_s_per_m": "no damping grid: B_top is unbounded (every damper renders passively at "
-    "K = 0), so [0, B_top] cannot be sampled; the intercepts and the area say the rest",
-    "K_max_N_per_m": "no passive K >= 0 at that damping (the Z-width is empty there), or no "
-    "damping grid (B_N_s_per_m null)",
-    "bandwidth_gain": "one side has no bandwidth (the motor unavailable, or no crossing)",
-    "max_stable_K_N_per_m": "unknown: the stability scan cannot resolve this loop (it would "
-    "need more than 2e5 phase-resolved frequencies, or 2e6 a step: an extreme transmission "
-    "or delay)",
-    "max_stable_K_torque_delay_N_per_m": "unknown: the stability scan cannot resolve this "
-    "loop with that delay, or the lags are not finite",
-    "bandwidth_gain_lumped": "one side has no bandwidth (the motor unavailable)",
-}
-NAN_MEANS["K_min_N_per_m"] = NAN_MEANS["K_max_N_per_m"]
-NAN_MEANS["robust"] = (
-    "not asked: the verdict is at nominal values only (--no-uncertainty, "
-    "or the design's [render] verdict = 'nominal')"
-)
-NAN_MEANS["K_max_at_B0_N_per_m"] = (
-    "no passive K >= 0 even with no virtual damping (the Z-width is empty at B = 0)"
-)
-NAN_MEANS["delay"] = (
-    "the delay's range is not given: it spans the typed delay and the torque "
-    "response's equivalent delay at the corners (mrclutch.robust)"
-)
-NAN_MEANS["fluid_temperature"] = "the fluid's temperature range is not given: the operating one"
-NAN_MEANS["max_stable_K_typed_delay_N_per_m"] = NAN_MEANS["max_stable_K_N_per_m"]
-NAN_MEANS["max_stable_K_lags_N_per_m"] = NAN_MEANS["max_stable_K_torque_delay_N_per_m"]
-#: What an infinite figure (null in JSON, which has no infinity) means, by key.
-INF_MEANS: dict[str, str] = {
-    "time_to_wire_limit_s": "never: the coil stays below its temperature limit at the peak current",
-    "time_to_fluid_limit_s": "never: the fluid stays below its temperature limit at the "
-    "peak current",
-}
-NAN_MEANS.update(DUTY_NULLS)  # issue 41's figures (mrclutch.duty)
-INF_MEANS.update(DUTY_INFS)
-_UNBOUNDED = "unbounded (inf): no finite limit exists; JSON has no infinity"
-#: The ends of a figure's range over the uncertain inputs (the ``robust`` block).
-RANGE_ENDS = frozenset({"nominal", "worst", "best"})
-
-
-def null_notes(data: Mapping[str, Any]) -> dict[str, str]:
-    """Every figure of an evaluation's JSON that would be null (None, NaN or ±inf), by its
-    path ("zwidth/mr/K_max_N_per_m[3]" as "zwidth/mr/K_max_N_per_m"), with why: the
-    documented meaning of a NaN or an inf, or the note of an unavailable side. Figures
-    left without a reason would be a bug (tests/mrclutch/test_robust_inputs.py)."""
-    out: dict[str, str] = {}
-
-    def walk(v: Any, path: tuple[str, ...], note: str | None) -> None:
-        if isinstance(v, Mapping):
-            here = v.get("note") if isinstance(v.get("note"), str) else note
-            for k, x in v.items():
-                if k not in ("nulls", "note"):
-                    walk(x, (*path, str(k)), here)
-            return
-        if isinstance(v, (list, tuple, np.ndarray)) and np.ndim(v) > 0:
-            for x in v:
-                walk(x, path, note)
-            return
-        # a range's end (robust/<figure>/nominal|worst|best) means what its figure's NaN does
-        meaning = NAN_MEANS.get(path[-1]) or (
-            NAN_MEANS.get(path[-2]) if len(path) > 1 and path[-1] in RANGE_ENDS else None
-        )
-        if v is None or (isinstance(v, (float, np.floating)) and math.isnan(v)):
-            why = note or meaning
-        elif isinstance(v, (float, np.floating)) and math.isinf(v):
-            why = INF_MEANS.get(path[-1], _UNBOUNDED)
-        else:
-            return
-        key = "/".join(path)
-        if key not in out:
-            out[key] = why or "not computed (no reason recorded)"
-
-    walk(data, (), None)
-    return out
 
 
 def _gain(a: float | None, b: float | None) -> float | None:

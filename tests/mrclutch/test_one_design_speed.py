@@ -65,3 +65,34 @@ def test_hand_box_nominal_rows_in_the_corners_call_are_their_own():
             assert np.array_equal(a, b, equal_nan=True), name
     assert np.array_equal(merged.valid, separate.valid)
     assert math.isfinite(float(merged.K[0][1])) and float(merged.K[2][0]) > float(merged.K[1][0])
+
+
+def test_the_catalogue_commands_load_no_design_machinery(fresh_python):
+    """``haptic`` and ``compare`` on the catalogue (no design) answer from the haptic model
+    alone: neither the pipeline, the verdict, the design (its duty, dynamics, network) nor
+    the plots are imported (issue 40: 84 project modules before, 27 after); a design's
+    ``haptic`` still loads the pipeline."""
+    code = (
+        "import sys\nfrom mrclutch.cli.main import main\n"
+        "for argv in (['haptic'], ['compare'], ['haptic', '--json', '--delay-ms', '2']):\n"
+        "    assert main(argv) == 0, argv\n"
+        "print(' '.join(sys.modules), file=sys.stderr)\n"
+        "assert main(['haptic', '--preset', 'paper']) == 0\n"
+        "print('|', ' '.join(sys.modules), file=sys.stderr)"
+    )
+    catalogue, design = fresh_python(code).stderr.split("|")
+    loaded = set(catalogue.split())
+    assert "mrclutch.haptics.model" in loaded and "mrclutch.nulls" in loaded  # they ran
+    for heavy in ("mrclutch.pipeline", "mrclutch.verdict", "mrclutch.design", "mrclutch.duty",
+                  "magnetics.network", "magnetics.dynamics", "mrclutch.cli.plots"):  # fmt: skip
+        assert heavy not in loaded, heavy
+    assert "mrclutch.pipeline" in set(design.split())
+
+
+def test_haptic_delay_bound_is_the_design_files():
+    """``haptic --delay-ms``'s bound, kept in the command module so the catalogue does not
+    load mrclutch.operating, is the design file's MAX_DELAY."""
+    from mrclutch.cli.commands.haptic import MAX_DELAY_S
+    from mrclutch.operating import MAX_DELAY
+
+    assert MAX_DELAY_S == MAX_DELAY

@@ -2,19 +2,20 @@
 paper's equal-force comparison, Fig. 7c). Given a design (``DESIGN.toml`` or ``--preset``)
 both judge it as ``evaluate`` does (``mrclutch.verdict``: its ``[render]`` K, its verdict,
 the equal-force Maxon geared from its K_max at the same fidelity). Imports nothing heavy at
-module level."""
+module level: a design's branch is ``mrclutch.cli.commands.haptic_design`` (the design, the
+pipeline and the verdict), loaded, as main loads a command's module, only when a design is
+named, so the catalogue's answer loads the haptic model alone (issue 40: 84 project modules
+before, 27 now)."""
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import math
 from typing import Any
 
 from geometry.validation import check_choice, check_range
-from mrclutch.cli.commands._common import add_design_args, load_design_args, print_json
-from mrclutch.cli.errors import CLIError
-from mrclutch.cli.plots.haptic import compare_figure
-from mrclutch.design import MAX_DELAY
+from mrclutch.cli.options import add_design_args, print_json
 from mrclutch.haptic_run import (
     ACTUATOR_NAMES,
     GEARING_RANGE,
@@ -28,9 +29,17 @@ from mrclutch.haptic_run import (
     compare_params,
     compare_result,
 )
+from mrclutch.nulls import null_notes
 from mrclutch.outputs import format_kmax
-from mrclutch.pipeline import evaluate, null_notes
-from mrclutch.verdict import judge_evaluation, resonance_notes, verdict_lines
+
+#: A design's branch of both commands and the comparison's figure: modules loaded by name
+#: when used (as mrclutch.cli.main loads a command's), each heavy to import (the design's
+#: duty, dynamics and network, the pipeline and the verdict; matplotlib).
+_DESIGN = "mrclutch.cli.commands.haptic_design"
+_PLOTS = "mrclutch.cli.plots.haptic"
+#: --delay-ms's bound (s): mrclutch.operating.MAX_DELAY, the design file's (checked equal in
+#: tests/mrclutch/test_one_design_speed.py; importing operating loads the drag and fluids).
+MAX_DELAY_S = 1.0
 
 
 def register(sub: Any) -> None:
@@ -73,26 +82,9 @@ def _design(p: argparse.ArgumentParser) -> None:
                    "evaluate --fidelity")  # fmt: skip
 
 
-def _judged(args: argparse.Namespace, command: str) -> tuple[Any, dict[str, Any]] | None:
-    """(Evaluation, ``verdict.judge`` data) of the design the options name, or None for the
-    catalogue. The catalogue's options are refused beside a design (the design has its own
-    K rule, delay and transmission)."""
-    if args.design is None and args.preset is None:
-        return None
-    for opt, given in (("--stiffness", args.stiffness is not None),
-                       ("--delay-ms", args.delay_ms is not None),
-                       ("--workspace-mm", args.workspace_mm != 50.0),
-                       ("--actuator", getattr(args, "actuator", "mr-paper") != "mr-paper"),
-                       ("--lever-mm", getattr(args, "lever_mm", 170.0) != 170.0),
-                       ("--gearing", getattr(args, "gearing", 1.0) != 1.0)):  # fmt: skip
-        if given:
-            raise CLIError(f"{command} {opt}: not with a design (its [render], [operating] and "
-                           "[transmission] tables set it)")  # fmt: skip
-    check_choice("--fidelity", args.fidelity, ("fast", "reference"))
-
-    ev = evaluate(load_design_args(args), args.fidelity)
-    data = judge_evaluation(ev)
-    return ev, data
+def _named(args: argparse.Namespace) -> bool:
+    """Whether the options name a design (a file or --preset) rather than the catalogue."""
+    return args.design is not None or args.preset is not None
 
 
 def _common(p: argparse.ArgumentParser) -> None:
@@ -115,7 +107,7 @@ def _edge(args: argparse.Namespace) -> tuple[float | None, float | None, float]:
         K = check_range("--stiffness", args.stiffness, 0.0, STIFFNESS_MAX, " N/m", lo_open=True)
     delay = None
     if args.delay_ms is not None:
-        delay = check_range("--delay-ms", args.delay_ms, 0.0, MAX_DELAY * 1e3, " ms") * 1e-3
+        delay = check_range("--delay-ms", args.delay_ms, 0.0, MAX_DELAY_S * 1e3, " ms") * 1e-3
     lo, hi = WORKSPACE_RANGE
     workspace = check_range("--workspace-mm", args.workspace_mm, lo * 1e3, hi * 1e3, " mm") * 1e-3
     return K, delay, workspace
@@ -123,22 +115,8 @@ def _edge(args: argparse.Namespace) -> tuple[float | None, float | None, float]:
 
 def run_haptic(args: argparse.Namespace) -> int:
     K, delay, workspace = _edge(args)
-    judged = _judged(args, "haptic")
-    if judged is not None:
-        _, data = judged
-        h = data["haptic"]
-        notes = resonance_notes(data, ("haptic",))  # a bandwidth that is a resonance
-        if args.json:
-            out = {**h, "source": data["source"], "verdict": data["verdict"],
-                   "render": data["render"], "notes": notes}  # fmt: skip
-            print_json({**out, "nulls": null_notes(out)})  # every null with its reason
-            return 0
-        print("\n".join(verdict_lines(data)))
-        print(f"MR pair of design {data['design']} ({data['source']})")
-        _print_metrics(h, f"MR pair, {data['source']}", rule=data["render"]["describe"])
-        for note in notes:
-            print(f"note: {note}")
-        return 0
+    if _named(args):  # a design: judged as evaluate judges it (its own module)
+        return importlib.import_module(_DESIGN).run_haptic(args)
     lo, hi = LEVER_RANGE  # Transmission's own rule, stated in the option's unit
     lever = check_range("--lever-mm", args.lever_mm, lo * 1e3, hi * 1e3, " mm") * 1e-3
     gearing = check_range("--gearing", args.gearing, *GEARING_RANGE)
@@ -149,15 +127,14 @@ def run_haptic(args: argparse.Namespace) -> int:
         print_json({**m, "source": src, "nulls": null_notes(m)})
     else:
         print(f"{act.name} on a {lever * 1e3:g} mm lever, gearing {gearing:g}, n = {tr.ratio:.3f}")
-        _print_metrics(m, src if K is None else "typed")
+        print_metrics(m, src if K is None else "typed")
     return 0
 
 
 def run_compare(args: argparse.Namespace) -> int:
     K, delay, workspace = _edge(args)
-    judged = _judged(args, "compare")
-    if judged is not None:
-        return _compare_design(args, *judged)
+    if _named(args):
+        return importlib.import_module(_DESIGN).run_compare(args)
     typed = K is not None
     mr, em, K = compare_params(K, delay, workspace)
     res = compare_result(mr, em, K)
@@ -165,14 +142,16 @@ def run_compare(args: argparse.Namespace) -> int:
     res["K_source"] = src
     res["sources"] = {"mr": TABLE2_SOURCE, "em": catalogue_source("maxon-136206")}
     if args.plot:
-        compare_figure({"MR pair (Table 2)": mr, "Maxon 136206": em}, K, args.plot)
+        importlib.import_module(_PLOTS).compare_figure(
+            {"MR pair (Table 2)": mr, "Maxon 136206": em}, K, args.plot
+        )
     if args.json:
         print_json({**res, "nulls": null_notes(res)})  # every null with its reason
         return 0
     for side, title, p in (("mr", "MR pair (Table 2 identified)", mr),
                            ("em", "Maxon 136206", em)):  # fmt: skip
         print(title)
-        _print_metrics(res[side], src, res["sources"][side], own_kmax=float(p.k_max))
+        print_metrics(res[side], src, res["sources"][side], own_kmax=float(p.k_max))
     g, g0 = res["bandwidth_gain"], res["bandwidth_gain_mr_without_delay"]
     print(
         f"At {format_kmax(K, src) if not typed else f'K = {K:.4g} N/m [typed]'} (the smaller "
@@ -190,58 +169,11 @@ def run_compare(args: argparse.Namespace) -> int:
     return 0
 
 
-def _compare_design(args: argparse.Namespace, ev: Any, data: dict[str, Any]) -> int:
-    """``compare`` of a design: its MR pair at the K its ``[render]`` rule picks beside the
-    Maxon 136206 geared to the pair's force at the same fidelity (what ``evaluate`` puts
-    side by side), led by the design's one verdict."""
-    h, m = data["haptic"], data["motor"]
-    K = float(h["K_N_per_m"])
-    src = f"MR pair, {data['source']}"
-    res = {
-        "design": data["design"],
-        "fidelity": data["fidelity"],
-        "verdict": data["verdict"],
-        "render": data["render"],
-        "mr": h,
-        "em": m,
-        "K_N_per_m": K,
-        "bandwidth_gain": data["bandwidth_gain"],
-        "bandwidth_gain_lumped": data["bandwidth_gain_lumped"],
-        "sources": {"mr": src, "em": f"Maxon 136206 geared to the pair's force ({src})"},
-        "notes": resonance_notes(data),  # a bandwidth that is a resonance says so
-    }
-    res["nulls"] = null_notes(res)  # every null with its reason (evaluate's table)
-    if args.plot:
-        sides = {"MR pair": ev.mr, "Maxon 136206 (equal force)": ev.motor}
-        compare_figure({n: p for n, p in sides.items() if p is not None}, K, args.plot)
-    if args.json:
-        print_json(res)
-        return 0
-    print("\n".join(verdict_lines(data)))
-    print(f"MR pair of design {data['design']} ({data['source']})")
-    _print_metrics(h, src, rule=data["render"]["describe"])
-    if m.get("gearing") is None:
-        print(f"Maxon 136206: unavailable: {m.get('note')}")
-    else:
-        print(f"Maxon 136206, geared ×{m['gearing']:.3g} to the MR pair's force ({src})")
-        _print_metrics(m, f"Maxon 136206 geared to the MR pair's force, {data['source']}",
-                       rule=f"the MR pair's K ({data['render']['describe']})")  # fmt: skip
-        gl, g = data["bandwidth_gain_lumped"], data["bandwidth_gain"]
-        full = "none" if g is None else f"{100 * g:.1f} %"
-        print(f"At K = {K:.4g} N/m the MR lever renders {100 * gl:.1f} % more lumped bandwidth, "
-              f"{full} on the full response.")  # fmt: skip
-    for note in res["notes"]:
-        print(f"note: {note}")
-    if args.plot:
-        print(f"figure: {args.plot}")
-    return 0
-
-
 def _ps(passive: bool, stable: bool) -> str:
     return f"{'passive' if passive else 'NOT passive'}, {'stable' if stable else 'UNSTABLE'}"
 
 
-def _print_metrics(m: dict[str, Any], k_source: str, source: str | None = None,
+def print_metrics(m: dict[str, Any], k_source: str, source: str | None = None,
                    rule: str | None = None, own_kmax: float | None = None) -> None:  # fmt: skip
     """The metrics of one side; ``k_source``: where K comes from ("typed", or the source of
     the K_max rendered), ``source``: where m1, b1 come from (default ``k_source``);
