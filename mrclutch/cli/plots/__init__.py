@@ -25,6 +25,11 @@ MIN_TEXT_KEY = "mrclutch:min_text_px"
 def min_text_px(fig: Any, dpi: float) -> float:
     """Font size in pixels of the smallest visible, non-empty text of ``fig``."""
     fig.canvas.draw()  # tick labels exist only once drawn
+    return drawn_min_text_px(fig, dpi)
+
+
+def drawn_min_text_px(fig: Any, dpi: float) -> float:
+    """:func:`min_text_px` of a figure already drawn (its text as that draw laid it out)."""
     sizes = [t.get_fontsize() for t in fig.findobj(lambda a: hasattr(a, "get_text")
              and hasattr(a, "get_fontsize")) if t.get_visible() and t.get_text().strip()
              and _on_canvas(t)]  # fmt: skip
@@ -43,13 +48,22 @@ def _on_canvas(t: Any) -> bool:
 def save_png(fig: Any, path: str | os.PathLike[str], dpi: float = 110) -> Path:
     """``fig`` as a PNG at ``path`` through the output layer (temporary file, fsync,
     rename; one OutputError line on any OSError) with its smallest text size in the
-    metadata, then closed whatever happened."""
+    metadata, then closed whatever happened.
+
+    The figure is drawn once: its layout engine runs, its text is measured and its pixels
+    are written from that one draw (what ``savefig`` does after its own draws: Agg's
+    ``print_png`` draws the canvas and writes ``buffer_rgba`` with ``imsave``), instead of
+    a draw to measure and ``savefig``'s layout pass and draw (issue 40: the report)."""
     import matplotlib.pyplot as plt
+    from matplotlib.image import imsave
 
     try:
-        px = min_text_px(fig, dpi)
+        fig.set_dpi(dpi)
+        fig.canvas.draw()
+        px = drawn_min_text_px(fig, dpi)
         with atomic_path(path) as tmp:
-            fig.savefig(tmp, format="png", dpi=dpi, metadata={MIN_TEXT_KEY: f"{px:.2f}"})
+            imsave(tmp, fig.canvas.buffer_rgba(), format="png", origin="upper", dpi=dpi,
+                   metadata={MIN_TEXT_KEY: f"{px:.2f}"})  # fmt: skip
     finally:
         plt.close(fig)
     return Path(path)
