@@ -2,8 +2,10 @@
 command that judges it — evaluate, report, compare, haptic, optimize — gives the same K,
 K_max and verdict at one fidelity, leading with one verdict line."""
 
+import copy
 import json
 import re
+from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
 
@@ -157,23 +159,60 @@ def test_commands_lead_with_one_verdict_and_agree(target, capsys):
     assert len(set(texts)) == 1 and len(set(triples)) == 1 and len(set(gearing)) == 1
 
 
+@contextmanager
+def _judged_once():
+    """Inside, ``pipeline.evaluate`` and ``verdict.judge_evaluation`` (what evaluate, compare
+    and haptic call: ``verdict.judge`` is the two) compute once per argument tuple and hand
+    back that result (the judged JSON as a deep copy: evaluate adds its ``nulls``): pure
+    functions of a frozen design, so each command's text and ``--json`` print what they
+    printed when each computed its own (the FEM at reference fidelity, 1-2 s a call); a
+    command that called them with other arguments (another fidelity, nominal only) still
+    computes its own. The report runs outside (its evaluation takes the B-rep mass from its
+    CAD process)."""
+    from mrclutch import pipeline, verdict
+
+    real_evaluate, real_judge = pipeline.evaluate, verdict.judge_evaluation
+    evs: dict = {}
+    judged: dict = {}
+
+    def evaluate(design, fidelity="fast", accuracy=None, K=None):
+        key = (design, fidelity, accuracy, K)
+        if key not in evs:
+            evs[key] = real_evaluate(design, fidelity, accuracy, K)
+        return evs[key]
+
+    def judge_evaluation(ev, robust=None):
+        key = (id(ev), robust)  # ev: one of evs' (kept alive there) or the caller's own
+        if key not in judged:
+            judged[key] = (ev, real_judge(ev, robust))
+        return copy.deepcopy(judged[key][1])
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(pipeline, "evaluate", evaluate)
+        mp.setattr(verdict, "evaluate", evaluate)
+        mp.setattr(verdict, "judge_evaluation", judge_evaluation)
+        yield
+
+
 def _every_command(capsys, args, report_dir=None):
     """The verdict line, (status, K, K_max) and the motor's gearing of one design from
     evaluate, compare, haptic (no motor) and, with ``report_dir``, report: each text leads
-    with its one verdict line and prints the gearing its JSON gives."""
+    with its one verdict line and prints the gearing its JSON gives. The three commands
+    judge the design once (``_judged_once``), the report on its own."""
     texts, triples, gearing = [], [], []
-    for cmd in ("evaluate", "compare", "haptic"):
-        code, cap = _run(capsys, [cmd, *args])
-        assert code == 0, cap.err
-        lines = _verdict_lines(cap.out)
-        assert len(lines) == 1 and cap.out.startswith("VERDICT:"), cap.out[:300]
-        texts.append(lines[0])
-        data = _json(capsys, [cmd, *args])
-        triples.append(_triple(data))
-        if cmd != "haptic":
-            g = (data["motor"] if cmd == "evaluate" else data["em"])["gearing"]
-            assert f"geared ×{g:.3g} to the MR pair's force" in cap.out, cmd
-            gearing.append(g)
+    with _judged_once():
+        for cmd in ("evaluate", "compare", "haptic"):
+            code, cap = _run(capsys, [cmd, *args])
+            assert code == 0, cap.err
+            lines = _verdict_lines(cap.out)
+            assert len(lines) == 1 and cap.out.startswith("VERDICT:"), cap.out[:300]
+            texts.append(lines[0])
+            data = _json(capsys, [cmd, *args])
+            triples.append(_triple(data))
+            if cmd != "haptic":
+                g = (data["motor"] if cmd == "evaluate" else data["em"])["gearing"]
+                assert f"geared ×{g:.3g} to the MR pair's force" in cap.out, cmd
+                gearing.append(g)
     if report_dir is not None:
         code, cap = _run(capsys, ["report", *args, "--out", str(report_dir), "--no-progress"])
         assert code == 0, cap.err
