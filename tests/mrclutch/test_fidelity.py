@@ -3,6 +3,7 @@ the registry and measure, the accuracy-target choice, and the fidelity command."
 
 import json
 import math
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -180,9 +181,10 @@ def test_a_setting_the_design_refuses_is_skipped_and_said(paper):
 
 def test_cli_fidelity_progress_on_stderr_json_alone_on_stdout(tmp_path, capsys, monkeypatch):
     """``mrclutch fidelity --json`` (issue 40: a job over ~2 s says how long): each method
-    is named on stderr as it starts, under a bar of the methods done (3/3 at the end, with
-    tqdm's rate and estimate); stdout is the JSON document alone, the rows of the three
-    methods (two bandwidths and the stand-in reference, exact: error 0)."""
+    is named on stderr as it starts, under a bar of the methods done and then the files
+    written (the chart's drawing, silent after the bar before): the files named, then 4/4
+    at the end, with tqdm's rate and estimate; stdout is the JSON document alone, the rows
+    of the three methods (two bandwidths and the stand-in reference, exact: error 0)."""
     import mrclutch.cli.commands.fidelity as cmd
     from mrclutch.cli.main import main
     from mrclutch.fidelity import Method, registry
@@ -198,5 +200,8 @@ def test_cli_fidelity_progress_on_stderr_json_alone_on_stdout(tmp_path, capsys, 
     assert doc["rows"][2]["error_rel"] == 0.0
     assert "fidelity: bandwidth: lumped (√(K/(m1+m2)))" in err
     assert "fidelity: stability: stand-in (1)" in err
-    assert "3/3" in err and ("method/s" in err or "s/method" in err)
+    files = "fidelity: writing fidelity.csv, fidelity.json, fidelity.png\n"
+    assert err.index(files) < err.rindex("4/4")  # the files are a step of the bar
+    assert re.search(r"fidelity: 100%\|[^|]*\| 4/4 \[\d\d:\d\d<\d\d:\d\d", err)
+    assert "step/s" in err or "s/step" in err
     assert json.loads((tmp_path / "fidelity.json").read_text()) == doc
