@@ -136,10 +136,6 @@ def clutch_figures(
         torque_method = "network" if fidelity == "fast" else "fem"
         if torque_method == "network":  # never a silent wrong number (issue 6)
             extra = circuit_trust(c, "network", design.current_limit, design.materials)
-    if inertia_method == "analytic":
-        mass = analytic_mass(section)
-    else:
-        mass = brep_mass(c, materials=design.materials)
     i_max = design.current_limit
     temp = op.fluid_temperature
     if torque_method == "network":  # torque_curve's network branch on the shared network
@@ -153,6 +149,12 @@ def clutch_figures(
     coil = coil_properties(c, i_max, op.coil_temperature)
     thermal = thermal_figures(design, section.table, path_from_section(section), drag.torque,
                               float(curve.torque[0]), net)  # fmt: skip
+    # the mass last: a B-rep mass may come from another process (geometry.mass.brep_mass_from:
+    # the report's CAD process), and the torque's FEM above runs here meanwhile (issue 40)
+    if inertia_method == "analytic":
+        mass = analytic_mass(section)
+    else:
+        mass = brep_mass(c, materials=design.materials)
     d, length = section.envelope
     notes = (tuple(mass.notes) + extra + drag.notes + _thermal_notes(design, thermal)
              + _density_notes(design) + _supply_notes(design))  # fmt: skip
