@@ -163,25 +163,34 @@ def limit_columns(fields: Mapping[str, ArrayLike], base: ClutchDesign,
     def fn(rg: regions.Regions, rows: np.ndarray) -> dict[str, np.ndarray]:
         limit = fluid_limit(rg.materials)
         net = thermal.network(rg, op.ambient_temperature, limit)
-        i = current[rows]
+        return {"capacity": net.capacity, "conductance": net.conductance,
+                "to_air": net.to_air, "r20": net.r20, "fluid_limit": limit}  # fmt: skip
+
+    # each region table's network, then the transient of every row in one call (its cost is
+    # mostly per call: a bisection of 120 steps, whatever the rows; each row its own)
+    nets = regions.per_topology(p, ok, fn, mats)
+    out = {k: np.full(off.shape, np.nan) for k in ("coil_power_W", "time_at_peak_s")}
+    out["time_at_duty_s"] = np.full(off.shape, np.inf if duty_torque <= 0 else np.nan)
+    rows = np.flatnonzero(ok)
+    for limit in np.unique(nets["fluid_limit"][rows]):  # one call a fluid limit (materials)
+        at = rows[nets["fluid_limit"][rows] == limit]
+        net = thermal.Network(nets["capacity"][at], nets["conductance"][at], nets["to_air"][at],
+                              nets["r20"][at], op.ambient_temperature, None)  # fmt: skip
+        i = current[at]
         # R(T) = R20 (1 + α (T − 20)) (magnetics.thermal)
-        power = i * i * net.r20 * (1 + thermal.ALPHA_CU * (op.coil_temperature - 20.0))
-        tw, tf = thermal.time_to_limits_batch(net, i, peak[rows] * w,
+        out["coil_power_W"][at] = i * i * net.r20 * (
+            1 + thermal.ALPHA_CU * (op.coil_temperature - 20.0))  # fmt: skip
+        tw, tf = thermal.time_to_limits_batch(net, i, peak[at] * w,
                                               op.wire_temperature_limit, limit)  # fmt: skip
-        out = {"coil_power_W": power, "time_at_peak_s": np.minimum(tw, tf)}
+        out["time_at_peak_s"][at] = np.minimum(tw, tf)
         if duty_torque > 0:
-            y = peak[rows] - off[rows]
-            i_d = i * np.clip((duty_torque - off[rows]) / y, 0.0, None)
+            y = peak[at] - off[at]
+            i_d = i * np.clip((duty_torque - off[at]) / y, 0.0, None)
             dw, df = thermal.time_to_limits_batch(
                 net, i_d, duty_torque * w, op.wire_temperature_limit, limit
             )
-            out["time_at_duty_s"] = np.where(duty_torque <= peak[rows], np.minimum(dw, df), 0.0)
-        return out
-
-    out = regions.per_topology(p, ok, fn, mats)
+            out["time_at_duty_s"][at] = np.where(duty_torque <= peak[at], np.minimum(dw, df), 0.0)
     out[CONTINUOUS] = np.asarray(r["continuous_torque_N_m"]) - off
-    if duty_torque <= 0:
-        out["time_at_duty_s"] = np.full(off.shape, np.inf)
     return out
 
 

@@ -12,9 +12,11 @@ import numpy as np
 
 from geometry.materials import SLOTS, MaterialChoice
 from geometry.validation import ParameterError, check_choice, check_int
+from mrclutch.at_hand import mr_at_hand
 from mrclutch.design import ClutchDesign
 from mrclutch.optimize.box import range_edges, search_box
 from mrclutch.optimize.limits import CONTINUOUS, Constraints, active_limits, evaluate_rows
+from mrclutch.robust_search import stable_stiffness_batch
 
 #: The Pareto search's objectives: name → (column, +1 maximised / −1 minimised). The first
 #: is the rendering figure (``rendering``: bandwidth or zwidth).
@@ -173,7 +175,8 @@ def pareto(
     evaluations = len(x_all)
     ok = cons.violation(r_all) == 0
     x_ok = x_all[ok]
-    f_all = objective_matrix({k: v[ok] for k, v in r_all.items()})
+    r_ok = {k: v[ok] for k, v in r_all.items()}
+    f_all = objective_matrix(r_ok)
 
     def front_of(x: np.ndarray, f: np.ndarray) -> np.ndarray:
         if not len(f):
@@ -191,7 +194,6 @@ def pareto(
     stable_ok = np.full(n_ok, -1)  # 1 passes, 0 fails, -1 not computed yet
     robust_ok = np.full(n_ok, -1)
     drop_s = drop_r = 0
-    nominal = replace(cons, stable=False)
     while True:
         idx = np.flatnonzero(alive)
         nd = idx[front_of(x_ok[idx], f_all[idx])]
@@ -200,8 +202,7 @@ def pareto(
             break
         todo = nd[stable_ok[nd] < 0]
         if todo.size and cons.stable:
-            r = rows(fields_of(x_ok[todo]), stability=True, c=nominal)
-            good = r["K_N_per_m"] < r["max_stable_K_N_per_m"] * (1 - 1e-9)
+            good = r_ok["K_N_per_m"][todo] < _stable_K(base, r_ok, todo) * (1 - 1e-9)
             stable_ok[todo] = good
         elif todo.size:
             stable_ok[todo] = 1
@@ -253,6 +254,17 @@ def pareto(
                                   range_edges(d, box, source, counts)))  # fmt: skip
     return ParetoSet(tuple(out_members), objectives, len(x_front), evaluations, drop_s, drop_r,
                      box, source, counts, how, front)  # fmt: skip
+
+
+def _stable_K(base: ClutchDesign, r: Mapping[str, np.ndarray], idx: np.ndarray) -> np.ndarray:
+    """The largest stable K (N/m) of rows ``idx`` of the search's own rows ``r`` (valid
+    designs), from their figures at the hand (``mr_at_hand``, as ``evaluate_batch`` forms
+    them), by ``stable_stiffness_batch``: the column ``evaluate_batch(stability=True)``
+    gives, without evaluating the designs a second time."""
+    inertia = r["rotor_inertia_kg_m2"][idx] + r["fluid_inertia_kg_m2"][idx]
+    hp = mr_at_hand(base, inertia, r["drag_damping_N_m_s"][idx], r["max_torque_N_m"][idx],
+                    r["clutch_mass_kg"][idx], r["torque_delay_s"][idx])  # fmt: skip
+    return stable_stiffness_batch(hp)
 
 
 def _spread(f: np.ndarray, k: int) -> list[int]:
