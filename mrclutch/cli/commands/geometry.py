@@ -17,6 +17,7 @@ from mrclutch.cli.commands.handoff import export_handoff
 from mrclutch.cli.commands.inertia import DEFAULT_TOLERANCE_MM, add_tolerance, tolerance
 from mrclutch.cli.commands.inertia import register as register_inertia
 from mrclutch.cli.errors import CLIError
+from mrclutch.cli.progress import bar
 from mrclutch.cli.view import screenshot, show
 from mrclutch.solids import export_cad
 
@@ -75,7 +76,15 @@ def cmd_export(args: argparse.Namespace) -> int:
     if args.current is not None:
         raise CLIError("--current: applies to --format femm or onelab only")
     design = load_design_args(args)
-    res = export_cad(design, args.out, tolerance(args, design.clutch))
+    tol = tolerance(args, design.clutch)
+    # a bar of its two steps with its estimate (issue 40: ~8 s idle, silent before): the
+    # CAD kernel's import (≈ 6 s of CPU), then the solids, the files and the read-back
+    with bar(2, "export", "step") as done:
+        done(0, "export: loading the CAD kernel (build123d)")
+        _load_cad()
+        done(1, "export: the solids, clutch.step, the STL files, clutch.step read back")
+        res = export_cad(design, args.out, tol)
+        done(2)
     print(f"{res.step}")
     print(f"{res.materials}  (material and density of every solid: mrclutch inertia reads it)")
     for name, path in res.stl.items():
@@ -88,8 +97,23 @@ def cmd_export(args: argparse.Namespace) -> int:
 def cmd_view(args: argparse.Namespace) -> int:
     clutch = load_clutch(args)
     tol = None if args.tolerance_mm is None else tolerance(args, clutch)
+    # a bar with its estimate (issue 40: ~11 s idle, silent before): the CAD kernel imported,
+    # then the solids tessellated and rendered (a window: it opens after the bar)
+    with bar(2 if args.screenshot else 1, "view", "step") as done:
+        done(0, "view: loading the CAD kernel (build123d)")
+        _load_cad()
+        if args.screenshot:
+            done(1, f"view: the solids tessellated and rendered into {args.screenshot}")
+            shot = screenshot(clutch, args.screenshot, tolerance=tol)
+        done(2 if args.screenshot else 1)
     if args.screenshot:
-        print(screenshot(clutch, args.screenshot, tolerance=tol))
+        print(shot)
     else:
         show(clutch, tolerance=tol)
     return 0
+
+
+def _load_cad() -> None:
+    """Import the CAD kernel (build123d: ≈ 6 s of CPU) as the first step of a bar; the
+    steps after find it loaded."""
+    import build123d  # noqa: F401
