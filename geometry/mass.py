@@ -20,7 +20,9 @@ applies it to one section, ``analytic_batch`` to arrays of designs (sweeps).
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any
@@ -131,13 +133,39 @@ def weigh_shape(shape: Any, density: float, axis: str = "z") -> PartMass:
     return PartMass(density * props.Mass() * MM**3, density * j * MM**5)
 
 
+#: Where ``brep_mass`` takes its result from inside ``brep_mass_from`` (None: computed here).
+_BREP_SOURCE: ContextVar[Callable[[DrumClutch, MaterialChoice], MassReport | None] | None] = (
+    ContextVar("brep_source", default=None)
+)
+
+
+@contextmanager
+def brep_mass_from(
+    source: Callable[[DrumClutch, MaterialChoice], MassReport | None],
+) -> Iterator[None]:
+    """Inside, ``brep_mass(clutch, materials=m)`` (no ``solids``) returns
+    ``source(clutch, m)`` when that is a MassReport, and computes it here when None: the
+    same ``brep_mass`` run elsewhere, e.g. the design report's CAD process, which imports
+    build123d while the report draws (issue 40)."""
+    token = _BREP_SOURCE.set(source)
+    try:
+        yield
+    finally:
+        _BREP_SOURCE.reset(token)
+
+
 def brep_mass(
     clutch: DrumClutch,
     solids: Mapping[tuple[str, str], Any] | None = None,
     materials: MaterialChoice = DEFAULT_CHOICE,
 ) -> MassReport:
     """Mass and inertia of every part from OpenCascade's exact volume integrals (each
-    solid at its chosen material's density)."""
+    solid at its chosen material's density); inside ``brep_mass_from``, its source's."""
+    source = _BREP_SOURCE.get()
+    if solids is None and source is not None:
+        known = source(clutch, materials)
+        if known is not None:
+            return known
     s = build_section(clutch, materials)
     solids = solids if solids is not None else material_solids(clutch, s)
     acc = {p: [0.0, 0.0] for p in PARTS}

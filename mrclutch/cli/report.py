@@ -20,6 +20,12 @@ and moved in only when all of it succeeded, so an error, Ctrl-C or ``kill`` (SIG
 leaves a half-written report: either signal stops the build at its next step (a second one at
 once) and the staging folder is removed. The staging folders of processes that died harder
 (SIGKILL, power loss) are removed by the next report into the same place.
+
+The CAD side — build123d's import (seconds), the B-rep mass the evaluation uses, the STEP
+and STL files and the 3D view — runs in a second process (``mrclutch.cli.report_cad``)
+started with the build, while this one solves the FEM and draws the plots (issue 40); the
+evaluation waits for the mass, the last steps for the files, and a stopped build kills it
+before the staging folder goes.
 """
 
 from __future__ import annotations
@@ -36,6 +42,9 @@ from pathlib import Path
 from typing import Any
 
 from geometry.atomic import OutputError, fsync_dir, output_error, write_text
+from geometry.mass import MassReport, brep_mass_from
+from geometry.materials import MaterialChoice
+from geometry.params import DrumClutch
 from geometry.validation import ParameterError
 from mrclutch.cli.duty_format import duty_html
 from mrclutch.cli.feel_format import feel_html
@@ -44,11 +53,11 @@ from mrclutch.cli.plots.design import section_figure
 from mrclutch.cli.plots.dynamics import plot_torque_step
 from mrclutch.cli.plots.haptic import compare_figure, zwidth_figure
 from mrclutch.cli.plots.magnetics import plot_torque
-from mrclutch.cli.view import screenshot
+from mrclutch.cli.report_cad import CadProcess, mass_report
 from mrclutch.design import ClutchDesign
 from mrclutch.outputs import CLUTCH_ROWS, HAND_ROWS, output, row_label
 from mrclutch.pipeline import evaluate
-from mrclutch.report_data import export_cad, section_of, torque_curves
+from mrclutch.report_data import section_of, torque_curves
 from mrclutch.sweep import sigterm_as_interrupt
 from mrclutch.verdict import judge_evaluation
 
@@ -78,12 +87,15 @@ def write_report(
     # KeyboardInterrupt raised inside cannot unwind through; the build stops between steps
     with sigterm_as_interrupt(deferred=True) as terminated:
 
-        def tick(msg: str) -> None:
+        def check() -> None:
             if terminated.is_set():
                 raise KeyboardInterrupt
+
+        def tick(msg: str) -> None:
+            check()
             report(msg)
 
-        return _build(design, out, fidelity, tick)
+        return _build(design, out, fidelity, tick, check)
 
 
 def _partial_prefix(out: Path) -> str:
@@ -117,7 +129,8 @@ def _alive(pid: int) -> bool:
     return True
 
 
-def _build(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[str], None]) -> Report:
+def _build(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[str], None],
+           check: Callable[[], None]) -> Report:  # fmt: skip
     """The report built in a staging folder and moved into ``out``; a write that fails
     (disk full, read-only) is one OutputError naming the file under ``out``, and the
     staging folder goes."""
@@ -127,7 +140,7 @@ def _build(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[str],
     except OSError as exc:
         raise output_error(out, exc) from None
     try:
-        return _build_in(design, out, fidelity, tick, tmp)
+        return _build_in(design, out, fidelity, tick, check, tmp)
     except OutputError as exc:  # name the file where the user will look for it
         raise OutputError(str(exc).replace(str(tmp), str(out))) from None
     except OSError as exc:
@@ -138,23 +151,36 @@ def _build(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[str],
 
 
 def _build_in(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[str], None],
-              tmp: Path) -> Report:  # fmt: skip
-    tick("evaluating the design")
-    ev = evaluate(design, fidelity)
-    data = judge_evaluation(ev)  # the design's `[render]` rule, its one verdict
-    # the FEM before CAD and the 3D view: their libraries (OpenCascade, VTK: ~0.4 GiB
-    # resident) would otherwise sit beside its grid and factors (issue 44: ≤ 1 GiB); what
-    # evaluate's FEM fitted beside, this one fits beside too (magnetics.fem.grid.check_memory)
-    tick("torque–current curve (network, circuit and FEM)")
+              check: Callable[[], None], tmp: Path) -> Report:  # fmt: skip
+    # build123d's import (seconds), the B-rep mass, the CAD files and the 3D view run in a
+    # second process while this one solves the FEM and draws (issue 40); it is killed and
+    # waited for before the staging folder goes (_build's finally)
+    cad_side = CadProcess(design, tmp, check)
+    try:
+        return _steps(design, out, fidelity, tick, tmp, cad_side)
+    finally:
+        cad_side.close()
+
+
+def _steps(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[str], None],
+           tmp: Path, cad_side: CadProcess) -> Report:  # fmt: skip
+    tick("torque–current curve (network, circuit and FEM); a second process loads build123d "
+         "for the B-rep mass, STEP/STL and 3D view")  # fmt: skip
     curve = _torque(design, tmp / "torque.png")
-    tick("CAD: STEP and STL")
-    cad = _cad(design, tmp)
-    tick("3D view")
-    _view(design, tmp / "view.png")
     tick("section drawing")
     section_figure(section_of(design), tmp / "section.png")
-    tick("haptic plots")
+    tick("evaluating the design" + (" (its B-rep mass from the CAD process)"
+                                    if fidelity == "reference" else ""))  # fmt: skip
 
+    def mass(clutch: DrumClutch, materials: MaterialChoice) -> MassReport | None:
+        if (clutch, materials) != (design.clutch, design.materials):
+            return None  # not this design's: brep_mass computes it
+        return mass_report(cad_side.result("mass"))
+
+    with brep_mass_from(mass):
+        ev = evaluate(design, fidelity)
+        data = judge_evaluation(ev)  # the design's `[render]` rule, its one verdict
+    tick("haptic plots")
     k = float(data["haptic"]["K_N_per_m"])  # the K rendered (the design's `[render]` rule)
     sides = {"MR pair": ev.mr, "Maxon 136206 (equal force)": ev.motor}
     compare_figure({n: p for n, p in sides.items() if p is not None}, k, tmp / "haptic.png")
@@ -165,6 +191,10 @@ def _build_in(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[st
     tick("torque step response")
     plot_torque_step([(design.name, ev.torque_response)], tmp / "response.png",
                      typed_delay=design.operating.delay)  # fmt: skip
+    tick("the CAD files: STEP and STL (the second process)")
+    cad = _cad(cad_side)
+    tick("the 3D view (the second process)")
+    _view(cad_side, tmp / "view.png")
     metrics = {**data, "torque_curve": curve, "cad": cad}
     write_text(tmp / "metrics.json", json.dumps(to_jsonable(metrics), indent=2) + "\n")
     tick("report.html")
@@ -178,12 +208,15 @@ def _build_in(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[st
     return Report(out, files, metrics)
 
 
-def _cad(design: ClutchDesign, folder: Path) -> dict[str, Any]:
-    return export_cad(design, folder)
+def _cad(cad_side: CadProcess) -> dict[str, Any]:
+    """The CAD files' names and volumes (report_data.export_cad, run by the CAD process)."""
+    return cad_side.result("cad")
 
 
-def _view(design: ClutchDesign, path: Path) -> None:
-    screenshot(design.clutch, path)
+def _view(cad_side: CadProcess, path: Path) -> None:
+    """Wait for the CAD process to draw ``path``, the staging folder's view.png
+    (mrclutch.cli.view.screenshot)."""
+    cad_side.result("view")
 
 
 def _torque(design: ClutchDesign, path: Path) -> dict[str, Any]:

@@ -34,7 +34,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def _report(args: argparse.Namespace) -> int:
     design = load_design_args(args)
     check_choice("fidelity", args.fidelity, FIDELITIES)
-    steps = 9  # the tick() calls of mrclutch.cli.report._build
+    steps = 9  # the tick() calls of mrclutch.cli.report._steps
     with progress_bar(steps, "report", "step", not args.no_progress) as done:
         started = 0
 

@@ -1,0 +1,183 @@
+"""The design report's CAD side in a second process: build123d's import (seconds), the
+B-rep mass, the STEP and STL export and the 3D view run there while the report's own
+process solves the FEM and draws the plots (issue 40: a report on 2 cores).
+
+``CadProcess(design, folder, check)`` starts it (``python -m mrclutch.cli.report_cad``: a
+fresh interpreter, nothing forked from this one and no main module re-run, which
+``multiprocessing``'s spawn would do to a script without a ``__main__`` guard) and sends it
+the design over a pipe; ``result(name)`` waits for one task's result in the order of
+``TASKS``, calling ``check`` (which may raise KeyboardInterrupt) every ``POLL_S``; an error
+there is raised here, as the same exception, and its warnings are issued here. ``close()``
+kills the process if it still runs and waits for it, so nothing it writes lands after the
+caller removes ``folder``. The process runs in a session of its own: a terminal's Ctrl-C
+reaches the report only, which stops and closes it (a KeyboardInterrupt raised inside
+OpenCascade's C++ could abort it instead: see ``mrclutch.sweep.run.sigterm_as_interrupt``).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import pickle
+import signal
+import subprocess
+import sys
+import warnings
+from collections.abc import Callable
+from multiprocessing.connection import Connection
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any
+
+from geometry.mass import MassReport, PartMass, brep_mass
+from mrclutch.cli.view import screenshot
+from mrclutch.design import ClutchDesign
+from mrclutch.report_data import export_cad
+
+#: The tasks of the CAD process, in the order it runs them: the B-rep mass first (the
+#: evaluation waits for it), then the STEP + STL files and the 3D view (view.png).
+TASKS = ("mass", "cad", "view")
+#: Seconds between two calls of ``check`` while a result is awaited.
+POLL_S = 0.1
+
+
+def _mass_data(rep: MassReport) -> tuple[str, dict[str, tuple[float, float]], tuple[str, ...]]:
+    """A MassReport as plain data (its MappingProxyType does not pickle)."""
+    return rep.method, {p: (pm.mass, pm.inertia) for p, pm in rep.parts.items()}, rep.notes
+
+
+def mass_report(data: tuple[str, dict[str, tuple[float, float]], tuple[str, ...]]) -> MassReport:
+    """The MassReport that ``_mass_data`` flattened."""
+    method, parts, notes = data
+    return MassReport(method, MappingProxyType({p: PartMass(m, i) for p, (m, i) in
+                                                parts.items()}), tuple(notes))  # fmt: skip
+
+
+def _jobs(design: ClutchDesign, folder: Path) -> dict[str, Callable[[], Any]]:
+    def view() -> str:
+        return str(screenshot(design.clutch, folder / "view.png"))
+
+    return {
+        "mass": lambda: _mass_data(brep_mass(design.clutch, materials=design.materials)),
+        "cad": lambda: export_cad(design, folder),
+        "view": view,
+    }
+
+
+def _picklable(exc: BaseException) -> BaseException:
+    try:
+        pickle.loads(pickle.dumps(exc))
+    except Exception:  # an extension's exception: its type and text
+        return RuntimeError(f"{type(exc).__name__}: {exc}")
+    return exc
+
+
+def _serve(requests: Connection, results: Connection) -> None:
+    """The child: reads (design, folder), then runs each task of TASKS and sends its
+    result as (name, ok, value, warnings) when done; after an error, nothing more."""
+    try:
+        design, folder = requests.recv()
+        requests.close()
+        jobs = _jobs(design, Path(folder))
+        for name in TASKS:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")  # the parent's filters decide
+                try:
+                    ok, value = True, jobs[name]()
+                except Exception as exc:
+                    ok, value = False, _picklable(exc)
+            seen = {(str(w.message), w.category, w.filename, w.lineno) for w in caught}
+            results.send((name, ok, value, sorted(seen, key=str)))
+            if not ok:
+                return
+    except (BrokenPipeError, EOFError):  # the report ended first: nobody to tell
+        return
+    finally:
+        results.close()
+
+
+class _Failed:
+    def __init__(self, error: BaseException) -> None:
+        self.error = error
+
+
+class CadProcess:
+    """The CAD process of one report: started here, its files written into ``folder``."""
+
+    def __init__(self, design: ClutchDesign, folder: str | Path,
+                 check: Callable[[], None]) -> None:  # fmt: skip
+        self._check = check
+        req_r, req_w = os.pipe()
+        res_r, res_w = os.pipe()
+        env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)}
+        try:
+            self._proc = subprocess.Popen(
+                [sys.executable, "-m", __name__, str(req_r), str(res_w), str(os.getpid())],
+                pass_fds=(req_r, res_w), stdin=subprocess.DEVNULL, env=env,
+                start_new_session=True,
+            )  # fmt: skip
+        except BaseException:
+            for fd in (req_r, req_w, res_r, res_w):
+                os.close(fd)
+            raise
+        os.close(req_r)
+        os.close(res_w)
+        self._conn = Connection(res_r, writable=False)
+        self._results: dict[str, Any] = {}
+        with Connection(req_w, readable=False) as requests:
+            try:
+                requests.send((design, str(folder)))
+            except BrokenPipeError:  # it died at once: result() says so
+                pass
+
+    @property
+    def pid(self) -> int:
+        """The CAD process's id."""
+        return self._proc.pid
+
+    def result(self, name: str) -> Any:
+        """The result of task ``name`` (waiting for it, ``check()`` every POLL_S)."""
+        if name not in TASKS:
+            raise ValueError(f"task {name!r}: one of {', '.join(TASKS)}")
+        while name not in self._results:
+            while not self._conn.poll(POLL_S):
+                self._check()
+            try:
+                got, ok, value, caught = self._conn.recv()
+            except EOFError:
+                code = self._proc.wait()
+                raise RuntimeError(f"the report's CAD process ended (exit code {code}) "
+                                   f"before its {name}") from None  # fmt: skip
+            for message, category, filename, lineno in caught:
+                warnings.warn_explicit(message, category, filename, lineno)
+            self._results[got] = value if ok else _Failed(value)
+            if not ok:  # the child stopped: this error is every later task's too
+                self._results.update({t: self._results[got] for t in TASKS
+                                      if t not in self._results})  # fmt: skip
+        found = self._results[name]
+        if isinstance(found, _Failed):
+            raise found.error
+        return found
+
+    def close(self) -> None:
+        """Kill the process if it still runs, and wait for it."""
+        if self._proc.poll() is None:
+            self._proc.kill()
+        self._proc.wait()
+        self._conn.close()
+
+
+def _die_with(parent: int) -> None:
+    """End this process when ``parent`` ends, however it ends (Linux: the kernel's
+    PR_SET_PDEATHSIG), so a report killed by SIGKILL leaves no CAD process writing into
+    its staging folder."""
+    if sys.platform.startswith("linux"):
+        ctypes.CDLL(None).prctl(1, signal.SIGKILL)  # 1: PR_SET_PDEATHSIG, prctl(2)
+    if os.getppid() != parent:  # it ended before that took effect
+        os._exit(1)
+
+
+if __name__ == "__main__":  # the child: its two pipes' file descriptors and its parent
+    _die_with(int(sys.argv[3]))
+    _serve(Connection(int(sys.argv[1]), writable=False),
+           Connection(int(sys.argv[2]), readable=False))  # fmt: skip
