@@ -54,6 +54,15 @@ def _materials(net: Network, mats: Mapping[str, Magnetic]):  # type: ignore[no-u
                    magnetic(net.core_steel, mats), magnetic(net.shell_steel, mats))  # fmt: skip
 
 
+def _median_rows(a: FloatArray) -> FloatArray:
+    """``np.median(a, axis=0)`` of finite ``a``, bit for bit (the middle row of the sorted
+    rows, or the two middle ones' sum halved, as np.median's mean of them), without the
+    NaN check that imports numpy.ma (≈ 20 ms of a single design's answer, issue 40)."""
+    s = np.sort(a, axis=0)
+    h = s.shape[0] // 2
+    return s[h] if s.shape[0] % 2 else (s[h - 1] + s[h]) / 2.0
+
+
 def solve_network(
     net: Network,
     ampere_turns: ArrayLike,
@@ -105,7 +114,7 @@ def _solve_packed(net: Network, ampere_turns: ArrayLike, packed: Any, mats: Mapp
     order = np.empty(ni.shape, np.int64)
     for lo in range(0, shape[0], _BLOCK):
         blk = slice(lo, lo + _BLOCK)
-        order[blk] = np.argsort(np.median(np.abs(ni[blk]), axis=0), kind="stable")
+        order[blk] = np.argsort(_median_rows(np.abs(ni[blk])), kind="stable")
     out = np.zeros(shape)
     ok = np.ones(shape[0], np.bool_)
     if out.size:

@@ -96,3 +96,30 @@ def test_haptic_delay_bound_is_the_design_files():
     from mrclutch.operating import MAX_DELAY
 
     assert MAX_DELAY_S == MAX_DELAY
+
+
+def test_median_rows_is_numpys_median():
+    """The network's continuation order reads each block's median by ``_median_rows``:
+    np.median along the rows, bit for bit (odd and even counts, ties)."""
+    from magnetics.network.solve import _median_rows
+
+    rng = np.random.default_rng(3)
+    for n in range(1, 24):
+        a = np.abs(rng.standard_normal((n, 5)) * 10.0 ** rng.uniform(-3, 3, (n, 5)))
+        a[: n // 3] = a[0]  # ties
+        assert np.array_equal(_median_rows(a), np.median(a, axis=0)), n
+
+
+def test_single_design_answers_do_not_import_numpy_ma(fresh_python):
+    """numpy.ma (≈ 20 ms to import) is loaded by np.median's NaN check and np.unique's
+    masked-array check; no interactive command of one design calls either (the network's
+    continuation order, the hand scan's polynomial degrees). One process a command: what
+    a process runs first decides which network rows run uncompiled (compiled.uncompiled)."""
+    for argv in (["evaluate", "--preset", "paper"], ["torque", "--preset", "paper"]):
+        code = (
+            "import sys\nfrom mrclutch.cli.main import main\n"
+            f"assert main({argv!r}) == 0\n"
+            "print(' '.join(sys.modules), file=sys.stderr)"
+        )
+        loaded = set(fresh_python(code).stderr.split())
+        assert "magnetics.network.solve" in loaded and "numpy.ma" not in loaded, argv
