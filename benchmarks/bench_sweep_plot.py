@@ -1,6 +1,6 @@
 """The sweep's Pareto plot on 10⁵ rows (issue 40: ≤ 2 s), and what its samples save.
 
-    python benchmarks/bench_sweep_plot.py [--csv RESULTS.csv] [--rounds 3]
+    python benchmarks/bench_sweep_plot.py [--csv RESULTS.csv] [--rounds 3] [--against DIR]
 
 Without ``--csv`` it first runs ``mrclutch sweep examples/random_sweep.toml`` (10⁵ random
 designs, minutes) into a temporary folder. Then, each in a fresh process (imports
@@ -15,6 +15,8 @@ included: what ``sweep --pareto`` adds after its rows), ``pareto_plot`` on those
 Prints the median wall and CPU time (user + system of the child, what a loaded machine
 inflates least) of ``--rounds`` runs, each step's share (read, fronts, drawing, PNG) and
 the ratio of the two, with the machine and its load average: times are this machine's.
+``--against DIR`` (another checkout) times its shipped plot beside this one's, each round
+alternating between the two, so that both see the same load.
 """
 
 from __future__ import annotations
@@ -54,9 +56,10 @@ def _child_cpu() -> float:
     return r.ru_utime + r.ru_stime
 
 
-def plot_once(csv: Path, png: Path, mode: str) -> tuple[float, float, dict]:
-    """(wall s, CPU s, the child's step times) of one plot in a fresh process."""
-    env = {**os.environ, "PYTHONPATH": f"{ROOT}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"}
+def plot_once(csv: Path, png: Path, mode: str, root: Path = ROOT) -> tuple[float, float, dict]:
+    """(wall s, CPU s, the child's step times) of one plot in a fresh process, with the
+    checkout ``root`` first on the path."""
+    env = {**os.environ, "PYTHONPATH": f"{root}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"}
     cpu0, t0 = _child_cpu(), time.perf_counter()
     out = subprocess.run([sys.executable, "-c", CHILD, str(csv), str(png), mode], env=env,
                          capture_output=True, text=True, check=True)  # fmt: skip
@@ -74,11 +77,31 @@ def sweep_rows(tmp: Path) -> Path:
     return csv
 
 
+def _against(csv: Path, tmp: Path, other: Path, rounds: int) -> None:
+    """The shipped plot here and in ``other``, the rounds alternating (both on one load):
+    median wall and CPU of each and their ratio."""
+    runs: dict[Path, list[tuple[float, float, dict]]] = {ROOT: [], other: []}
+    for _ in range(rounds):
+        for root in runs:
+            runs[root].append(plot_once(csv, tmp / "ab.png", "shipped", root))
+    med = {root: (statistics.median(r[0] for r in rs), statistics.median(r[1] for r in rs))
+           for root, rs in runs.items()}  # fmt: skip
+    for root, (wall, cpu) in med.items():
+        print(f"as shipped, {str(root)[-28:]:>28s}: wall {wall:6.2f} s  CPU {cpu:6.2f} s")
+    (w1, c1), (w0, c0) = med[ROOT], med[other]
+    print(f"this checkout / {other.name}: wall ratio {w1 / w0:.2f}, CPU ratio {c1 / c0:.2f}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--csv", type=Path, help="a sweep's results (default: sweep 10^5 rows)")
     ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--against", type=Path, default=None, metavar="DIR",
+                    help="another checkout (git worktree add /tmp/before REV): its shipped "
+                    "plot timed beside this one's, the rounds alternating")  # fmt: skip
     args = ap.parse_args()
+    if args.against is not None and not (args.against / "mrclutch" / "__main__.py").is_file():
+        raise SystemExit(f"--against {args.against}: not a checkout of mrclutch")
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} CPUs, "
           f"Python {platform.python_version()}; load average before: "
           f"{os.getloadavg()[0]:.2f}")  # fmt: skip
@@ -100,6 +123,8 @@ def main() -> None:
                   f"{'':24s} import {mid['import']:.2f} s; steps (s): {steps}")  # fmt: skip
         (w1, c1), (w2, c2) = result["shipped"], result["all"]
         print(f"everything drawn / as shipped: wall ratio {w2 / w1:.1f}, CPU ratio {c2 / c1:.1f}")
+        if args.against is not None:
+            _against(csv, tmp, args.against.resolve(), args.rounds)
     print(f"load average after: {os.getloadavg()[0]:.2f}")
 
 
