@@ -22,7 +22,8 @@ loaded machine inflates least) and the goal:
   (``--system-site-packages``: the dependencies of this environment; the project with
   ``--no-deps``; an empty numba cache), ``evaluate --preset paper --no-uncertainty`` and a
   solve of 10³ designs (which compiles the kernels), each run twice: the first run's excess
-  over the second (goal ≤ 5 s).
+  over the second (goal ≤ 5 s), and the compile notice's estimate beside the time the
+  compile took.
 
 Times depend on the machine and its load: the script prints the load average beside them.
 ``--against DIR`` (another checkout, e.g. ``git worktree add /tmp/before HEAD~3``) times its
@@ -152,9 +153,20 @@ def install_first_run(tmp: Path) -> list[tuple[str, float, float, str]]:
     ):  # fmt: skip
         first, err, cpu1 = _run(argv, env, tmp)
         second, _, cpu2 = _run(argv, env, tmp)
-        said = next((ln for ln in err.splitlines() if "compiling" in ln), "")
-        out.append((what, first, second, f"CPU {cpu1:.2f} s then {cpu2:.2f} s; {said.strip()}"))
+        said = next((ln for ln in err.splitlines() if "compiling" in ln), "").strip()
+        said += _estimate(err)
+        out.append((what, first, second, f"CPU {cpu1:.2f} s then {cpu2:.2f} s; {said}"))
     return out
+
+
+def _estimate(err: str) -> str:
+    """The compile notice's estimate beside the time the compile took (its stderr)."""
+    said = re.search(r"left of ~(\d+) s", err)
+    took = re.search(r"compiled in ([\d.]+) s", err)
+    if not (said and took):
+        return ""
+    est, real = float(said.group(1)), float(took.group(1))
+    return f"\n    estimate ~{est:.0f} s, the compile took {real:.1f} s (x{est / real:.2f})"
 
 
 def _interactive(rounds: int, tmp: Path, roots: list[Path]) -> None:

@@ -3,10 +3,11 @@
 Newton with its line search) compiled by numba (``@njit(cache=True)``, ``_kernels``) and run
 one design and current at a time; they are the network's only solver. numba is imported, and
 the kernels compiled or loaded from numba's cache, on the first compiled solve of a process
-(``_entry``); a first compile on a machine (≈ 10 s) says so on stderr. A few rows run the
-same functions as plain Python (``uncompiled``: a single design never pays for loading the
-compiler). ``NUMBA_DISABLE_JIT=1`` runs the same functions as Python (the debug path: slow,
-the same answers).
+(``_entry``), each kernel for its one signature; a first compile on a machine says so on
+stderr with an estimate of its time (``load``). A few rows run the same functions as plain
+Python (``uncompiled``: a single design never pays for loading the compiler).
+``NUMBA_DISABLE_JIT=1`` runs the same functions as Python (the debug path: slow, the same
+answers).
 """
 
 from __future__ import annotations
@@ -23,7 +24,6 @@ from typing import Any
 from magnetics.network import kernels
 
 _COMPILE_NOTICE_S = 1.0  # a first compile longer than this says so on stderr
-_COMPILE_ESTIMATE_S = 10  # CPU seconds of a kernel's first compile (benchmarks/bench_waits.py)
 
 #: Rows (design × current) a process solves with the kernels' own Python before it loads
 #: the compiled ones: importing numba and loading a cached kernel cost ≈ 1 s, a row in
@@ -44,9 +44,11 @@ def use_compiled() -> None:
 
 def uncompiled(budget: str, rows: int, limit: int) -> bool:
     """Whether ``rows`` more rows of ``budget``'s kernel run as plain Python: while this
-    process has loaded none of its compiled entry and its rows so far stay within
-    ``limit``. The same functions either way (one implementation)."""
-    if budget in _loaded or _used.get(budget, 0) + rows > limit:
+    process has loaded no compiled kernel and its rows of ``budget`` so far stay within
+    ``limit``. Once one is loaded (numba imported, its context set up) another loads in
+    ≈ 0.04 s: the torque reading of a 10³-design solve, 1.6·10⁴ cells, took ≈ 0.65 s more
+    CPU in Python. The same functions either way (one implementation)."""
+    if _loaded or _used.get(budget, 0) + rows > limit:
         return False
     _used[budget] = _used.get(budget, 0) + rows
     return True
@@ -151,7 +153,7 @@ def load(kernel: Any, signature: str, what: str, before: tuple[tuple[Any, str], 
     clock = _listener()(kernel, what, before)
     with install_listener("numba:compile", clock):
         _one(kernel, signature)
-    clock.done()
+    clock.finish()
     return kernel
 
 
@@ -173,43 +175,69 @@ def _listener() -> type:
 
 
 class _Clock:
-    """A listener of numba's compile events while ``load`` runs: on the kernel's compile (a
-    cache miss) it compiles ``before`` first and times every compile; past
-    ``_COMPILE_NOTICE_S`` the notice, and the time after (``done``)."""
+    """A listener of numba's compile events while ``load`` runs. On the kernel's own compile
+    (a cache miss) it compiles ``before`` first; past ``_COMPILE_NOTICE_S`` it says so on
+    stderr with an estimate of the time left: the time so far scaled by the bytecode still
+    to compile over the bytecode compiled (each kernel's share of the compile taken as its
+    share of the kernels' bytecode; those loaded from the cache leave the count), and the
+    time it took after (``finish``). benchmarks/bench_waits.py prints the estimate beside
+    the time the compile took."""
 
     def __init__(self, kernel: Any, what: str, before: tuple[tuple[Any, str], ...]) -> None:
         self.kernel, self.what, self.before = kernel, what, before
+        self.weight = {id(d): _weight(d) for d, _ in (*before, (kernel, ""))}
+        self.total = float(sum(self.weight.values()))  # bytecode to compile
+        self.done = 0.0  # bytecode compiled
+        self.compiled: set[int] = set()
         self.t0: float | None = None
-        self.times: dict[str, float] = {}
+        self.said = False
+        self.lock = threading.Lock()
         self.timer = threading.Timer(_COMPILE_NOTICE_S, self.notice)
         self.timer.daemon = True
-        self._open: list[tuple[str, float]] = []
 
     def on_start(self, ev: Any) -> None:
         disp = ev.data["dispatcher"]
-        self._open.append((disp.py_func.__name__, time.process_time()))
-        if disp is self.kernel and self.t0 is None:
-            self.t0 = time.perf_counter()
-            self.timer.start()
-            for d, sig in self.before:
-                _one(d, sig)
+        self.compiled.add(id(disp))
+        if disp is not self.kernel or self.t0 is not None:
+            return
+        self.t0 = time.perf_counter()
+        self.timer.start()
+        for d, sig in self.before:
+            _one(d, sig)
+            if id(d) not in self.compiled:  # loaded from the cache (or held): no compile
+                self.total -= self.weight[id(d)]
 
     def on_end(self, ev: Any) -> None:
-        name, t = self._open.pop()
-        self.times[name] = self.times.get(name, 0.0) + time.process_time() - t
+        key = id(ev.data["dispatcher"])
+        if key in self.weight and self.t0 is not None:
+            self.done += self.weight[key]
+            if time.perf_counter() - self.t0 > _COMPILE_NOTICE_S and self.done < self.total:
+                self.notice()
 
     def notice(self) -> None:
-        print(f"mrclutch: compiling {self.what} (numba, once on this machine; ~"
-              f"{_COMPILE_ESTIMATE_S} s of CPU) …", file=sys.stderr, flush=True)  # fmt: skip
+        """The notice, once, as soon as a kernel is compiled (the estimate's scale)."""
+        with self.lock:
+            if self.said or self.t0 is None or self.done <= 0:
+                return
+            self.said = True
+            took = time.perf_counter() - self.t0
+            left = took * max(self.total - self.done, 0.0) / self.done
+            print(f"mrclutch: compiling {self.what} (numba, once on this machine): ~{left:.0f} s "
+                  f"left of ~{took + left:.0f} s …", file=sys.stderr, flush=True)  # fmt: skip
 
-    def done(self) -> None:
+    def finish(self) -> None:
         self.timer.cancel()
         if self.t0 is None:
             return
         took = time.perf_counter() - self.t0
         if took > _COMPILE_NOTICE_S:
-            print(f"mrclutch: compiled in {took:.0f} s (cached in {cache_dir()}: later runs load "
-                  "it)", file=sys.stderr)  # fmt: skip
+            print(f"mrclutch: compiled in {took:.1f} s (cached in {cache_dir()}: later runs "
+                  "load it)", file=sys.stderr)  # fmt: skip
+
+
+def _weight(kernel: Any) -> int:
+    """A kernel's share of a compile: the length of its function's bytecode."""
+    return len(kernel.py_func.__code__.co_code)
 
 
 def _entry(name: str, rows: int) -> Any:

@@ -264,7 +264,7 @@ def _read_rows(phi, bz, r, length, w_end, scale, band_end, gt, gw, tab, inv, nse
 
 
 #: Cells (design × current × film) a process reads with ``_read_rows``'s own Python before
-#: it loads the compiled reader (``compiled.uncompiled``; a cell ≈ 20 µs in Python).
+#: it loads the compiled reader (``compiled.uncompiled``; a cell ≈ 40 µs in Python).
 _PY_CELLS = 20_000
 
 

@@ -6,14 +6,17 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import subprocess
 import sys
+import types
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from geometry.params import preset
+from magnetics.network import compiled
 
 ROOT = Path(__file__).resolve().parents[2]
 BENCH = ROOT / "benchmarks"
@@ -111,7 +114,20 @@ kernels = [k["_solve_rows"], nt._reader()]
 misses = sum(len(d.stats.cache_misses) for d in kernels)
 hits = sum(len(d.stats.cache_hits) for d in kernels)
 package = Path(compiled.__file__).parent
-print(json.dumps({"misses": misses, "hits": hits, "t": list(t),
+overloads = {name: len(k[name].overloads) for name in compiled._SIGNATURES}
+overloads["_read_rows"] = len(kernels[1].overloads)
+try:  # another layout (a read-only view): an error, not a second overload
+    ni = np.zeros((1, 1))
+    ni.flags.writeable = False
+    k["_solve_rows"](np.zeros((1, 1)), np.zeros(1, np.int64), 1, 1, np.zeros((4, 1, 3)),
+                     np.zeros(4), np.zeros(4, np.int64), ni, np.zeros((1, 1), np.int64),
+                     np.zeros((0, 1, 1)), False, np.zeros((0, 1)), 1e-10, 60,
+                     np.zeros((1, 1, 8)), np.ones(1, np.bool_))
+    other = "ran"
+except TypeError:
+    other = "refused"
+print(json.dumps({"misses": misses, "hits": hits, "t": list(t), "overloads": overloads,
+                  "other": other, "after": len(k["_solve_rows"].overloads),
                   "cache": str(compiled.cache_dir()),
                   "paths": [d.stats.cache_path for d in kernels],
                   "in_package": [Path(d.stats.cache_path).is_relative_to(package)
@@ -130,6 +146,19 @@ def test_a_later_process_compiles_nothing(tmp_path):
                            text=True, timeout=600, check=True) for _ in range(2)]  # fmt: skip
     first, second = (json.loads(r.stdout) for r in runs)
     assert first["misses"] >= 2 and "compiled in" in runs[0].stderr, runs[0].stderr
+    # one overload of each kernel the solve and the reading call (issue 40: the literal
+    # material rows compiled 32 of 13 kernels), none of the flux linkage's own, and a call
+    # of another type refused, not compiled
+    want = {name: 1 for name in compiled._SIGNATURES if name != "_tangent_rows"}
+    assert first["overloads"] == {**want, "_tangent_rows": 0, "_read_rows": 1}
+    assert first["other"] == "refused" and first["after"] == 1
+    # the notice's estimate, then the time it took
+    notice = re.search(r"mrclutch: compiling the reluctance network's solver \(numba, once "
+                       r"on this machine\): ~\d+ s left of ~\d+ s …\n", runs[0].stderr)  # fmt: skip
+    assert notice and re.search(r"compiled in \d+\.\d s", runs[0].stderr), runs[0].stderr
+    # a later process loads the solver alone (its cached code holds what it calls)
+    none = dict.fromkeys(compiled._SIGNATURES, 0)
+    assert second["overloads"] == {**none, "_solve_rows": 1, "_read_rows": 1}
     assert second["misses"] == 0 and second["hits"] == 2, second
     assert runs[1].stderr == ""
     assert second["t"] == first["t"] and all(t > 0 for t in first["t"])
@@ -137,6 +166,49 @@ def test_a_later_process_compiles_nothing(tmp_path):
     assert list((tmp_path / "mrclutch" / "numba").rglob("*.nbi"))
     assert all(Path(p).is_relative_to(tmp_path) for p in first["paths"]), first["paths"]
     assert first["in_package"] == [False, False]
+
+
+def test_the_compile_notice_estimates_the_time_left(monkeypatch, capsys):
+    """``compiled._Clock``: the entry's compile compiles what it calls first; past
+    ``_COMPILE_NOTICE_S`` the notice says the time so far times the bytecode left over the
+    bytecode compiled (a kernel loaded from the cache leaves the count), once; the time it
+    took after. Kernels of bytecode 100 (0.5 s), 300 (loaded), 200 (done at 2 s), the entry
+    400 (done at 4 s): 2 s · (700 − 300)/300 = 2.7 s left of 4.7 s."""
+    now = [0.0]
+    monkeypatch.setattr(compiled, "time", types.SimpleNamespace(perf_counter=lambda: now[0]))
+    monkeypatch.setattr(compiled, "_weight", lambda d: d.w)
+    a, b, c, entry = (types.SimpleNamespace(w=w) for w in (100, 300, 200, 400))
+    ends = {id(a): 0.5, id(c): 2.0}
+    clock = compiled._Clock(entry, "the test's kernel", ((a, "sa"), (b, "sb"), (c, "sc")))
+
+    def one(d, sig):  # a compile event for a and c; b loads from the cache
+        if id(d) in ends:
+            clock.on_start(types.SimpleNamespace(data={"dispatcher": d}))
+            now[0] = ends[id(d)]
+            clock.on_end(types.SimpleNamespace(data={"dispatcher": d}))
+
+    monkeypatch.setattr(compiled, "_one", one)
+    clock.on_start(types.SimpleNamespace(data={"dispatcher": entry}))
+    now[0] = 4.0
+    clock.on_end(types.SimpleNamespace(data={"dispatcher": entry}))
+    clock.finish()
+    err = capsys.readouterr().err.splitlines()
+    assert err[0] == ("mrclutch: compiling the test's kernel (numba, once on this machine): "
+                      "~3 s left of ~5 s …")  # fmt: skip
+    assert err[1].startswith("mrclutch: compiled in 4.0 s (cached in ") and len(err) == 2
+    assert clock.total == 700 and clock.done == 700
+
+
+def test_a_loaded_kernel_takes_every_later_batch_compiled(monkeypatch):
+    """``compiled.uncompiled``: plain Python within a budget while no compiled kernel is
+    loaded; once one is (numba imported), every kernel's batches run compiled."""
+    monkeypatch.setattr(compiled, "_loaded", set())
+    monkeypatch.setattr(compiled, "_used", {})
+    assert compiled.uncompiled("reader", 10, 20) and compiled.uncompiled("reader", 10, 20)
+    assert not compiled.uncompiled("reader", 1, 20)  # past its budget
+    assert compiled.uncompiled("network", 5, 20)
+    compiled._loaded.add("network")
+    assert not compiled.uncompiled("reader", 0, 20)
 
 
 def test_cache_folder_is_the_users_and_numba_cache_dir_wins(monkeypatch, tmp_path):
