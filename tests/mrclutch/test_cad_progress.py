@@ -95,3 +95,16 @@ def test_view_window_loads_under_its_bar_then_opens(capsys, monkeypatch, loads):
     cap = capsys.readouterr()
     assert loads == ["build123d"] and order == ["window"]
     assert re.search(BAR_DONE.format("view", n=1), cap.err) and cap.out == ""
+
+
+def test_drawing_bar_on_stderr_stdout_the_file(tmp_path, capsys, loads):
+    """``export --format drawing`` (~2 s, most of it matplotlib's import): a bar of its two
+    steps, each named; stdout the SVG's path alone, the SVG whole; no CAD kernel loaded."""
+    assert main(["export", "--preset", "paper", "--format", "drawing", "--out",
+                 str(tmp_path)]) == 0  # fmt: skip
+    cap = capsys.readouterr()
+    svg = tmp_path / "paper.svg"
+    assert cap.out == f"{svg}\n" and svg.read_text().rstrip().endswith("</svg>")
+    assert cap.err.index("export: loading matplotlib\n") < cap.err.index(
+        f"export: drawing {svg}\n")  # fmt: skip
+    assert re.search(BAR_DONE.format("export", n=2), cap.err) and loads == []

@@ -4,7 +4,8 @@ library as CSV) and ``mrclutch device DESIGN --out FILE.json`` (what a haptic re
 framework clamps its commands to). docs/handoff.md.
 
 Every file goes through the output layer (geometry.atomic). ezdxf and matplotlib load
-only when a DXF or a drawing is written.
+only when a DXF or a drawing is written; the drawing (~2 s, most of it matplotlib's import)
+under a bar of its two steps on stderr.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from mrclutch.cli.commands._common import add_design_args, load_design_args
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.jsonio import to_jsonable
 from mrclutch.cli.longjobs import announce
+from mrclutch.cli.progress import bar
 from mrclutch.handoff import (
     MAP_COLUMNS,
     device_description,
@@ -81,14 +83,26 @@ def export_handoff(args: argparse.Namespace) -> int:
         raise CLIError("--current: applies to --format femm or onelab only")
     elif args.format == "dxf":
         written.append(write_text(out / f"{name}.dxf", dxf_text(design)))
-    else:
+    else:  # ~2 s, most of it matplotlib's import: a bar of the two (issue 40)
         path = out / f"{name}.svg"
-        with atomic_path(path) as tmp:
+        with bar(2, "export", "step") as done, atomic_path(path) as tmp:
+            done(0, "export: loading matplotlib")
+            _load_matplotlib()
+            done(1, f"export: drawing {path}")
             draw_section(design, str(tmp))
+            done(2)
         written.append(path)
     for w in written:
         print(w)
     return 0
+
+
+def _load_matplotlib() -> None:
+    """Import matplotlib's drawing machinery (pyplot: ≈ 1 s of CPU) as a bar's first step."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot
 
 
 def cmd_materials(args: argparse.Namespace) -> int:
