@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import copy
 import os
 import re
 import subprocess
 import sys
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import AbstractContextManager, contextmanager
 from pathlib import Path
 
 import pytest
@@ -146,3 +148,46 @@ def fresh_python() -> Callable[[str], subprocess.CompletedProcess]:
         return p
 
     return run
+
+
+@contextmanager
+def _judged_once() -> Iterator[None]:
+    """Inside, ``pipeline.evaluate`` and ``verdict.judge_evaluation`` (what evaluate, compare
+    and haptic call; ``verdict.judge`` is the two) compute once per argument tuple and hand
+    back that result (the judged JSON as a deep copy: evaluate adds its ``nulls`` to it).
+    Both are pure functions of a frozen design, so each command prints what it printed when
+    it computed its own (the FEM at reference fidelity, 1-2 s a call; the box over the
+    ranges, ~0.5 s); a command that calls them with other arguments (another fidelity,
+    nominal only) still computes its own. A report's evaluation (the B-rep mass from its
+    CAD process) is left outside by the tests that use it."""
+    from mrclutch import pipeline, verdict
+
+    real_evaluate, real_judge = pipeline.evaluate, verdict.judge_evaluation
+    evs: dict = {}
+    judged: dict = {}
+
+    def evaluate(design, fidelity="fast", accuracy=None, K=None):
+        key = (design, fidelity, accuracy, K)
+        if key not in evs:
+            evs[key] = real_evaluate(design, fidelity, accuracy, K)
+        return evs[key]
+
+    def judge_evaluation(ev, robust=None):
+        key = (id(ev), robust)  # ev kept alive below: its id is not reused
+        if key not in judged:
+            judged[key] = (ev, real_judge(ev, robust))
+        return copy.deepcopy(judged[key][1])
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(pipeline, "evaluate", evaluate)
+        mp.setattr(verdict, "evaluate", evaluate)
+        mp.setattr(verdict, "judge_evaluation", judge_evaluation)
+        yield
+
+
+@pytest.fixture
+def judged_once() -> Callable[[], AbstractContextManager[None]]:
+    """A context (``with judged_once():``) in which several commands on one design share
+    one evaluation and one judgement (``_judged_once``): tests that run evaluate, compare
+    and haptic (text and ``--json``) on the same design pay for it once."""
+    return _judged_once

@@ -148,16 +148,19 @@ def _json(capsys, argv: list[str]) -> Any:
     return json.loads(captured.out)
 
 
-def test_every_commands_json_on_presets_examples_and_extremes(tmp_path, capsys):
+def test_every_commands_json_on_presets_examples_and_extremes(tmp_path, capsys, judged_once):
+    """Each design's commands share its evaluation (``judged_once``: evaluate, compare and
+    haptic evaluated it each, the last two judged it each)."""
     designs = _designs(tmp_path)
     assert {"paper", "paper_bench", "thin_drums", "many", "big", "hot"} <= set(designs)
     found: list[tuple[str, str, str, Any]] = []
     for name, args in designs.items():
         # evaluate on every design; the other commands on the paper and the extremes
         wide = name == "paper" or name in EXTREMES
-        for cmd, extra in COMMANDS if wide else COMMANDS[:1]:
-            data = _json(capsys, [cmd, *args, *extra])
-            found += [(name, cmd, k, v) for k, v in unexplained(data)]
+        with judged_once():
+            for cmd, extra in COMMANDS if wide else COMMANDS[:1]:
+                data = _json(capsys, [cmd, *args, *extra])
+                found += [(name, cmd, k, v) for k, v in unexplained(data)]
         if not wide:
             continue
         out = tmp_path / f"device_{name}.json"

@@ -2,10 +2,8 @@
 command that judges it — evaluate, report, compare, haptic, optimize — gives the same K,
 K_max and verdict at one fidelity, leading with one verdict line."""
 
-import copy
 import json
 import re
-from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
 
@@ -150,57 +148,22 @@ def test_the_targets_are_every_preset_and_example():
 
 
 @pytest.mark.parametrize("target", TARGETS)
-def test_commands_lead_with_one_verdict_and_agree(target, capsys):
+def test_commands_lead_with_one_verdict_and_agree(target, capsys, judged_once):
     """evaluate, compare and haptic on one design at one fidelity: the first line is the
     verdict, said once, the same line in each; their JSON gives the same K, K_max, status
     and gearing."""
     args = [target] if target.startswith("--") else [str(EXAMPLES / target)]
-    texts, triples, gearing = _every_command(capsys, args)
+    texts, triples, gearing = _every_command(capsys, judged_once, args)
     assert len(set(texts)) == 1 and len(set(triples)) == 1 and len(set(gearing)) == 1
 
 
-@contextmanager
-def _judged_once():
-    """Inside, ``pipeline.evaluate`` and ``verdict.judge_evaluation`` (what evaluate, compare
-    and haptic call: ``verdict.judge`` is the two) compute once per argument tuple and hand
-    back that result (the judged JSON as a deep copy: evaluate adds its ``nulls``): pure
-    functions of a frozen design, so each command's text and ``--json`` print what they
-    printed when each computed its own (the FEM at reference fidelity, 1-2 s a call); a
-    command that called them with other arguments (another fidelity, nominal only) still
-    computes its own. The report runs outside (its evaluation takes the B-rep mass from its
-    CAD process)."""
-    from mrclutch import pipeline, verdict
-
-    real_evaluate, real_judge = pipeline.evaluate, verdict.judge_evaluation
-    evs: dict = {}
-    judged: dict = {}
-
-    def evaluate(design, fidelity="fast", accuracy=None, K=None):
-        key = (design, fidelity, accuracy, K)
-        if key not in evs:
-            evs[key] = real_evaluate(design, fidelity, accuracy, K)
-        return evs[key]
-
-    def judge_evaluation(ev, robust=None):
-        key = (id(ev), robust)  # ev: one of evs' (kept alive there) or the caller's own
-        if key not in judged:
-            judged[key] = (ev, real_judge(ev, robust))
-        return copy.deepcopy(judged[key][1])
-
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(pipeline, "evaluate", evaluate)
-        mp.setattr(verdict, "evaluate", evaluate)
-        mp.setattr(verdict, "judge_evaluation", judge_evaluation)
-        yield
-
-
-def _every_command(capsys, args, report_dir=None):
+def _every_command(capsys, judged_once, args, report_dir=None):
     """The verdict line, (status, K, K_max) and the motor's gearing of one design from
     evaluate, compare, haptic (no motor) and, with ``report_dir``, report: each text leads
     with its one verdict line and prints the gearing its JSON gives. The three commands
-    judge the design once (``_judged_once``), the report on its own."""
+    judge the design once (``judged_once``, tests/conftest.py), the report on its own."""
     texts, triples, gearing = [], [], []
-    with _judged_once():
+    with judged_once():
         for cmd in ("evaluate", "compare", "haptic"):
             code, cap = _run(capsys, [cmd, *args])
             assert code == 0, cap.err
@@ -227,14 +190,15 @@ def _every_command(capsys, args, report_dir=None):
 
 
 @pytest.mark.slow
-def test_paper_preset_one_K_max_and_gearing_per_fidelity_in_every_command(capsys, tmp_path):
+def test_paper_preset_one_K_max_and_gearing_per_fidelity_in_every_command(capsys, tmp_path,
+                                                                          judged_once):  # fmt: skip
     """Issue 39: K_max was 367.3 N/m in evaluate, 361.7 in the report and 299.2 in compare,
     the motor geared ×1.23 in one and ×1.21 in another. At reference fidelity (the report's)
     evaluate, compare, haptic and report now give one verdict line, one (status, K, K_max)
     and one gearing; the fast path its own K_max (the network's torque), again one in all."""
-    ref = _every_command(capsys, ["--preset", "paper", "--fidelity", "reference"],
+    ref = _every_command(capsys, judged_once, ["--preset", "paper", "--fidelity", "reference"],
                          tmp_path / "rep")  # fmt: skip
-    fast = _every_command(capsys, ["--preset", "paper", "--fidelity", "fast"])
+    fast = _every_command(capsys, judged_once, ["--preset", "paper", "--fidelity", "fast"])
     for texts, triples, gearing in (ref, fast):
         assert len(texts) == len(triples) and len(set(texts)) == 1
         assert len(set(triples)) == 1 and len(set(gearing)) == 1
@@ -274,8 +238,9 @@ def members(tmp_path_factory):
 
 
 @pytest.mark.slow
-def test_members_get_the_optimisers_verdict_K_and_K_max_from_every_command(members, capsys,
-                                                                          tmp_path):  # fmt: skip
+def test_members_get_the_optimisers_verdict_K_and_K_max_from_every_command(
+    members, capsys, tmp_path, judged_once
+):
     folder, opt = members
     files = sorted(folder.glob("member_*.toml"))
     assert len(files) >= 2 and len(files) == len(opt["designs_written"])  # two members or more
@@ -286,7 +251,8 @@ def test_members_get_the_optimisers_verdict_K_and_K_max_from_every_command(membe
         row = by_member[int(f.stem.split("_")[1])]["reference"]
         want = _triple(row)
         assert want[0] == "pass"  # kept members hold over the ranges
-        texts, triples, gearing = _every_command(capsys, [str(f), "--fidelity", "reference"],
+        texts, triples, gearing = _every_command(capsys, judged_once,
+                                                 [str(f), "--fidelity", "reference"],
                                                  tmp_path / f.stem)  # fmt: skip
         assert set(triples) == {want} and len(triples) == 4, f.name  # the four commands
         assert len(set(texts)) == 1 and len(set(gearing)) == 1, f.name
