@@ -1,24 +1,28 @@
 """What a newcomer reads is what the tool does (issue 34): every command is in the README's
 tour, and every file a command writes is named in its ``--help`` and in the README.
 
-Each command runs once here in a scratch folder (small inputs); the files it leaves are the
-files it writes. A file in an output folder is named by its own name (per-part STLs as
-``<part>.stl``); a file written beside a results file the user names (``r.csv`` →
-``r.csv.meta.json``) by the same suffix on the help's metavar (``RESULTS.csv.meta.json``).
+Each command runs once here in a scratch folder (small inputs; in this process, as ``main``
+from that folder, except the CAD's and the 3D view's, which load build123d and VTK: a
+process of their own); the files it leaves are the files it writes. A file in an output
+folder is named by its own name (per-part STLs as ``<part>.stl``); a file written beside a
+results file the user names (``r.csv`` → ``r.csv.meta.json``) by the same suffix on the
+help's metavar (``RESULTS.csv.meta.json``).
 The report's own files are checked against the module's report in test_report.py's fixture.
 """
 
 from __future__ import annotations
 
+import io
 import os
 import re
 import subprocess
 import sys
+from contextlib import redirect_stdout
 from pathlib import Path
 
 import pytest
 
-from mrclutch.cli.main import COMMANDS
+from mrclutch.cli.main import COMMANDS, main
 
 ROOT = Path(__file__).resolve().parents[2]
 README = (ROOT / "README.md").read_text()
@@ -54,24 +58,25 @@ CASES: dict[str, tuple[list[str], dict[str, str], bool]] = {
 }  # fmt: skip
 
 
-#: ``python -m mrclutch`` with optimize's Pareto search made small (a population of 16 for 4
-#: generations, 2 members): the files it writes do not depend on how long it searched, and
-#: the default search (100 × 100) took a minute here.
-SMALL_SEARCH = """\
-import sys
-import mrclutch.cli.commands.optimize_pareto as op
-from mrclutch.cli.main import main
+#: optimize's Pareto search made small (a population of 16 for 4 generations, 2 members):
+#: the files it writes do not depend on how long it searched, and the default search
+#: (100 × 100) took a minute here.
+SMALL_SEARCH = {"pop_size": 16, "generations": 4, "members": 2}
 
-real = op.pareto
-op.pareto = lambda *a, **k: real(*a, **{**k, "pop_size": 16, "generations": 4, "members": 2})
-sys.exit(main())
-"""
+#: The commands run in a process of their own (``python -m mrclutch``): the CAD kernel
+#: (build123d) and the 3D view (VTK) are not loaded into the test process.
+OWN_PROCESS = ("export", "view")
 
 
 def _help(command: str) -> str:
-    out = subprocess.run([sys.executable, "-m", "mrclutch", command, "--help"],
-                         capture_output=True, text=True, check=True).stdout  # fmt: skip
-    return " ".join(out.split())  # argparse wraps lines
+    """``mrclutch COMMAND --help`` (in this process, 80 columns as a terminal's default)."""
+    out = io.StringIO()
+    with pytest.MonkeyPatch.context() as mp, redirect_stdout(out):
+        mp.setenv("COLUMNS", "80")
+        with pytest.raises(SystemExit) as done:
+            main([command, "--help"])
+    assert done.value.code == 0
+    return " ".join(out.getvalue().split())  # argparse wraps lines
 
 
 def documented_names(written: list[Path], user: dict[str, str]) -> set[str]:
@@ -111,19 +116,34 @@ def _check_named(command: str, written: list[Path], user: dict[str, str]) -> Non
         assert name in README, f"README does not name {name} (written by {command})"
 
 
+def _run(command: str, args: list[str], folder: Path, monkeypatch, capsys) -> None:
+    """``mrclutch COMMAND ARGS`` from ``folder``, without progress bars: exit 0 (or 3, a
+    verdict that fails)."""
+    if command in OWN_PROCESS:
+        env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "MRCLUTCH_NO_PROGRESS": "1"}
+        proc = subprocess.run([sys.executable, "-m", "mrclutch", command, *args], cwd=folder,
+                              env=env, capture_output=True, text=True, timeout=300)  # fmt: skip
+        assert proc.returncode in (0, 3), proc.stderr[-1000:]
+        return
+    import mrclutch.cli.commands.optimize_pareto as op
+
+    real = op.pareto
+    monkeypatch.setattr(op, "pareto", lambda *a, **k: real(*a, **{**k, **SMALL_SEARCH}))
+    monkeypatch.setenv("MRCLUTCH_NO_PROGRESS", "1")
+    monkeypatch.chdir(folder)
+    code = main([command, *args])
+    assert code in (0, 3), capsys.readouterr().err[-1000:]
+
+
 @pytest.mark.parametrize("command", _params())
-def test_every_written_file_is_named_in_help_and_readme(command, tmp_path):
+def test_every_written_file_is_named_in_help_and_readme(command, tmp_path, monkeypatch, capsys):
     args, user, _ = CASES[command]
     if not args:  # no output option at all: it writes nothing
         assert not re.search(r"--(out|plot|screenshot)\b", _help(command))
         return
     (tmp_path / "spec.toml").write_text(TINY_SWEEP)
     before = set(tmp_path.rglob("*"))
-    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "MRCLUTCH_NO_PROGRESS": "1"}
-    run = ["-c", SMALL_SEARCH] if command == "optimize" else ["-m", "mrclutch"]
-    proc = subprocess.run([sys.executable, *run, command, *args], cwd=tmp_path, env=env,
-                          capture_output=True, text=True, timeout=300)  # fmt: skip
-    assert proc.returncode in (0, 3), proc.stderr[-1000:]
+    _run(command, args, tmp_path, monkeypatch, capsys)
     written = sorted(p.relative_to(tmp_path) for p in set(tmp_path.rglob("*")) - before
                      if p.is_file())  # fmt: skip
     if user or command in ("export", "fidelity"):
