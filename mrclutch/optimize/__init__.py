@@ -23,7 +23,9 @@ from mrclutch.optimize.limits import (
     limit_columns,
 )
 from mrclutch.optimize.pareto import (
+    DEFAULT_GENERATIONS,
     DEFAULT_MEMBERS,
+    DEFAULT_POP_SIZE,
     MAX_ROBUST,
     PARETO_OBJECTIVES,
     RENDERING,
@@ -45,7 +47,9 @@ __all__ = [
     "ACTIVE",
     "CONTINUOUS",
     "DEFAULT_BOUNDS",
+    "DEFAULT_GENERATIONS",
     "DEFAULT_MEMBERS",
+    "DEFAULT_POP_SIZE",
     "EDGE",
     "MAX_CANDIDATES",
     "MAX_ROBUST",

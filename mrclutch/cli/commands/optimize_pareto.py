@@ -26,6 +26,7 @@ from mrclutch.members import (
     verify_members,
 )
 from mrclutch.optimize import (
+    DEFAULT_GENERATIONS,
     RENDERING,
     Constraints,
     ParetoSet,
@@ -73,7 +74,7 @@ def run_pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, .
     old_members = _old_members(args)
     wc = None if args.nominal else robust_verdict(base)
     t0 = time.perf_counter()
-    gens = 100  # pareto's default generations
+    gens = DEFAULT_GENERATIONS  # pareto's default
     with progress_bar(gens, "optimize: generations", "gen", not args.no_progress) as done:
         ps = pareto(base, rendering=args.rendering, constraints=cons,
                     bounds=parse_bounds(args.vary) if args.vary else None, drum_counts=drums,
