@@ -44,11 +44,12 @@ def use_compiled() -> None:
 
 def uncompiled(budget: str, rows: int, limit: int) -> bool:
     """Whether ``rows`` more rows of ``budget``'s kernel run as plain Python: while this
-    process has loaded no compiled kernel and its rows of ``budget`` so far stay within
-    ``limit``. Once one is loaded (numba imported, its context set up) another loads in
-    ≈ 0.04 s: the torque reading of a 10³-design solve, 1.6·10⁴ cells, took ≈ 0.65 s more
-    CPU in Python. The same functions either way (one implementation)."""
-    if _loaded or _used.get(budget, 0) + rows > limit:
+    process has loaded none of its compiled entry and its rows so far stay within
+    ``limit``. The same functions either way (one implementation). (Not while any compiled
+    kernel is loaded: the reading of a 10³-design solve, 1.6·10⁴ cells, then loads its
+    compiled reader in ≈ 0.04 s instead of ≈ 0.8 s in Python, but a machine's first such
+    run then compiles the reader too, ≈ 2 s of CPU, issue 40's first-run wait.)"""
+    if budget in _loaded or _used.get(budget, 0) + rows > limit:
         return False
     _used[budget] = _used.get(budget, 0) + rows
     return True
@@ -103,10 +104,14 @@ def _kernels() -> dict[str, Any]:
 #: them), in the order they compile: each after the kernels it calls. A kernel compiled for
 #: its signature alone, then closed to more (``load``), so no call compiles a second overload
 #: (a literal material row or a read-only array would: 32 overloads of 13 kernels before).
+#: The Thomas solve first: a kernel of a typical size, whose time scales the compile notice's
+#: estimate (``_Clock``) better than the few-line helpers that open it otherwise.
 _F1, _I1, _F2, _F3 = "float64[::1]", "int64[::1]", "float64[:, ::1]", "float64[:, :, ::1]"
 _MAT = f"{_F3}, {_F1}, {_I1}"  # a material table, its 1/step and its segments (``_tables``)
 _SIGNATURES = {
+    "_solve_ladder": f"void(int64, {_F1}, int64, int64, {_F2}, {_F2})",
     "_jac_layout": "UniTuple(int64, 8)(int64)",
+    "_solve": f"void(int64, {_F1}, {_F1}, {_F1}, {_F2})",
     "_segment": f"int64({_F1}, {_I1}, int64, float64)",
     "_h_dh": f"UniTuple(float64, 2)({_MAT}, int64, float64)",
     "_h_mean_dh": f"UniTuple(float64, 2)({_MAT}, int64, float64)",
@@ -115,8 +120,6 @@ _SIGNATURES = {
     "_band": f"UniTuple(float64, 3)({_MAT}, {', '.join(['float64'] * 5)}, boolean)",
     "_residual": f"void({_F1}, {_I1}, int64, int64, {_MAT}, {_F1}, float64, {_F1}, boolean, "
     f"{_F1}, {_F1}, {_F2})",
-    "_solve_ladder": f"void(int64, {_F1}, int64, int64, {_F2}, {_F2})",
-    "_solve": f"void(int64, {_F1}, {_F1}, {_F1}, {_F2})",
     "_workspace": f"{_F2}(int64)",
     "_newton": f"Tuple((boolean, int64))({_F1}, {_I1}, int64, int64, {_MAT}, float64, {_F1}, "
     f"boolean, float64, float64, int64, {_F1}, {_F2})",

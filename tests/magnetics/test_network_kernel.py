@@ -199,16 +199,19 @@ def test_the_compile_notice_estimates_the_time_left(monkeypatch, capsys):
     assert clock.total == 700 and clock.done == 700
 
 
-def test_a_loaded_kernel_takes_every_later_batch_compiled(monkeypatch):
-    """``compiled.uncompiled``: plain Python within a budget while no compiled kernel is
-    loaded; once one is (numba imported), every kernel's batches run compiled."""
+def test_each_kernel_runs_uncompiled_within_its_own_budget(monkeypatch):
+    """``compiled.uncompiled``: a kernel's batches run as plain Python while their rows stay
+    within its budget and its compiled entry is not loaded; the solver's being loaded
+    leaves the reader's budget as it was."""
     monkeypatch.setattr(compiled, "_loaded", set())
     monkeypatch.setattr(compiled, "_used", {})
     assert compiled.uncompiled("reader", 10, 20) and compiled.uncompiled("reader", 10, 20)
     assert not compiled.uncompiled("reader", 1, 20)  # past its budget
-    assert compiled.uncompiled("network", 5, 20)
     compiled._loaded.add("network")
-    assert not compiled.uncompiled("reader", 0, 20)
+    assert not compiled.uncompiled("network", 0, 20)
+    assert compiled.uncompiled("other", 5, 20)
+    compiled._loaded.add("other")
+    assert not compiled.uncompiled("other", 0, 20)
 
 
 def test_cache_folder_is_the_users_and_numba_cache_dir_wins(monkeypatch, tmp_path):
