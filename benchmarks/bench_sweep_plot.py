@@ -46,7 +46,7 @@ if sys.argv[3] == "all":
 marks = [time.perf_counter()]
 d.pareto_plot(sys.argv[1], sys.argv[2], progress=lambda n: marks.append(time.perf_counter()))
 print(json.dumps({"import": marks[0] - t0, "steps": [b - a for a, b in zip(marks, marks[1:])],
-                  "total": marks[-1] - t0}))
+                  "total": marks[-1] - t0, "file": d.__file__}))
 """
 STEPS = ("read", "fronts", "drawing", "PNG")
 
@@ -61,10 +61,15 @@ def plot_once(csv: Path, png: Path, mode: str, root: Path = ROOT) -> tuple[float
     checkout ``root`` first on the path."""
     env = {**os.environ, "PYTHONPATH": f"{root}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"}
     cpu0, t0 = _child_cpu(), time.perf_counter()
+    # run in ``root``: ``python -c`` puts the working folder first on the path, before
+    # PYTHONPATH (from elsewhere, --against timed this checkout twice)
     out = subprocess.run([sys.executable, "-c", CHILD, str(csv), str(png), mode], env=env,
-                         capture_output=True, text=True, check=True)  # fmt: skip
+                         cwd=root, capture_output=True, text=True, check=True)  # fmt: skip
     wall = time.perf_counter() - t0
-    return wall, _child_cpu() - cpu0, json.loads(out.stdout.strip().splitlines()[-1])
+    got = json.loads(out.stdout.strip().splitlines()[-1])
+    if not Path(got["file"]).resolve().is_relative_to(Path(root).resolve()):
+        raise SystemExit(f"timed {got['file']}, not the checkout {root}")
+    return wall, _child_cpu() - cpu0, got
 
 
 def sweep_rows(tmp: Path) -> Path:
