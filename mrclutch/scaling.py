@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from geometry.numerics import illinois
 from geometry.params import INT_RANGES
 from geometry.validation import ParameterError, check_range
 from mrclutch.design import ClutchDesign
@@ -64,8 +65,6 @@ def scaling_study(
     """Base figures and the three routes to ``factor`` × the base torque, and the notes on
     routes out of reach. ``progress(n, what)``: called as each of the ``STEPS`` ends, with
     the steps done and the one about to start ("" after the last)."""
-    from scipy.optimize import brentq
-
     check_range("factor", factor, 1.0, 10.0, lo_open=True)
     done = _steps(progress)
     c = design.clutch
@@ -92,11 +91,14 @@ def scaling_study(
         ("zone_length", "longer drums", 0.1),
         ("drum_inner_diameter", "larger diameter", 0.1),
     ):
-        v0 = getattr(c, name)
-        if torque(name, hi) >= 0:
-            routes.append(
-                (route, name, brentq(lambda v, nm=name: torque(nm, v), v0, hi, rtol=1e-10))
-            )
+        v0, f_hi = getattr(c, name), torque(name, hi)
+        if f_hi >= 0:  # the root between the base design (below the target) and hi
+            # Illinois regula falsi ([dowell-jarratt1971], geometry.numerics), not scipy's
+            # brentq: its import alone was ~0.5 s of scale's CPU (issue 40)
+            f0 = np.array([base["max_torque_N_m"] - target])
+            v = illinois(lambda _act, x, nm=name: np.array([torque(nm, float(x[0]))]),
+                         np.array([v0]), np.array([hi]), f0, np.array([f_hi]), 1e-10)  # fmt: skip
+            routes.append((route, name, float(v[0])))
             done()
             continue
         # not reachable: report the best this route can do (the steel saturates)
