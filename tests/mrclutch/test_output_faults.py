@@ -141,7 +141,7 @@ def test_step_and_stl_export_on_a_full_disk(tmp_path, disk_full, capsys, suffix)
     disk_full(suffix)
     out = tmp_path / "cad"
     with _no_resource_warning():
-        assert main(["export", "--out", str(out), "--tolerance-mm", "0.2"]) == 2
+        assert main(["export", "--out", str(out), "--tolerance-mm", "0.2", "--no-progress"]) == 2
     _one_line(capsys.readouterr().err, f"{suffix}: cannot write ({ENOSPC})")
     assert list(tmp_path.iterdir()) == []  # the folder it made, and what it wrote, are gone
 

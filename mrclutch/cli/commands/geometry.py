@@ -48,6 +48,7 @@ def register(sub: Any) -> None:
         metavar="A",
         help="femm, onelab: the coil current (default: the design's current limit)",
     )
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.set_defaults(func=cmd_export)
 
     register_inertia(sub)  # between export and view, the order of --help
@@ -61,6 +62,7 @@ def register(sub: Any) -> None:
         default=None,
         help="chord height of the view, mm (default: one screen pixel of the clutch)",
     )
+    p.add_argument("--no-progress", action="store_true", help="no progress bar on stderr")
     p.set_defaults(func=cmd_view)
 
 
@@ -79,7 +81,7 @@ def cmd_export(args: argparse.Namespace) -> int:
     tol = tolerance(args, design.clutch)
     # a bar of its two steps with its estimate (issue 40: ~8 s idle, silent before): the
     # CAD kernel's import (≈ 6 s of CPU), then the solids, the files and the read-back
-    with bar(2, "export", "step") as done:
+    with bar(2, "export", "step", not args.no_progress) as done:
         done(0, "export: loading the CAD kernel (build123d)")
         _load_cad()
         done(1, "export: the solids, clutch.step, the STL files, clutch.step read back")
@@ -99,7 +101,7 @@ def cmd_view(args: argparse.Namespace) -> int:
     tol = None if args.tolerance_mm is None else tolerance(args, clutch)
     # a bar with its estimate (issue 40: ~11 s idle, silent before): the CAD kernel imported,
     # then the solids tessellated and rendered (a window: it opens after the bar)
-    with bar(2 if args.screenshot else 1, "view", "step") as done:
+    with bar(2 if args.screenshot else 1, "view", "step", not args.no_progress) as done:
         done(0, "view: loading the CAD kernel (build123d)")
         _load_cad()
         if args.screenshot:

@@ -85,7 +85,7 @@ def export_handoff(args: argparse.Namespace) -> int:
         written.append(write_text(out / f"{name}.dxf", dxf_text(design)))
     else:  # ~2 s, most of it matplotlib's import: a bar of the two (issue 40)
         path = out / f"{name}.svg"
-        with bar(2, "export", "step") as done, atomic_path(path) as tmp:
+        with bar(2, "export", "step", not args.no_progress) as done, atomic_path(path) as tmp:
             done(0, "export: loading matplotlib")
             _load_matplotlib()
             done(1, f"export: drawing {path}")
