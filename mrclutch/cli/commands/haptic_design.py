@@ -10,8 +10,8 @@ from typing import Any
 
 from geometry.validation import check_choice
 from mrclutch.cli.commands._common import load_design_args, print_json
-from mrclutch.cli.commands.haptic import print_metrics
 from mrclutch.cli.errors import CLIError
+from mrclutch.cli.metrics_format import print_metrics
 from mrclutch.cli.plots.haptic import compare_figure
 from mrclutch.pipeline import evaluate, null_notes
 from mrclutch.verdict import judge_evaluation, resonance_notes, verdict_lines
