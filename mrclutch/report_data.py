@@ -1,16 +1,23 @@
 """The figures the design report computes beside the evaluation: its CAD export (STEP, one STL
 per part, their volumes) and its torque–current curves (circuit and network, with FEM points)
-and their errors. The HTML report writer (``mrclutch.cli.report``) draws and writes them
-(issue 43: no computation under ``mrclutch/cli/``)."""
+and their errors, and the B-rep mass its CAD process hands over. The HTML report writer
+(``mrclutch.cli.report``) draws and writes them (issue 43: no computation under
+``mrclutch/cli/``)."""
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
 
 from geometry.export import export_clutch
+from geometry.mass import MassReport, PartMass, brep_mass, brep_mass_from
+from geometry.materials import MaterialChoice
+from geometry.params import DrumClutch
 from geometry.section import Section, build_section
 from magnetics.torque import TorqueCurve, torque_curve
 from mrclutch.design import ClutchDesign
@@ -62,3 +69,39 @@ def torque_curves(design: ClutchDesign) -> tuple[list[TorqueCurve], dict[str, An
         "circuit_vs_fem_max_error_rel": err["circuit"],
         "network_vs_fem_max_error_rel": err["network"],
     }
+
+
+#: A MassReport as plain data: (method, {part: (mass kg, inertia kg m²)}, notes), what a pipe
+#: to the report's CAD process carries (a MappingProxyType does not pickle).
+MassData = tuple[str, dict[str, tuple[float, float]], tuple[str, ...]]
+
+
+def mass_data(rep: MassReport) -> MassData:
+    """``rep`` as plain data (``MassData``)."""
+    return rep.method, {p: (pm.mass, pm.inertia) for p, pm in rep.parts.items()}, rep.notes
+
+
+def mass_report(data: MassData) -> MassReport:
+    """The MassReport that ``mass_data`` flattened."""
+    method, parts, notes = data
+    return MassReport(method, MappingProxyType({p: PartMass(m, i) for p, (m, i) in
+                                                parts.items()}), tuple(notes))  # fmt: skip
+
+
+def design_brep_mass(design: ClutchDesign) -> MassData:
+    """The design's exact B-rep mass (``geometry.mass.brep_mass``, build123d) as plain data."""
+    return mass_data(brep_mass(design.clutch, materials=design.materials))
+
+
+@contextmanager
+def design_mass_from(design: ClutchDesign, fetch: Callable[[], MassData]) -> Iterator[None]:
+    """Inside, the B-rep mass of ``design`` (its clutch and materials) is ``fetch()``'s, e.g.
+    the report's CAD process's (issue 40); any other design's is computed where asked."""
+
+    def source(clutch: DrumClutch, materials: MaterialChoice) -> MassReport | None:
+        if (clutch, materials) != (design.clutch, design.materials):
+            return None  # not this design's: brep_mass computes it
+        return mass_report(fetch())
+
+    with brep_mass_from(source):
+        yield

@@ -42,9 +42,6 @@ from pathlib import Path
 from typing import Any
 
 from geometry.atomic import OutputError, fsync_dir, output_error, write_text
-from geometry.mass import MassReport, brep_mass_from
-from geometry.materials import MaterialChoice
-from geometry.params import DrumClutch
 from geometry.validation import ParameterError
 from mrclutch.cli.duty_format import duty_html
 from mrclutch.cli.feel_format import feel_html
@@ -53,11 +50,11 @@ from mrclutch.cli.plots.design import section_figure
 from mrclutch.cli.plots.dynamics import plot_torque_step
 from mrclutch.cli.plots.haptic import compare_figure, zwidth_figure
 from mrclutch.cli.plots.magnetics import plot_torque
-from mrclutch.cli.report_cad import CadProcess, mass_report
+from mrclutch.cli.report_cad import CadProcess
 from mrclutch.design import ClutchDesign
 from mrclutch.outputs import CLUTCH_ROWS, HAND_ROWS, output, row_label
 from mrclutch.pipeline import evaluate
-from mrclutch.report_data import section_of, torque_curves
+from mrclutch.report_data import design_mass_from, section_of, torque_curves
 from mrclutch.sweep import sigterm_as_interrupt
 from mrclutch.verdict import judge_evaluation
 
@@ -172,12 +169,7 @@ def _steps(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[str],
     tick("evaluating the design" + (" (its B-rep mass from the CAD process)"
                                     if fidelity == "reference" else ""))  # fmt: skip
 
-    def mass(clutch: DrumClutch, materials: MaterialChoice) -> MassReport | None:
-        if (clutch, materials) != (design.clutch, design.materials):
-            return None  # not this design's: brep_mass computes it
-        return mass_report(cad_side.result("mass"))
-
-    with brep_mass_from(mass):
+    with design_mass_from(design, lambda: cad_side.result("mass")):
         ev = evaluate(design, fidelity)
         data = judge_evaluation(ev)  # the design's `[render]` rule, its one verdict
     tick("haptic plots")

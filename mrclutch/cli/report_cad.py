@@ -26,13 +26,11 @@ import warnings
 from collections.abc import Callable
 from multiprocessing.connection import Connection
 from pathlib import Path
-from types import MappingProxyType
 from typing import Any
 
-from geometry.mass import MassReport, PartMass, brep_mass
 from mrclutch.cli.view import screenshot
 from mrclutch.design import ClutchDesign
-from mrclutch.report_data import export_cad
+from mrclutch.report_data import design_brep_mass, export_cad
 
 #: The tasks of the CAD process, in the order it runs them: the B-rep mass first (the
 #: evaluation waits for it), then the STEP + STL files and the 3D view (view.png).
@@ -41,24 +39,12 @@ TASKS = ("mass", "cad", "view")
 POLL_S = 0.1
 
 
-def _mass_data(rep: MassReport) -> tuple[str, dict[str, tuple[float, float]], tuple[str, ...]]:
-    """A MassReport as plain data (its MappingProxyType does not pickle)."""
-    return rep.method, {p: (pm.mass, pm.inertia) for p, pm in rep.parts.items()}, rep.notes
-
-
-def mass_report(data: tuple[str, dict[str, tuple[float, float]], tuple[str, ...]]) -> MassReport:
-    """The MassReport that ``_mass_data`` flattened."""
-    method, parts, notes = data
-    return MassReport(method, MappingProxyType({p: PartMass(m, i) for p, (m, i) in
-                                                parts.items()}), tuple(notes))  # fmt: skip
-
-
 def _jobs(design: ClutchDesign, folder: Path) -> dict[str, Callable[[], Any]]:
     def view() -> str:
         return str(screenshot(design.clutch, folder / "view.png"))
 
     return {
-        "mass": lambda: _mass_data(brep_mass(design.clutch, materials=design.materials)),
+        "mass": lambda: design_brep_mass(design),
         "cad": lambda: export_cad(design, folder),
         "view": view,
     }

@@ -19,6 +19,7 @@ import geometry.mass as mass_mod
 import mrclutch.cli.report_cad as rc
 from geometry.mass import MassReport, PartMass, brep_mass, brep_mass_from
 from mrclutch.design import design_preset
+from mrclutch.report_data import mass_data, mass_report
 
 PAPER = design_preset("paper")
 
@@ -68,7 +69,7 @@ def test_brep_mass_from_hands_back_its_source_s_report_for_the_clutch_it_knows(m
 def test_a_mass_report_survives_the_pipe():
     parts = {"rotor": PartMass(0.1, 2e-5), "coil": PartMass(0.3, 1e-4)}
     rep = MassReport("brep", MappingProxyType(parts), ("a note",))
-    back = rc.mass_report(rc._mass_data(rep))
+    back = mass_report(mass_data(rep))
     assert back == rep and back.rotor_inertia == rep.rotor_inertia
 
 
