@@ -119,9 +119,11 @@ def threshold(p: HapticParams, K: float, verdict: str, field: str) -> dict[str, 
     if x0 <= 0:
         return None
 
+    def gain(v: float) -> float:  # log of the limit over K, an unbounded limit capped
+        return math.log(min(float(v), 1e12) / K)
+
     def g(u: float) -> float:
-        v = float(limit(replace(p, **{field: math.exp(u)})))
-        return math.log(min(v, 1e12) / K)
+        return gain(limit(replace(p, **{field: math.exp(u)})))
 
     def root(a: float, b: float, ga: float, gb: float) -> float:
         # the Illinois variant of regula falsi ([dowell-jarratt1971], geometry.numerics; not
@@ -136,7 +138,7 @@ def threshold(p: HapticParams, K: float, verdict: str, field: str) -> dict[str, 
     us = np.linspace(lo, hi, 13)
     if verdict in _VECTORISED:  # the grid in one call: its rows are the scalar calls' bits
         vs = limit(replace(p, **{field: np.array([math.exp(u) for u in us])}))
-        gs = [math.log(min(float(v), 1e12) / K) for v in vs]
+        gs = [gain(v) for v in vs]
     else:
         gs = [g(u) for u in us]
     # the crossing nearest the value in p
