@@ -120,30 +120,6 @@ def cmd_device(args: argparse.Namespace) -> int:
     return 0
 
 
-def add_map_args(p: argparse.ArgumentParser) -> None:
-    """``mrclutch torque``'s torque-map options (``write_torque_map``)."""
-    p.add_argument(
-        "--map",
-        metavar="FILE.csv|.parquet",
-        help="write a torque map over current (--current) x slip speed (--map-speeds-rpm) x "
-        "fluid temperature (--map-temperatures-C): the yield torque by --method (network, "
-        "circuit or fem) with the fluid's tau_y(T), the off-state torque (the drag) and "
-        "their sum; a controller's lookup table (docs/handoff.md)",
-    )
-    p.add_argument(
-        "--map-speeds-rpm",
-        default="0,100,265,530",
-        metavar="S,S,...",
-        help="--map: slip speeds, rpm (default 0,100,265,530)",
-    )
-    p.add_argument(
-        "--map-temperatures-C",
-        default="20,40,60",
-        metavar="T,T,...",
-        help="--map: fluid temperatures, °C (default 20,40,60)",
-    )
-
-
 def _floats(option: str, text: str) -> list[float]:
     try:
         vals = [float(x) for x in text.split(",")]
@@ -156,7 +132,8 @@ def _floats(option: str, text: str) -> list[float]:
 
 def write_torque_map(args: argparse.Namespace, currents: Any) -> int:
     """``mrclutch torque --map FILE``: the map (mrclutch.handoff.torque_map) as CSV or
-    Parquet, by the file's suffix, through the output layer."""
+    Parquet, by the file's suffix, through the output layer (its options: the torque
+    command's ``add_map_args``, mrclutch.cli.commands.magnetics)."""
     path = Path(args.map)
     suffix = path.suffix.lower()
     if suffix not in (".csv", ".parquet"):

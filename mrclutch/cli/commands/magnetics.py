@@ -15,11 +15,10 @@ from mrclutch.cli.commands._common import (
     load_design_args,
     print_json,
 )
-from mrclutch.cli.commands.handoff import add_map_args, write_torque_map
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.longjobs import announce
 from mrclutch.cli.plots.magnetics import plot_field, plot_torque
-from mrclutch.pipeline import current_notes
+from mrclutch.clutch import current_notes
 from mrclutch.report_data import section_of
 from mrclutch.torque_curves import (
     FEM_SIZE,
@@ -80,6 +79,32 @@ def register(sub: argparse._SubParsersAction) -> None:  # type: ignore[type-arg]
     f.set_defaults(func=_field)
 
 
+def add_map_args(p: argparse.ArgumentParser) -> None:
+    """``mrclutch torque``'s torque-map options (``write_torque_map`` of
+    mrclutch.cli.commands.handoff, loaded only when ``--map`` is given: the hand-offs' module
+    and mrclutch.handoff are not a plain torque curve's imports, issue 40)."""
+    p.add_argument(
+        "--map",
+        metavar="FILE.csv|.parquet",
+        help="write a torque map over current (--current) x slip speed (--map-speeds-rpm) x "
+        "fluid temperature (--map-temperatures-C): the yield torque by --method (network, "
+        "circuit or fem) with the fluid's tau_y(T), the off-state torque (the drag) and "
+        "their sum; a controller's lookup table (docs/handoff.md)",
+    )
+    p.add_argument(
+        "--map-speeds-rpm",
+        default="0,100,265,530",
+        metavar="S,S,...",
+        help="--map: slip speeds, rpm (default 0,100,265,530)",
+    )
+    p.add_argument(
+        "--map-temperatures-C",
+        default="20,40,60",
+        metavar="T,T,...",
+        help="--map: fluid temperatures, °C (default 20,40,60)",
+    )
+
+
 def _operating_point(args: argparse.Namespace, design: Any) -> None:
     """The slip speed and fluid temperature not given take the design's own (``evaluate``'s
     max torque is at them, with the design's ``[support]`` drag): one design, one torque."""
@@ -106,6 +131,8 @@ def _torque(args: argparse.Namespace) -> int:
         return _torque_for(args, design)
     currents = currents_asked(design, args.current, args.ignore_limit)
     if args.map is not None:
+        from mrclutch.cli.commands.handoff import write_torque_map  # the map's alone
+
         return write_torque_map(args, currents)
     clutch = section_of(design)
     methods = ("network", "fem") if args.method == "both" else (args.method,)
