@@ -24,7 +24,7 @@ from numpy.typing import ArrayLike
 
 from geometry import regions
 from geometry.params import MIN_GAP, valid
-from magnetics.circuit import path_from_regions, path_from_section
+from magnetics.circuit import MagneticPath, path_from_regions, path_from_section
 from magnetics.hysteresis import coercive_current, pulse_train, torque_loop
 from magnetics.network import network_from_regions
 from magnetics.ripple import GAP_STEP, gap_derivatives, ripple_amplitude
@@ -48,13 +48,15 @@ def slip_frequency(design: ClutchDesign) -> float:
 
 
 def feel_figures(design: ClutchDesign, max_torque: float, yield_torque: float,
-                 off_torque: float, backdrive: float | None = None) -> dict[str, Any]:  # fmt: skip
+                 off_torque: float, backdrive: float | None = None,
+                 path: MagneticPath | None = None) -> dict[str, Any]:  # fmt: skip
     """The residual torque, the loop and the ripple of one design, and what each is at the
     hand (N), as ``evaluate --json``'s ``feel``. ``max_torque``, ``yield_torque`` and
     ``off_torque`` (N·m): the clutch figures at the current limit; ``backdrive`` (N): the
-    unpowered lever's backdrive force, to which the residual force adds."""
+    unpowered lever's backdrive force, to which the residual force adds. ``path``: the
+    design's circuit (``path_from_section``) where the caller built it already."""
     section, net = section_network(design.clutch, design.materials)  # evaluate's network
-    path = path_from_section(section)
+    path = path_from_section(section) if path is None else path
     peak = design.current_limit
     reduction = design.transmission.reduction  # F = T·nG/l [lebel] Eq. 4
 

@@ -32,6 +32,7 @@ import numpy as np
 
 from geometry.section import build_section
 from geometry.validation import ParameterError
+from magnetics.circuit import path_from_section
 from magnetics.dynamics import torque_response
 from mrclutch.at_hand import (
     HAND_KEYS,
@@ -199,11 +200,14 @@ def evaluate(
     fig = clutch_figures(design, fidelity, accuracy)
     if accuracy is not None:
         fidelity = f"accuracy={accuracy:g}"
+    section = build_section(design.clutch, design.materials)
+    path = path_from_section(section)  # one circuit: the torque response's and the feel's
     resp = torque_response(
-        build_section(design.clutch, design.materials).table,
+        section.table,
         fig.max_current,
         design.amplifier,
         design.laminations,
+        path=path,
         coil_temperature=design.operating.coil_temperature,
     )
     mr = mr_at_hand(design, fig.moving_inertia, fig.drag_damping, fig.max_torque,
@@ -229,7 +233,7 @@ def evaluate(
                     response_figures(design, resp, mr, unavailable), resp,
                     MappingProxyType(unavailable), source, model_mr,
                     feel_figures(design, fig.max_torque, fig.yield_torque, fig.off_state_torque,
-                                 float(backdrive_force(mr))))  # fmt: skip
+                                 float(backdrive_force(mr)), path))  # fmt: skip
     return rendered(ev, float(mr.k_max) if K is None else K)
 
 

@@ -123,3 +123,28 @@ def test_single_design_answers_do_not_import_numpy_ma(fresh_python):
         )
         loaded = set(fresh_python(code).stderr.split())
         assert "magnetics.network.solve" in loaded and "numpy.ma" not in loaded, argv
+
+
+def test_evaluate_builds_the_feel_and_torque_response_circuit_once(monkeypatch):
+    """pipeline.evaluate builds the design's magnetic circuit once for the torque response
+    and the feel's loop (clutch_figures builds its own): 2 path_from_regions calls, not 3;
+    and feel_figures with that circuit handed over equals feel_figures building it."""
+    from magnetics import circuit, dynamics
+    from mrclutch import feel, pipeline
+
+    calls = []
+    real = circuit.path_from_regions
+
+    def counted(*a, **k):
+        calls.append(1)
+        return real(*a, **k)
+
+    monkeypatch.setattr(circuit, "path_from_regions", counted)
+    monkeypatch.setattr(dynamics, "path_from_regions", counted)
+    design = ClutchDesign()
+    ev = pipeline.evaluate(design)
+    assert len(calls) == 2
+    f = ev.clutch
+    args = (design, f.max_torque, f.yield_torque, f.off_state_torque, 1.0)
+    path = circuit.path_from_section(pipeline.build_section(design.clutch, design.materials))
+    assert feel.feel_figures(*args, path) == feel.feel_figures(*args)
