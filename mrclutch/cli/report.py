@@ -51,6 +51,7 @@ from mrclutch.cli.plots.dynamics import plot_torque_step
 from mrclutch.cli.plots.haptic import compare_figure, zwidth_figure
 from mrclutch.cli.plots.magnetics import plot_torque
 from mrclutch.cli.report_cad import CadProcess
+from mrclutch.cli.view import compose
 from mrclutch.design import ClutchDesign
 from mrclutch.outputs import CLUTCH_ROWS, HAND_ROWS, output, row_label
 from mrclutch.pipeline import evaluate
@@ -186,7 +187,7 @@ def _steps(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[str],
     tick("the CAD files: STEP and STL (the second process)")
     cad = _cad(cad_side)
     tick("the 3D view (the second process)")
-    _view(cad_side, tmp / "view.png")
+    _view(cad_side, design, tmp / "view.png")
     metrics = {**data, "torque_curve": curve, "cad": cad}
     write_text(tmp / "metrics.json", json.dumps(to_jsonable(metrics), indent=2) + "\n")
     tick("report.html")
@@ -205,10 +206,10 @@ def _cad(cad_side: CadProcess) -> dict[str, Any]:
     return cad_side.result("cad")
 
 
-def _view(cad_side: CadProcess, path: Path) -> None:
-    """Wait for the CAD process to draw ``path``, the staging folder's view.png
-    (mrclutch.cli.view.screenshot)."""
-    cad_side.result("view")
+def _view(cad_side: CadProcess, design: ClutchDesign, path: Path) -> None:
+    """view.png at ``path``: the model the CAD process rendered (its pixels) beside its
+    legend, drawn here (mrclutch.cli.view.compose)."""
+    compose(cad_side.result("view"), design.clutch, path)
 
 
 def _torque(design: ClutchDesign, path: Path) -> dict[str, Any]:

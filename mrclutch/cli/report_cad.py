@@ -1,5 +1,5 @@
 """The design report's CAD side in a second process: build123d's import (seconds), the
-B-rep mass, the STEP and STL export and the 3D view run there while the report's own
+B-rep mass, the STEP and STL export and the 3D view's rendering run there while the report's own
 process solves the FEM and draws the plots (issue 40: a report on 2 cores).
 
 ``CadProcess(design, folder, check)`` starts it (``python -m mrclutch.cli.report_cad``: a
@@ -28,25 +28,25 @@ from multiprocessing.connection import Connection
 from pathlib import Path
 from typing import Any
 
-from mrclutch.cli.view import screenshot
+from mrclutch.cli.view import render_model
 from mrclutch.design import ClutchDesign
 from mrclutch.report_data import design_brep_mass, export_cad
 
 #: The tasks of the CAD process, in the order it runs them: the B-rep mass first (the
-#: evaluation waits for it), then the STEP + STL files and the 3D view (view.png).
+#: evaluation waits for it), then the STEP + STL files and the 3D view's pixels (the
+#: model's part of view.png, mrclutch.cli.view.render_model).
 TASKS = ("mass", "cad", "view")
 #: Seconds between two calls of ``check`` while a result is awaited.
 POLL_S = 0.1
 
 
 def _jobs(design: ClutchDesign, folder: Path) -> dict[str, Callable[[], Any]]:
-    def view() -> str:
-        return str(screenshot(design.clutch, folder / "view.png"))
-
     return {
         "mass": lambda: design_brep_mass(design),
         "cad": lambda: export_cad(design, folder),
-        "view": view,
+        # the model's pixels: the report composes view.png with the matplotlib it has
+        # loaded already (neither pyvista's plotting layer nor matplotlib is imported here)
+        "view": lambda: render_model(design.clutch),
     }
 
 

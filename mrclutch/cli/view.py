@@ -1,9 +1,13 @@
 """3-D view of a clutch: parts coloured by material, cut in half to show the drums and gaps.
 
-pyvista (VTK) and build123d are imported inside the functions. Off screen, with no X
-display, VTK renders through EGL (Mesa's ``libegl1`` + ``libgl1-mesa-dri`` on Debian/Ubuntu;
-see docs/geometry.md); ``VTK_DEFAULT_OPENGL_WINDOW=vtkEGLRenderWindow`` is set for that
-case so VTK does not first try (and warn about) a missing X server.
+VTK, pyvista and build123d are imported inside the functions. The interactive window is a
+pyvista Plotter; the screenshot renders the same scene (lights, camera, colours) with VTK's
+own classes (``render_model``), without pyvista's plotting layer and the matplotlib it
+loads (~1.2 s of CPU to import: the report's CAD process, issue 40), and composes it with
+its legend (``compose``). Off screen, with no X display, VTK renders through EGL (Mesa's
+``libegl1`` + ``libgl1-mesa-dri`` on Debian/Ubuntu; see docs/geometry.md);
+``VTK_DEFAULT_OPENGL_WINDOW=vtkEGLRenderWindow`` is set for that case so VTK does not first
+try (and warn about) a missing X server.
 """
 
 from __future__ import annotations
@@ -21,6 +25,11 @@ from mrclutch.solids import legend_entries, material_colour, view_tolerance, vie
 WINDOW_SIZE = (1024, 768)
 #: Opacity of the MR fluid so the drums in it stay visible.
 FLUID_OPACITY = 0.55
+#: The camera: along +y at the x–z cut plane, turned by these angles (degrees) to look a
+#: little from the shaft side and from above.
+AZIMUTH_DEG, ELEVATION_DEG = -25.0, 20.0
+#: Multisample anti-aliasing of the screenshot (pyvista's default theme: MSAA, 8 samples).
+MULTI_SAMPLES = 8
 
 
 def has_display() -> bool:
@@ -79,8 +88,8 @@ def build_plotter(
         plotter.add_legend(bcolor="white", face="rectangle", size=(0.28, 0.28))
     # look along +y at the x–z cut plane, a little from above and from the shaft side
     plotter.camera_position = "xz"
-    plotter.camera.azimuth = -25
-    plotter.camera.elevation = 20
+    plotter.camera.azimuth = AZIMUTH_DEG
+    plotter.camera.elevation = ELEVATION_DEG
     plotter.reset_camera()
     return plotter
 
@@ -96,18 +105,9 @@ def screenshot(
     ``path``, atomically: the model on the left, its legend in a panel on the right (never
     over the model; each swatch outlined so the pale stainless reads on white), text at
     least 2.1 % of the width tall (≥ 9 px when the image is shown 450 px wide)."""
-    dest = Path(path)
-    if dest.suffix.lower() != ".png":
-        raise ParameterError(f"--screenshot {dest}: must end in .png")
-    w, h = window_size
-    model_w = max(1, round(w * LEGEND_SPLIT))
-    plotter = build_plotter(clutch, off_screen=True, tolerance=tolerance,
-                            window_size=(model_w, h), legend=False)  # fmt: skip
-    try:
-        img = plotter.screenshot(return_img=True)
-    finally:
-        plotter.close()
-    _compose(img, legend_entries(clutch), (w, h), dest)
+    dest = _png(path)
+    compose(render_model(clutch, tolerance=tolerance, window_size=window_size), clutch,
+            dest, window_size=window_size)  # fmt: skip
     return dest
 
 
@@ -115,17 +115,134 @@ def screenshot(
 LEGEND_SPLIT = 0.66
 
 
+def _png(path: str | os.PathLike[str]) -> Path:
+    dest = Path(path)
+    if dest.suffix.lower() != ".png":
+        raise ParameterError(f"--screenshot {dest}: must end in .png")
+    return dest
+
+
+def render_model(
+    clutch: DrumClutch,
+    *,
+    tolerance: float | None = None,
+    window_size: tuple[int, int] = WINDOW_SIZE,
+) -> Any:
+    """The model's part of the screenshot (its ``LEGEND_SPLIT`` of ``window_size``), off
+    screen: RGB pixels (uint8, rows from the top). The window's scene (``build_plotter``:
+    pyvista's light kit, flat shading, the camera along +y turned by AZIMUTH_DEG and
+    ELEVATION_DEG, MSAA) built with VTK's own classes; tessellated to ``tolerance`` [m], by
+    default one pixel of the model's part."""
+    w, h = window_size
+    size = (max(1, round(w * LEGEND_SPLIT)), h)
+    tolerance = view_tolerance(clutch, size) if tolerance is None else tolerance
+    triangles = view_triangles(clutch, tolerance)  # before VTK: build123d's import first
+    _prepare_offscreen()
+    import numpy as np
+    import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  (VTK's OpenGL implementation)
+    from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray, vtk_to_numpy
+    from vtkmodules.vtkCommonCore import vtkPoints
+    from vtkmodules.vtkCommonDataModel import vtkCellArray, vtkPolyData
+    from vtkmodules.vtkRenderingCore import (
+        vtkActor,
+        vtkLightKit,
+        vtkPolyDataMapper,
+        vtkRenderer,
+        vtkRenderWindow,
+        vtkWindowToImageFilter,
+    )
+
+    ren = vtkRenderer()
+    ren.SetBackground(1.0, 1.0, 1.0)
+    ren.SetTwoSidedLighting(True)
+    ren.AutomaticLightCreationOff()
+    for part, material, v, faces in triangles:
+        points = vtkPoints()
+        points.SetData(numpy_to_vtk(np.ascontiguousarray(v, dtype=float), deep=True))
+        cells = vtkCellArray()
+        cells.ImportLegacyFormat(numpy_to_vtkIdTypeArray(faces.astype(np.int64), deep=True))
+        poly = vtkPolyData()
+        poly.SetPoints(points)
+        poly.SetPolys(cells)
+        mapper = vtkPolyDataMapper()
+        mapper.SetInputData(poly)
+        mapper.ScalarVisibilityOff()
+        actor = vtkActor()
+        actor.SetMapper(mapper)
+        prop = actor.GetProperty()  # pyvista's add_mesh defaults, flat shaded
+        prop.SetColor(*material_colour(material))
+        prop.SetOpacity(FLUID_OPACITY if part == "fluid" else 1.0)
+        prop.SetInterpolationToFlat()
+        prop.SetAmbient(0.0)
+        prop.SetDiffuse(1.0)
+        prop.SetSpecular(0.0)
+        ren.AddActor(actor)
+    vtkLightKit().AddLightsToRenderer(ren)
+    lights = ren.GetLights()
+    lights.InitTraversal()
+    for _ in range(lights.GetNumberOfItems()):  # colours in 8-bit steps, as pyvista's Light
+        light = lights.GetNextItem()
+        for name in ("DiffuseColor", "SpecularColor", "AmbientColor"):
+            rgb = getattr(light, f"Get{name}")()
+            getattr(light, f"Set{name}")(*(round(x * 255) / 255 for x in rgb))
+    window = vtkRenderWindow()
+    window.SetOffScreenRendering(1)
+    window.SetMultiSamples(MULTI_SAMPLES)
+    window.SetSize(*size)
+    window.AddRenderer(ren)
+    cam = ren.GetActiveCamera()
+    b = ren.ComputeVisiblePropBounds()
+    centre = np.array([(b[0] + b[1]) / 2, (b[2] + b[3]) / 2, (b[4] + b[5]) / 2])
+    cam.SetFocalPoint(*centre)
+    cam.SetPosition(*(centre - (0.0, 1.0, 0.0)))  # along +y at the x–z cut plane
+    cam.SetViewUp(0.0, 0.0, 1.0)
+    ren.ResetCamera()
+    cam.Azimuth(AZIMUTH_DEG)
+    cam.Elevation(ELEVATION_DEG)
+    ren.ResetCamera()
+    try:
+        window.Render()
+        grab = vtkWindowToImageFilter()
+        grab.SetInput(window)
+        grab.FixBoundaryOn()
+        grab.ShouldRerenderOff()
+        grab.SetInputBufferTypeToRGB()
+        grab.ReadFrontBufferOff()
+        grab.Update()
+        pixels = vtk_to_numpy(grab.GetOutput().GetPointData().GetScalars())
+    finally:
+        window.Finalize()
+    return pixels.reshape(size[1], size[0], 3)[::-1].copy()  # VTK's rows: bottom first
+
+
+def compose(
+    img: Any,
+    clutch: DrumClutch,
+    path: str | os.PathLike[str],
+    *,
+    window_size: tuple[int, int] = WINDOW_SIZE,
+) -> Path:
+    """``render_model``'s pixels and a legend panel beside them, as one PNG of
+    ``window_size`` pixels at ``path`` (atomically); the report's process draws it from
+    its CAD process's pixels."""
+    dest = _png(path)
+    _compose(img, legend_entries(clutch), window_size, dest)
+    return dest
+
+
 def _compose(img: Any, labels: list, size: tuple[int, int], dest: Path) -> None:
     """The rendered model and a legend panel beside it, as one PNG of ``size`` pixels."""
     import matplotlib
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
     from matplotlib.patches import Patch
 
     w, h = size
     dpi = 100
-    fig = plt.figure(figsize=(w / dpi, h / dpi), dpi=dpi)
+    fig = Figure(figsize=(w / dpi, h / dpi), dpi=dpi)  # no pyplot: nothing to manage
+    FigureCanvasAgg(fig)
     ax = fig.add_axes((0, 0, LEGEND_SPLIT, 1))
     ax.imshow(img)
     ax.set_axis_off()
@@ -136,7 +253,6 @@ def _compose(img: Any, labels: list, size: tuple[int, int], dest: Path) -> None:
                          for t, c in labels], loc="center left", fontsize=font_pt,
                 frameon=False, labelcolor="0.1", handlelength=1.4)  # fmt: skip
     save_png(fig, dest, dpi=dpi)
-    plt.close(fig)
 
 
 def show(clutch: DrumClutch, *, tolerance: float | None = None) -> None:
