@@ -228,15 +228,28 @@ def max_passive_damping(p: HapticParams) -> Any:
     """B_max [N·s/m]: the largest virtual damper passive with K = 0, inf over {gB < 0} of
     Re Z_p/(−gB) (module docstring; inf if gB ≥ 0 everywhere). Vectorised over designs."""
     q = _columns(p)
+    R, _, gB = _parts(q, np.broadcast_to(U_GRID, (q.m1.shape[0], U_GRID.size)))
+    best = _damping(q, _damping_ratio(R, gB))
+    return best.reshape(p.shape) if p.shape else float(best[0])
+
+
+def _damping_ratio(R: np.ndarray, gB: np.ndarray) -> np.ndarray:
+    """Re Z_p/(−gB) where gB < 0, inf elsewhere: ``max_passive_damping``'s bound per ω."""
+    neg = gB < 0
+    return np.where(neg, R / np.where(neg, -gB, 1.0), np.inf)
+
+
+def _damping(q: HapticParams, v0: np.ndarray) -> np.ndarray:
+    """``max_passive_damping`` of the rows of ``q`` (fields (n, 1)) from its ratio on
+    ``U_GRID`` (``_damping_ratio``), refined: zwidth hands over the grid it computed for
+    its own lines instead of this evaluating ``_parts`` on it a second time (issue 40)."""
     u0 = np.broadcast_to(U_GRID, (q.m1.shape[0], U_GRID.size))
 
     def ratio(rows: np.ndarray, u: np.ndarray) -> np.ndarray:
         R, _, gB = _parts(_rows(q, rows), u)
-        neg = gB < 0
-        return np.where(neg, R / np.where(neg, -gB, 1.0), np.inf)
+        return _damping_ratio(R, gB)
 
-    best = _refine(u0, ratio(np.arange(u0.shape[0]), u0), ratio, 5, 41)[0]
-    return best.reshape(p.shape) if p.shape else float(best[0])
+    return _refine(u0, v0, ratio, 5, 41)[0]
 
 
 def _feasible(al_hi, be_hi, al_lo, be_lo, B):  # type: ignore[no-untyped-def]
@@ -280,9 +293,9 @@ def zwidth(p: HapticParams, n_b: int = 17) -> dict[str, np.ndarray]:
     hi_lines = _lines(R, gK, gB, -1.0)
     lo_lines = _lines(R, gK, gB, 1.0)
 
-    b_max = np.ravel(np.asarray(max_passive_damping(p), dtype=float))
-    negB = gB < 0
-    b_grid = np.min(np.where(negB, R / np.where(negB, -gB, 1.0), np.inf), axis=1)
+    v0 = _damping_ratio(R, gB)  # max_passive_damping's grid: the same _parts
+    b_max = _damping(q, v0)
+    b_grid = np.min(v0, axis=1)
     # right end of P: past B_max only where some K > 0 stays feasible (on the grid); then
     # doubling and bisection on the grid's feasibility (P convex: feasible B an interval)
     top = b_max.copy()

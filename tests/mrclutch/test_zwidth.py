@@ -358,3 +358,28 @@ def test_ray_crossing_directions_match_the_quartics_roots(phi: float) -> None:
             assert unstable(r * (1 + 1e-6)) - unstable(r * (1 - 1e-6)) == 2 * d
             seen += 1
     assert seen >= 3
+
+
+def test_zwidth_reads_the_coarse_grid_once_and_its_damping_end_is_max_passive_damping(
+    monkeypatch,
+):
+    """zwidth evaluates Re Z_p and the gains on U_GRID once for its lines and its B_max
+    (issue 40: max_passive_damping evaluated them a second time), and its B_max is
+    max_passive_damping's, bit for bit, on random designs (sampled ones too)."""
+    from mrclutch.haptics import zwidth as zw
+
+    for p in (_random(40, seed=3), _random(20, seed=4, sampled=True)):
+        full = []
+        real = zw._parts
+
+        def counted(q, u, _real=real, _full=full):
+            if u.shape[-1] == zw.U_GRID.size:
+                _full.append(1)
+            return _real(q, u)
+
+        monkeypatch.setattr(zw, "_parts", counted)
+        r = zw.zwidth(p)
+        monkeypatch.setattr(zw, "_parts", real)
+        assert len(full) == 1
+        bm = np.asarray(max_passive_damping(p))
+        assert np.asarray(r["B_max_at_K0_N_s_per_m"]).tobytes() == bm.tobytes()
