@@ -60,6 +60,74 @@ def judge_all(designs: list[ClutchDesign], fidelity: str, executor: Executor | N
     return out
 
 
+def brep_of(design: ClutchDesign) -> Any:
+    """The design's exact B-rep mass as plain data (``report_data.design_brep_mass``): a
+    helper process's task, so that this one never imports build123d (issue 40)."""
+    from mrclutch.report_data import design_brep_mass
+
+    return design_brep_mass(design)
+
+
+def judge_beside(designs: list[ClutchDesign], fidelity: str, helper: Executor,
+                 done: Callable[[int], None] | None = None) -> list[dict]:  # fmt: skip
+    """``judge_all`` shared between this process and one ``helper`` process (an executor of
+    one worker, e.g. started before the search so that its imports are behind it): this one
+    judges from the first design on, the helper from the last back, until they meet; at
+    reference fidelity the helper weighs every B-rep first (``brep_of``: a few 0.1 s) and
+    this process reads its masses from there (``report_data.design_mass_from``) instead of
+    importing build123d. Each design is judged by the same ``reference_check`` or
+    ``fast_check`` wherever it runs, so the answer is ``judge_all``'s. ``done(n)`` after
+    each of this process's judgements and at the end, ``n`` all judged so far."""
+    import threading
+    from contextlib import ExitStack
+
+    from mrclutch.report_data import design_mass_from
+
+    check = reference_check if fidelity == "reference" else fast_check
+    n = len(designs)
+    out: list[dict | None] = [None] * n
+    masses = ([helper.submit(brep_of, d) for d in designs] if fidelity == "reference"
+              else [])  # fmt: skip
+    ends = {"front": 0, "back": n}
+    lock = threading.Lock()
+    failed: list[BaseException] = []
+
+    def helper_side() -> None:  # claims from the back, one judgement at a time
+        try:
+            while True:
+                with lock:
+                    if ends["back"] <= ends["front"]:
+                        return
+                    ends["back"] -= 1
+                    i = ends["back"]
+                out[i] = helper.submit(check, designs[i]).result()
+        except BaseException as exc:  # re-raised here below, after the join
+            failed.append(exc)
+
+    thread = threading.Thread(target=helper_side, daemon=True)
+    thread.start()
+    try:
+        while not failed:
+            with lock:
+                if ends["front"] >= ends["back"]:
+                    break
+                i = ends["front"]
+                ends["front"] += 1
+            with ExitStack() as stack:
+                if masses:
+                    stack.enter_context(design_mass_from(designs[i], masses[i].result))
+                out[i] = check(designs[i])
+            if done is not None:
+                done(sum(r is not None for r in out))
+    finally:
+        thread.join()
+    if failed:
+        raise failed[0]
+    if done is not None:
+        done(n)
+    return [r for r in out if r is not None]
+
+
 def ranges(wc: WorstCase | None) -> Uncertainty | None:
     """The ranges the optimiser's worst case is taken over (None: ``--nominal``)."""
     return None if wc is None else wc.uncertainty
@@ -171,11 +239,16 @@ def shipped_members(ps: ParetoSet, wc: WorstCase | None) -> list[tuple[ClutchDes
 
 def judge_members(ps: ParetoSet, shipped: list[tuple[ClutchDesign, list[str]]],
                   cons: Constraints, fidelity: str, executor: Executor | None = None,
-                  done: Callable[[int], None] | None = None) -> list[dict]:  # fmt: skip
+                  done: Callable[[int], None] | None = None,
+                  helper: Executor | None = None) -> list[dict]:  # fmt: skip
     """Each shipped member judged by the one verdict every command uses at ``fidelity``
     (reference, or the fast path: --no-verify), with the requirements it misses there
-    (``member_record``; kept: those with no violation)."""
-    refs = judge_all([d for d, _ in shipped], fidelity, executor, done)
+    (``member_record``; kept: those with no violation). ``helper``: one process sharing
+    the judgements with this one (``judge_beside``), else ``executor`` judges them all
+    (None: here)."""
+    designs = [d for d, _ in shipped]
+    refs = (judge_beside(designs, fidelity, helper, done) if helper is not None
+            else judge_all(designs, fidelity, executor, done))  # fmt: skip
     judged = zip(ps.members, refs, shipped, strict=True)
     return [member_record(i, m, ev, requirement_violations(ev, cons, d))
             for i, (m, ev, (d, _)) in enumerate(judged, 1)]  # fmt: skip

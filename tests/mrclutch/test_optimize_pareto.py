@@ -433,8 +433,8 @@ def test_cli_drops_members_failing_at_reference_and_says_how_many(monkeypatch, c
             ev["haptic"]["max_passive_K_N_per_m"] = 0.5 * ev["haptic"]["K_N_per_m"]
         return ev
 
-    monkeypatch.setattr(members, "reference_check", check)
-    assert main(["optimize", "--drums", "2", "--nominal"]) == 0
+    monkeypatch.setattr(members, "reference_check", check)  # judged here: --workers 0
+    assert main(["optimize", "--drums", "2", "--nominal", "--workers", "0"]) == 0
     out = capsys.readouterr().out
     assert "Pareto set: 2 members meet every limit at reference fidelity; 1 of 3 dropped" in out
     assert "#2 dropped at reference fidelity: not passive at K" in out

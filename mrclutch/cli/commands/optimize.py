@@ -198,8 +198,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--workers",
         type=int,
-        default=0,
-        help="processes for the reference checks and --verify-top (0: in this process)",
+        default=None,
+        help="processes for the reference checks and --verify-top (0: in this process; "
+        "not given: this one, and for the Pareto set one helper process beside it)",
     )
     p.add_argument(
         "--verify-top",
@@ -344,7 +345,7 @@ def _optimize(args: argparse.Namespace) -> int:
         t2 = time.perf_counter()
         top = list(opt.candidates[: args.verify_top])
         fem_size = reference_fem_size()
-        with sweep_executor(args.workers) as (executor, _):
+        with sweep_executor(args.workers or 0) as (executor, _):
             verified = verify_candidates(top, base, cons, bounds, executor)
         data["verified"] = [vars(v) | {"error": v.error} for v in verified]
         t_verify = time.perf_counter() - t2
@@ -354,7 +355,7 @@ def _optimize(args: argparse.Namespace) -> int:
         _print_optimum(args, opt, cand, t_fast, data, wc)
         if verified is not None:
             print()
-            print(format_verified(verified, key, fem_size, max(args.workers, 1), t_verify)
+            print(format_verified(verified, key, fem_size, max(args.workers or 0, 1), t_verify)
                   .replace("rows", "candidates"))  # fmt: skip
     violations = data["violations"]
     if violations:

@@ -4,8 +4,13 @@ its members judged as their files say (``mrclutch.members``), written, drawn and
 from __future__ import annotations
 
 import argparse
+import os
+import signal
 import sys
 import time
+from collections.abc import Iterator
+from concurrent.futures import Executor, ProcessPoolExecutor
+from contextlib import contextmanager, suppress
 from dataclasses import replace
 from pathlib import Path
 
@@ -73,6 +78,37 @@ def run_pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, .
             check_writable(opt, path, folder=folder)
     old_members = _old_members(args)
     wc = None if args.nominal else robust_verdict(base)
+    fidelity = "fast" if args.no_verify else "reference"
+    with _helper(args.workers) as helper:
+        return _run(args, base, drums, cons, old_members, wc, fidelity, helper)
+
+
+@contextmanager
+def _helper(workers: int | None) -> Iterator[Executor | None]:
+    """One helper process beside this one (``--workers`` not given): it judges the paper
+    preset while this one searches, then shares the members' judgements
+    (``members.judge_beside``; issue 40). Stopped on the way out, its work or not done."""
+    if workers is not None:
+        yield None
+        return
+    # Ctrl-C is this process's to handle (one line), the helper's to ignore until stopped
+    pool = ProcessPoolExecutor(1, initializer=signal.signal,
+                               initargs=(signal.SIGINT, signal.SIG_IGN))  # fmt: skip
+    try:
+        yield pool
+    except BaseException:  # an error or Ctrl-C: no judgement left running after the exit
+        for pid in list(getattr(pool, "_processes", None) or {}):
+            with suppress(ProcessLookupError):
+                os.kill(pid, signal.SIGTERM)
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown()
+
+
+def _run(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...],
+         cons: Constraints, old_members: set[Path], wc: WorstCase | None, fidelity: str,
+         helper: Executor | None) -> int:  # fmt: skip
+    paper_side = None if helper is None else helper.submit(paper_beside, base, fidelity, wc)
     t0 = time.perf_counter()
     gens = DEFAULT_GENERATIONS  # pareto's default
     with progress_bar(gens, "optimize: generations", "gen", not args.no_progress) as done:
@@ -94,15 +130,14 @@ def run_pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, .
     t1 = time.perf_counter()
     desc = "optimize: members checked"
     with (progress_bar(len(shipped), desc, "design", not args.no_progress) as done,
-          sweep_executor(args.workers) as (executor, _)):  # fmt: skip
-        rows = judge_members(ps, shipped, cons, "fast" if args.no_verify else "reference",
-                             executor, done)  # fmt: skip
+          sweep_executor(args.workers or 0) as (executor, _)):  # fmt: skip
+        rows = judge_members(ps, shipped, cons, fidelity, executor, done, helper)
     t_ref = 0.0 if args.no_verify else time.perf_counter() - t1
     kept = [r for r in rows if not r["violations"]]
     verified = None
     if args.verify_top is not None and kept:
         t2 = time.perf_counter()
-        with sweep_executor(args.workers) as (executor, _):
+        with sweep_executor(args.workers or 0) as (executor, _):
             verified = verify_members(ps, kept, args.verify_top, executor)
         t_verify = time.perf_counter() - t2
     written = []
@@ -118,7 +153,7 @@ def run_pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, .
         for path in old_members - {Path(w) for w in written}:  # --overwrite: none left over
             path.unlink(missing_ok=True)
     notes = shipped[0][1] if shipped else []
-    paper = paper_beside(base, "fast" if args.no_verify else "reference", wc)
+    paper = paper_beside(base, fidelity, wc) if paper_side is None else paper_side.result()
     if args.plot:
         pareto_set_plot(ps, [r["member"] for r in kept], paper, args.plot)
     data = {
@@ -154,7 +189,7 @@ def run_pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, .
         if verified is not None:
             print()
             print(format_verified(verified, ps.objectives[0][1],
-                                  reference_fem_size(), max(args.workers, 1),
+                                  reference_fem_size(), max(args.workers or 0, 1),
                                   t_verify).replace("rows", "members"))  # fmt: skip
         if written:
             print(

@@ -1,0 +1,103 @@
+"""Issue 40: the Pareto members judged by this process and one helper process together
+(``members.judge_beside``) get ``judge_all``'s answer, each judged once, in order; at
+reference fidelity this process reads the B-rep masses the helper weighed; the command's
+output with its helper is the output without (``--workers 0``)."""
+
+import json
+import os
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import replace
+
+from geometry.mass import brep_mass
+from mrclutch import members
+from mrclutch.cli.commands import optimize_pareto as pareto_cmd
+from mrclutch.cli.main import main
+from mrclutch.design import design_preset
+
+PAPER = design_preset("paper")
+#: This test process (a forked helper inherits the value and knows it is not it).
+MAIN = os.getpid()
+_REAL_FAST = members.fast_check
+
+
+def _designs(n: int) -> list:
+    return [replace(PAPER, clutch=replace(PAPER.clutch, gap=PAPER.clutch.gap * (1 + 0.05 * i)))
+            for i in range(n)]  # fmt: skip
+
+
+def _fast_with_pid(design):
+    """``fast_check`` marked with the process that ran it."""
+    return {**_REAL_FAST(design), "pid": os.getpid()}
+
+
+def _dumped(data: list[dict]) -> list[str]:
+    return [json.dumps({k: v for k, v in d.items() if k != "pid"}, sort_keys=True, default=str)
+            for d in data]  # fmt: skip
+
+
+def test_both_processes_judge_and_the_answer_is_judge_alls(monkeypatch):
+    """Three designs on the fast path: the shared judging's list equals ``judge_all``'s in
+    this process, design for design, to the printed digit (NaN included); the helper judged
+    some from the back and this process the others from the front; ``done`` counts up to
+    three."""
+    designs = _designs(3)
+    want = _dumped(members.judge_all(designs, "fast"))
+    monkeypatch.setattr(members, "fast_check", _fast_with_pid)
+    counts: list[int] = []
+    with ProcessPoolExecutor(1) as helper:
+        got = members.judge_beside(designs, "fast", helper, counts.append)
+    assert _dumped(got) == want
+    pids = [d["pid"] for d in got]
+    here = [i for i, p in enumerate(pids) if p == MAIN]
+    there = [i for i, p in enumerate(pids) if p != MAIN]
+    assert here and there and here[0] == 0 and there[-1] == 2
+    assert max(here) < min(there)  # the front here, the back there: they met once
+    assert counts[-1] == 3 and counts == sorted(counts)
+
+
+def _weighed_there(design):
+    """A stand-in for ``brep_of``: plain MassData naming the process that weighed it."""
+    return ("brep", {"rotor": (0.01, 1e-6)}, (f"weighed in {os.getpid()}",))
+
+
+def _mass_check(design):
+    """A stand-in for ``reference_check``: where the B-rep mass came from (this process
+    asks ``brep_mass``; the helper returns only its id, weighing nothing)."""
+    if os.getpid() != MAIN:
+        return {"pid": os.getpid()}
+    rep = brep_mass(design.clutch, materials=design.materials)
+    return {"pid": os.getpid(), "notes": list(rep.notes), "mass": rep.parts["rotor"].mass}
+
+
+def test_at_reference_this_process_reads_the_helpers_b_rep_masses(monkeypatch):
+    """At reference fidelity the helper weighs every design first and this process's
+    judgements take those masses (``report_data.design_mass_from``): none weighed here."""
+    monkeypatch.setattr(members, "brep_of", _weighed_there)
+    monkeypatch.setattr(members, "reference_check", _mass_check)
+    with ProcessPoolExecutor(1) as helper:
+        got = members.judge_beside(_designs(4), "reference", helper)
+    here = [d for d in got if d["pid"] == MAIN]
+    assert here and len(here) < 4
+    for d in here:
+        (note,) = d["notes"]
+        assert note.startswith("weighed in ") and int(note.split()[-1]) != MAIN
+        assert d["mass"] == 0.01
+
+
+def test_the_command_with_its_helper_prints_what_it_prints_alone(monkeypatch, capsys):
+    """A small seeded Pareto run (fast path): the JSON with the helper process (the
+    default) equals the JSON with ``--workers 0`` but for the timings."""
+    real = pareto_cmd.pareto
+    monkeypatch.setattr(pareto_cmd, "pareto",
+                        lambda *a, **k: real(*a, **{**k, "pop_size": 16, "generations": 4,
+                                                    "members": 3}))  # fmt: skip
+    argv = ["optimize", "--drums", "2", "--seed", "3", "--no-verify", "--json", "--no-progress"]
+    out = []
+    for extra in ([], ["--workers", "0"]):
+        assert main([*argv, *extra]) == 0
+        data = json.loads(capsys.readouterr().out)
+        for k in ("optimisation_time_s", "reference_time_s"):
+            data.pop(k)
+        out.append(json.dumps(data, sort_keys=True))
+    assert out[0] == out[1]
+    assert len(json.loads(out[0])["members"]) == 3
