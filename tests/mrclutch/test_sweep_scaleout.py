@@ -126,32 +126,50 @@ def test_a_scheduler_without_workers_is_refused_within_the_timeout(tmp_path, cap
         _fails(capsys, argv, "no worker joined within 0.5 s")
 
 
-def test_dask_local_cluster_gives_the_rows_of_the_in_process_run(tmp_path):
-    """``--dask-local 2``: two worker processes (one thread each) started by the CLI."""
+@pytest.fixture(scope="module")
+def whole_parquet(tmp_path_factory):
+    """(the spec, the parts of its sweep run in one process without interruption): one
+    20 000-row run the Dask and the killed sweeps are both compared with (each ran its own,
+    ~8 s of CPU)."""
+    pytest.importorskip("pyarrow.parquet")
+    tmp = tmp_path_factory.mktemp("whole")
+    spec, whole = tmp / "spec.toml", tmp / "whole.parquet"
+    spec.write_text(SPEC)  # 20 000 designs in 20 chunks
+    subprocess.run(_sweep(spec, whole), check=True, capture_output=True, timeout=HANG)
+    return spec, whole
+
+
+def _same_parts(whole, other):
+    names = sorted(p.name for p in whole.iterdir())
+    assert names == sorted(p.name for p in other.iterdir()) and len(names) == 20
+    assert all((other / n).read_bytes() == (whole / n).read_bytes() for n in names)
+
+
+def test_dask_local_cluster_gives_the_rows_of_the_in_process_run(tmp_path, whole_parquet):
+    """``--dask-local 2``: two worker processes (one thread each) started by the CLI write
+    the in-process run's Parquet parts byte for byte (its rows, in its order)."""
     pytest.importorskip("distributed")
-    spec = tmp_path / "spec.toml"
-    spec.write_text(SPEC)  # 20 000 designs
-    one, dask = tmp_path / "one.csv", tmp_path / "dask.csv"
-    subprocess.run(_sweep(spec, one), check=True, capture_output=True, timeout=HANG)
+    spec, whole = whole_parquet
+    dask = tmp_path / "dask.parquet"
     r = subprocess.run(_sweep(spec, dask, "--dask-local", "2"), capture_output=True, text=True,
                        timeout=HANG)  # fmt: skip
     if r.returncode != 0 and "LocalCluster" in r.stderr and "OSError" in r.stderr:
         pytest.skip(f"distributed cannot start a cluster here: {r.stderr[-300:]}")
     assert r.returncode == 0, r.stderr
     assert "20000 designs" in r.stdout
-    assert dask.read_text() == one.read_text()
+    _same_parts(whole, dask)
 
 
-def test_killed_parquet_sweep_keeps_readable_parts_and_resumes_to_the_same_rows(tmp_path):
+def test_killed_parquet_sweep_keeps_readable_parts_and_resumes_to_the_same_rows(
+    tmp_path, whole_parquet
+):
     """A real SIGTERM: every part on disk is readable at once (no footer left unwritten),
     and --resume ends with byte-identical parts. test_sweep_cli's SPEC: 20 000 rows in 20
     parts (60 000 in 30 cost three times the time for the same claim); killed once three
     are on disk, the 17 left take far longer than the 20 ms poll."""
     pq = pytest.importorskip("pyarrow.parquet")
-    spec = tmp_path / "spec.toml"
-    spec.write_text(SPEC)
-    whole, part = tmp_path / "whole.parquet", tmp_path / "part.parquet"
-    subprocess.run(_sweep(spec, whole), check=True, capture_output=True, timeout=HANG)
+    spec, whole = whole_parquet
+    part = tmp_path / "part.parquet"
     proc = subprocess.Popen(_sweep(spec, part), stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline:  # wait until a few parts are on disk
@@ -168,9 +186,7 @@ def test_killed_parquet_sweep_keeps_readable_parts_and_resumes_to_the_same_rows(
     assert 0 < table.num_rows < 20000 and table.num_rows % 1000 == 0
     assert np.array_equal(table["design_id"].to_numpy(), np.arange(table.num_rows))
     subprocess.run(_sweep(spec, part, "--resume"), check=True, capture_output=True, timeout=HANG)
-    names = sorted(p.name for p in whole.iterdir())
-    assert names == sorted(p.name for p in part.iterdir()) and len(names) == 20
-    assert all((part / n).read_bytes() == (whole / n).read_bytes() for n in names)
+    _same_parts(whole, part)
 
 
 def test_pareto_plot_reads_a_parquet_sweep(tmp_path):
