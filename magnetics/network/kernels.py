@@ -429,21 +429,23 @@ def _newton(p, off, m, npole, tab, inv, nseg, ni, start, warm_start, gain, rtol,
     return False, jrow
 
 
-def _workspace(m):  # type: ignore[no-untyped-def]
+def _workspace(m: int) -> FloatArray:
     """Scratch rows for ``_newton`` (x, trial x, step, two residuals, two Jacobians, and
     the residual's and the solve's work rows, the continuation's source and predicted start),
-    each long enough for any of them."""
+    each long enough for any of them. Allocated by the caller, not in a compiled kernel: the
+    kernels then allocate nothing and compile without numba's reference counting (NRT),
+    ≈ 20 % less code to compile (``compiled._kernels``)."""
     return np.zeros((7 + 8 + 2, max(_jac_layout(m)[-1], 3 * m + 5)))
 
 
 def _solve_rows(pk, off, m, npole, tab, inv, nseg, ni, order, start, has_start, gain, rtol,
-                max_iter, out, ok):  # type: ignore[no-untyped-def]  # fmt: skip
+                max_iter, out, ok, ws):  # type: ignore[no-untyped-def]  # fmt: skip
     """``solve_network``'s kernel: every design s, its currents in ``order[s]``, each Newton
     started from ``start`` (if ``has_start``) or by continuation from the last current's
     solution, the first (and a continuation that fails) from the linear network's times
     ``gain[s, c]`` (``gain`` (S, C), or empty: 1), retried as is if that start fails; the
-    loop fluxes in ``out`` (S, C, 3m + 5), ``ok[s]`` False where one did not converge."""
-    ws = _workspace(m)
+    loop fluxes in ``out`` (S, C, 3m + 5), ``ok[s]`` False where one did not converge.
+    ``ws``: the caller's workspace (``_workspace``)."""
     src, guess = ws[15], ws[16]
     for i in range(src.size):
         src[i] = 0.0
@@ -474,9 +476,9 @@ def _solve_rows(pk, off, m, npole, tab, inv, nseg, ni, order, start, has_start, 
             prev = c
 
 
-def _tangent_rows(pk, off, m, npole, tab, inv, nseg, x, ni, source, v):  # type: ignore[no-untyped-def]
-    """``flux_linkage``'s kernel: v = J⁻¹·source at the loop fluxes x (S, C, 3m + 5)."""
-    ws = _workspace(m)
+def _tangent_rows(pk, off, m, npole, tab, inv, nseg, x, ni, source, v, ws):  # type: ignore[no-untyped-def]
+    """``flux_linkage``'s kernel: v = J⁻¹·source at the loop fluxes x (S, C, 3m + 5), ``ws``
+    the caller's workspace (``_workspace``)."""
     res, jac, work = ws[3], ws[5], ws[7:15]
     for s in range(pk.shape[0]):
         for c in range(x.shape[1]):
@@ -486,5 +488,5 @@ def _tangent_rows(pk, off, m, npole, tab, inv, nseg, x, ni, source, v):  # type:
 
 
 _KERNELS = ("_jac_layout", "_segment", "_h_dh", "_h_mean_dh", "_odd", "_pair", "_band",
-            "_residual", "_solve", "_solve_ladder", "_newton", "_workspace", "_solve_rows",
+            "_residual", "_solve", "_solve_ladder", "_newton", "_solve_rows",
             "_tangent_rows")  # fmt: skip

@@ -31,7 +31,7 @@ from geometry.validation import ParameterError
 from magnetics.materials import MATERIALS, Magnetic, magnetic
 from magnetics.network.build import Network
 from magnetics.network.compiled import _entry
-from magnetics.network.kernels import _pack, _tables
+from magnetics.network.kernels import _pack, _tables, _workspace
 
 FloatArray = NDArray[np.float64]
 
@@ -121,7 +121,7 @@ def _solve_packed(net: Network, ampere_turns: ArrayLike, packed: Any, mats: Mapp
         (pk, off), (tab, inv, nseg) = prepare(net, mats) if packed is None else packed
         kernel = _entry("_solve_rows", out.shape[0] * out.shape[1])
         kernel(pk, off, net.m, net.shell_k.shape[1], tab, inv, nseg, ni, order, x0, has_start,
-               gains, float(rtol), int(max_iter), out, ok)  # fmt: skip
+               gains, float(rtol), int(max_iter), out, ok, _workspace(net.m))  # fmt: skip
     if not ok.all():
         rows = np.flatnonzero(~ok).tolist()
         raise NetworkConvergenceError(
@@ -156,7 +156,7 @@ def flux_linkage(
         pk, off = _pack(net)
         tab, inv, nseg = _materials(net, mats)
         kernel = _entry("_tangent_rows", x.shape[0] * x.shape[1])
-        kernel(pk, off, m, net.shell_k.shape[1], tab, inv, nseg, x, ni, source, v)
+        kernel(pk, off, m, net.shell_k.shape[1], tab, inv, nseg, x, ni, source, v, _workspace(m))
     lam = n * (x[..., m - 1] + x[..., m])
     ind = n**2 * (v[..., m - 1] + v[..., m])
     return lam, ind
