@@ -26,6 +26,7 @@ LAZY_OK = {
     "skfem": "FEM only on the reference path",
     "pyvista": "VTK, only for the 3-D view",
     "vtk": "as pyvista",
+    "vtkmodules": "VTK's own modules: the report's screenshot without pyvista's plotting layer",
     "trimesh": "only for mesh inertia",
     "matplotlib": "only where a figure is drawn",
     "scipy": "≈ 0.3–0.4 s; the CLI and the analytic commands start without it",

@@ -138,7 +138,6 @@ def render_model(
     tolerance = view_tolerance(clutch, size) if tolerance is None else tolerance
     triangles = view_triangles(clutch, tolerance)  # before VTK: build123d's import first
     _prepare_offscreen()
-    import numpy as np
     import vtkmodules.vtkRenderingOpenGL2  # noqa: F401  (VTK's OpenGL implementation)
     from vtkmodules.util.numpy_support import numpy_to_vtk, numpy_to_vtkIdTypeArray, vtk_to_numpy
     from vtkmodules.vtkCommonCore import vtkPoints
@@ -158,9 +157,9 @@ def render_model(
     ren.AutomaticLightCreationOff()
     for part, material, v, faces in triangles:
         points = vtkPoints()
-        points.SetData(numpy_to_vtk(np.ascontiguousarray(v, dtype=float), deep=True))
+        points.SetData(numpy_to_vtk(v.astype("float64", order="C"), deep=True))
         cells = vtkCellArray()
-        cells.ImportLegacyFormat(numpy_to_vtkIdTypeArray(faces.astype(np.int64), deep=True))
+        cells.ImportLegacyFormat(numpy_to_vtkIdTypeArray(faces.astype("int64"), deep=True))
         poly = vtkPolyData()
         poly.SetPoints(points)
         poly.SetPolys(cells)
@@ -192,9 +191,9 @@ def render_model(
     window.AddRenderer(ren)
     cam = ren.GetActiveCamera()
     b = ren.ComputeVisiblePropBounds()
-    centre = np.array([(b[0] + b[1]) / 2, (b[2] + b[3]) / 2, (b[4] + b[5]) / 2])
-    cam.SetFocalPoint(*centre)
-    cam.SetPosition(*(centre - (0.0, 1.0, 0.0)))  # along +y at the x–z cut plane
+    x, y, z = ((b[i] + b[i + 1]) / 2 for i in (0, 2, 4))
+    cam.SetFocalPoint(x, y, z)
+    cam.SetPosition(x, y - 1.0, z)  # along +y at the x–z cut plane
     cam.SetViewUp(0.0, 0.0, 1.0)
     ren.ResetCamera()
     cam.Azimuth(AZIMUTH_DEG)
