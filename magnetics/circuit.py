@@ -308,10 +308,7 @@ def _build_kernels(path: MagneticPath) -> _Kernels:
 
 def _sum_h(mat: Magnetic, phi: FloatArray, k: FloatArray, w: FloatArray, wk: FloatArray):  # type: ignore[no-untyped-def]
     """Σ_j w_j·H(k_j·Φ) and its Φ-derivative Σ_j w_j·k_j·H'(k_j·Φ); Φ ≥ 0 (S, C), k (J, S, 1)."""
-    h, dh = mat.h_dh(k * phi)
-    h *= w
-    dh *= wk
-    return h.sum(0), dh.sum(0)
+    return mat.h_dh_sum(k, phi, w, wk)
 
 
 def _mmf(

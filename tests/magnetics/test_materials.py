@@ -135,3 +135,25 @@ def test_carrier_viscosity_is_the_walther_line_through_its_points() -> None:
     assert f.carrier_viscosity(70.0) == pytest.approx(7.735e-6, rel=1e-3)
     ratio = f.viscosity_at(100.0) / f.viscosity_at(40.0)
     assert ratio == pytest.approx(4.1 / 19.0, rel=1e-9)
+
+
+@pytest.mark.parametrize("mat", [STEEL_1018, MATERIALS["mrf_132dg"], MATERIALS["air"]])
+@pytest.mark.parametrize("shape", [(12, 5000, 1), (12, 700, 8), (9, 1, 1), (1, 5000, 1)])
+def test_h_dh_sum_is_the_weighted_sum_of_h_dh_bit_for_bit(mat, shape):
+    """h_dh_sum (the circuit's element sums) equals h_dh at B = k·Φ weighted by w, wk and
+    summed over the first axis, to the last bit: the j-at-a-time loop of a large (S, C)
+    (the first two shapes), the plain expression of a small one (where numpy adds J ≥ 8
+    terms pairwise) and of a single j. B spans zero, the table and the μ0 extension."""
+    j, s, c = shape
+    rng = np.random.default_rng(sum(shape))
+    k = rng.uniform(0.0, 2.0, (j, s, 1))
+    k[:, ::7] = 0.0  # masked entries (k = w = 0)
+    w = rng.uniform(0.0, 1e-2, (j, s, 1))
+    phi = rng.choice([0.0, 0.3, 1.0, 2.5, 30.0], (s, c)) * rng.uniform(0.5, 1.0, (s, c))
+    h, dh = mat.h_dh(k * phi)
+    h *= w
+    dh *= w * k
+    got = mat.h_dh_sum(k, phi, w, w * k)
+    for a, b in zip(got, (h.sum(0), dh.sum(0)), strict=True):
+        assert a.shape == (s, c)
+        np.testing.assert_array_equal(a.view(np.int64), b.view(np.int64))
