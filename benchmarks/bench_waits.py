@@ -153,7 +153,8 @@ def install_first_run(tmp: Path) -> list[tuple[str, float, float, str]]:
     ):  # fmt: skip
         first, err, cpu1 = _run(argv, env, tmp)
         second, _, cpu2 = _run(argv, env, tmp)
-        said = next((ln for ln in err.splitlines() if "compiling" in ln), "").strip()
+        lines = [ln for ln in err.splitlines() if "compiling" in ln]  # the estimate's last
+        said = (lines[-1] if lines else "").strip()
         said += _estimate(err)
         out.append((what, first, second, f"CPU {cpu1:.2f} s then {cpu2:.2f} s; {said}"))
     return out
