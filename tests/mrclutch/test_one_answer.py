@@ -241,6 +241,10 @@ def members(tmp_path_factory):
 def test_members_get_the_optimisers_verdict_K_and_K_max_from_every_command(
     members, capsys, tmp_path, judged_once
 ):
+    """Every member's file through evaluate, compare and haptic at reference fidelity, and
+    the first member's through the report too (the report of each further member, ~20 s of
+    CPU, ran the same code on another design of the same rule and status: pass, worst
+    case), gives the optimiser's (status, K, K_max)."""
     folder, opt = members
     files = sorted(folder.glob("member_*.toml"))
     assert len(files) >= 2 and len(files) == len(opt["designs_written"])  # two members or more
@@ -251,13 +255,17 @@ def test_members_get_the_optimisers_verdict_K_and_K_max_from_every_command(
         row = by_member[int(f.stem.split("_")[1])]["reference"]
         want = _triple(row)
         assert want[0] == "pass"  # kept members hold over the ranges
+        report = tmp_path / f.stem if f == files[0] else None
         texts, triples, gearing = _every_command(capsys, judged_once,
                                                  [str(f), "--fidelity", "reference"],
-                                                 tmp_path / f.stem)  # fmt: skip
-        assert set(triples) == {want} and len(triples) == 4, f.name  # the four commands
+                                                 report)  # fmt: skip
+        n = 4 if report else 3  # the four commands (three without the report)
+        assert set(triples) == {want} and len(triples) == n, f.name
         assert len(set(texts)) == 1 and len(set(gearing)) == 1, f.name
-        metrics = json.loads((tmp_path / f.stem / "metrics.json").read_text())
-        html = (tmp_path / f.stem / "report.html").read_text()
+        if report is None:
+            continue
+        metrics = json.loads((report / "metrics.json").read_text())
+        html = (report / "report.html").read_text()
         assert html.count('id="verdict"') == 1 and "Verdict: PASS" in html
         assert texts[0] == metrics["verdict"]["line"]
     assert opt["notes"] and "[measured]" in opt["notes"][0]
