@@ -31,8 +31,11 @@ MU0 = 4e-7 * math.pi  # vacuum permeability, H/m (pre-2019 SI value; differs by 
 FloatArray = NDArray[np.float64]
 _DENSE = 4096  # samples of the PCHIP curve used by np.interp
 _FAR_B = 1e6  # T: the μ0 extension point (no clutch field comes near)
-#: (S, C) elements from which ``BHCurve.h_dh_sum`` works one j at a time
-_ROW_LOOP = 4096
+#: (S, C) elements from which ``BHCurve.h_dh_sum`` works in blocks of j's, and a block's
+#: elements (each of its buffers stays in cache). Measured on the sweep's calls (one run,
+#: interleaved): at S = 5000, C = 1 the plain expression is as fast, at C = 2 the blocks
+#: take 0.72–0.92 of its time, at C = 8 (the current's rise) 0.22–0.37.
+_ROW_LOOP, _BLOCK = 8192, 65536
 
 
 def pchip(x: FloatArray, y: FloatArray, xq: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -220,9 +223,10 @@ class BHCurve:
         at Φ ≥ 0 (S, C): the circuit's element sums, ``h_dh`` at B = k·Φ weighted and added.
 
         Bit-identical to ``h, dh = h_dh(k·Φ); (h·w).sum(0), (dh·wk).sum(0)``: a large
-        (S, C) is done one j at a time in reused buffers (each stays in cache; the (J, S, C)
-        temporaries were ~4 ns an element a pass), added in numpy's order for an outer
-        axis (j = 0, 1, …); a small one, where numpy may add pairwise, as that expression.
+        (S, C) is done a block of j's at a time in reused buffers (each stays in cache; the
+        (J, S, C) temporaries of C = 8 cost ~4 ns an element a pass), added in numpy's order
+        for an outer axis (j = 0, 1, …); a small one, where numpy may add pairwise (S·C = 1),
+        as that expression.
         """
         shape = np.broadcast_shapes(k.shape[1:], phi.shape)
         n = k.shape[0]
@@ -232,24 +236,30 @@ class BHCurve:
             dh *= wk
             return h.sum(0), dh.sum(0)
         last, inv = self._slope.size - 1, self._inv_step
-        hs, ds, h, s, b, t = (np.empty(shape) for _ in range(6))
-        i = np.empty(shape, np.intp)
-        for j in range(n):
-            hj, sj = (hs, ds) if j == 0 else (h, s)
-            np.multiply(k[j], phi, out=b)
-            np.multiply(b, inv, out=t)
-            np.minimum(t, last, out=t)
-            np.copyto(i, t, casting="unsafe")  # = astype(intp): truncation
+        rows = max(1, _BLOCK // math.prod(shape))  # j's a block: ~_BLOCK elements
+        hs, ds = np.empty(shape), np.empty(shape)
+        h, s, b, t = (np.empty((rows, *shape)) for _ in range(4))
+        i = np.empty((rows, *shape), np.intp)
+        for j0 in range(0, n, rows):
+            m = min(rows, n - j0)
+            bj, tj, ij, hj, sj = b[:m], t[:m], i[:m], h[:m], s[:m]
+            np.multiply(k[j0 : j0 + m], phi, out=bj)
+            np.multiply(bj, inv, out=tj)
+            np.minimum(tj, last, out=tj)
+            np.copyto(ij, tj, casting="unsafe")  # = astype(intp): truncation
             # mode "wrap": the same element as "raise" wherever that does not raise, unbuffered
-            self._slope.take(i, out=sj, mode="wrap")
-            self._icpt.take(i, out=hj, mode="wrap")
-            np.multiply(sj, b, out=b)
-            hj += b  # H = icpt + slope·B, as h_dh
-            hj *= w[j]
-            sj *= wk[j]
-            if j:
-                hs += h
-                ds += s
+            self._slope.take(ij, out=sj, mode="wrap")
+            self._icpt.take(ij, out=hj, mode="wrap")
+            np.multiply(sj, bj, out=bj)
+            hj += bj  # H = icpt + slope·B, as h_dh
+            hj *= w[j0 : j0 + m]
+            sj *= wk[j0 : j0 + m]
+            for r in range(m):  # in order of j, as numpy's sum over an outer axis
+                if j0 + r == 0:
+                    hs[...], ds[...] = hj[0], sj[0]
+                else:
+                    hs += hj[r]
+                    ds += sj[r]
         return hs, ds
 
     def h_mean_dh(self, b: FloatArray) -> tuple[FloatArray, FloatArray]:

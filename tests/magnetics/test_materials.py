@@ -138,12 +138,15 @@ def test_carrier_viscosity_is_the_walther_line_through_its_points() -> None:
 
 
 @pytest.mark.parametrize("mat", [STEEL_1018, MATERIALS["mrf_132dg"], MATERIALS["air"]])
-@pytest.mark.parametrize("shape", [(12, 5000, 1), (12, 700, 8), (9, 1, 1), (1, 5000, 1)])
+@pytest.mark.parametrize(
+    "shape", [(12, 5000, 2), (12, 700, 16), (12, 3000, 1), (9, 1, 1), (1, 9000, 1)]
+)
 def test_h_dh_sum_is_the_weighted_sum_of_h_dh_bit_for_bit(mat, shape):
     """h_dh_sum (the circuit's element sums) equals h_dh at B = k·Φ weighted by w, wk and
-    summed over the first axis, to the last bit: the j-at-a-time loop of a large (S, C)
-    (the first two shapes), the plain expression of a small one (where numpy adds J ≥ 8
-    terms pairwise) and of a single j. B spans zero, the table and the μ0 extension."""
+    summed over the first axis, to the last bit: the blocks of j's of a large (S, C) (the
+    first two shapes: two blocks of 6, blocks of 5, 5 and 2), the plain expression of a
+    small one (numpy adds J ≥ 8 terms pairwise at S·C = 1) and of a single j. B spans zero,
+    the table and the μ0 extension."""
     j, s, c = shape
     rng = np.random.default_rng(sum(shape))
     k = rng.uniform(0.0, 2.0, (j, s, 1))
