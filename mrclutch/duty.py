@@ -42,7 +42,7 @@ from magnetics.materials import FLUIDS
 from mrclutch.batch import batch_fields
 from mrclutch.design_network import network_yield, section_network
 from mrclutch.haptics.actuator import TABLE2_MR, HapticParams
-from mrclutch.haptics.model import metrics_of
+from mrclutch.haptics.model import passivity_batch
 from mrclutch.uncertainty import range_from
 
 #: The paper's duty rule for rated torque, 25 % [lebel] (docs/haptic.md): the default share
@@ -183,7 +183,8 @@ def hold(ctx: Context, load: Any, seconds: float, mr: HapticParams, reduction: f
     _, damp_cold, _ = drag_at(ctx, ctx.fluid_temperature)  # where mr.b1 was taken
     off, damp, eta = drag_at(ctx, temps[1])
     b1 = float(mr.b1) + 2 * reduction**2 * (damp - damp_cold)
-    verdict = metrics_of([replace(mr, b1=b1)], [k])[0]
+    # the verdict's passivity at k with that b1 (metrics_of's, without its other metrics)
+    verdict = passivity_batch(HapticParams.stack([replace(mr, b1=b1)]), np.array([float(k)]))
     return {
         "time_s": seconds,
         "current_A": i,
@@ -197,8 +198,8 @@ def hold(ctx: Context, load: Any, seconds: float, mr: HapticParams, reduction: f
         "torque_N_m": torque_at(ctx, i, temps),
         "off_state_torque_N_m": off,
         "b1_N_s_per_m": b1,
-        "passive": bool(verdict["passive"]),
-        "max_passive_K_N_per_m": float(verdict["max_passive_K_N_per_m"]),
+        "passive": bool(verdict["passive"][0]),
+        "max_passive_K_N_per_m": float(verdict["max_passive_K_N_per_m"][0]),
     }
 
 

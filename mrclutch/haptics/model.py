@@ -62,6 +62,7 @@ __all__ = [
     "metrics_batch",
     "metrics_of",
     "passive_impedance",
+    "passivity_batch",
     "rendering_area",
     "resonance",
 ]
@@ -187,12 +188,21 @@ def metrics_batch(
         "resonance_hz": full(resonance(p)),
     }
     if limits:
-        kp = full(max_passive_stiffness(p))
-        out["passive"] = out["K_N_per_m"] <= kp * (1.0 + 1e-9)
-        out["max_passive_K_N_per_m"] = kp
+        out.update(passivity_batch(p, K))
         out["max_stable_K_N_per_m"] = full(max_stable_stiffness(p))
     out["rendering_area_dB_decade"] = full(rendering_area(p, K, band))
     return out
+
+
+def passivity_batch(p: HapticParams, K: Any) -> dict[str, np.ndarray]:
+    """``metrics_batch``'s ``passive`` and ``max_passive_K_N_per_m`` alone (the same arrays,
+    bit for bit): what the duty's hot holds read of a pair at K, without the bandwidths
+    and the stability scan the other metrics need (issue 40)."""
+    K = _check_K(K)
+    shape = np.broadcast_shapes(p.shape, np.shape(K))
+    kp = np.broadcast_to(np.asarray(max_passive_stiffness(p), dtype=float), shape).copy()
+    k = np.broadcast_to(np.asarray(K, dtype=float), shape).copy()
+    return {"passive": k <= kp * (1.0 + 1e-9), "max_passive_K_N_per_m": kp}
 
 
 def metrics(p: HapticParams, K: float | None = None) -> dict[str, Any]:

@@ -148,3 +148,24 @@ def test_evaluate_builds_the_feel_and_torque_response_circuit_once(monkeypatch):
     args = (design, f.max_torque, f.yield_torque, f.off_state_torque, 1.0)
     path = circuit.path_from_section(pipeline.build_section(design.clutch, design.materials))
     assert feel.feel_figures(*args, path) == feel.feel_figures(*args)
+
+
+def test_passivity_batch_is_metrics_batch_passivity_bit_for_bit():
+    """The duty's hot holds read a pair's passivity at K by passivity_batch, not the full
+    metrics_of (bandwidths, the stability scan): the same passive flags and max passive K
+    as metrics_batch, bit for bit, on designs around the paper's pair, K below and above."""
+    from mrclutch.haptics.actuator import HapticParams
+    from mrclutch.haptics.model import metrics_batch, passivity_batch
+
+    rng = np.random.default_rng(7)
+    n = 12
+    b1, m1 = float(TABLE2_MR.b1), float(TABLE2_MR.m1)
+    p = HapticParams.stack([replace(TABLE2_MR, b1=b1 * s, m1=m1 * t)
+                            for s, t in rng.uniform(0.2, 5.0, (n, 2))])  # fmt: skip
+    K = rng.uniform(0.2, 3.0, n) * np.asarray(robust.max_passive_stiffness(p))
+    full = metrics_batch(p, K)
+    got = passivity_batch(p, K)
+    assert full["passive"].any() and not full["passive"].all()
+    for key in ("passive", "max_passive_K_N_per_m"):
+        assert got[key].dtype == full[key].dtype
+        assert got[key].tobytes() == full[key].tobytes()
