@@ -22,10 +22,11 @@ once) and the staging folder is removed. The staging folders of processes that d
 (SIGKILL, power loss) are removed by the next report into the same place.
 
 The CAD side — build123d's import (seconds), the B-rep mass the evaluation uses, the STEP
-and STL files and the 3D view — runs in a second process (``mrclutch.cli.report_cad``)
-started with the build, while this one solves the FEM and draws the plots (issue 40); the
-evaluation waits for the mass, the last steps for the files, and a stopped build kills it
-before the staging folder goes.
+and STL files and the 3D view's pixels (VTK) — runs in a second process
+(``mrclutch.cli.report_cad``) started with the build, while this one solves the FEM and
+draws the plots (issue 40); the evaluation waits for the mass, the last steps for the files
+and the pixels (view.png's legend is drawn here, with the matplotlib loaded for the plots),
+and a stopped build kills it before the staging folder goes.
 """
 
 from __future__ import annotations
