@@ -59,10 +59,13 @@ def _interp(
         frac.append(t)
     # all corners of the cell at once (a node axis has one)
     corners = _corners(len(names), node_axes)
-    T = np.stack(frac)[None]  # (1, k, P)
-    idx = np.stack(lo_idx)[None] + corners[:, :, None]  # (M, k, P)
-    w = np.prod(np.where(corners[:, :, None] == 1, T, 1.0 - T), axis=1)  # (M, P)
-    v = grid[tuple(idx[:, j] for j in range(len(names)))]  # (M, P)
+    # per axis j: each corner's index (M, P) and weight factor t or 1 − t (the rows of
+    # [1 − t, t] its 0/1 picks); the weights' product over the axes in their order
+    idx = tuple(i[None] + corners[:, j, None] for j, i in enumerate(lo_idx))
+    w = np.stack([1.0 - frac[0], frac[0]])[corners[:, 0]]  # (M, P)
+    for j in range(1, len(names)):
+        w *= np.stack([1.0 - frac[j], frac[j]])[corners[:, j]]
+    v = grid[idx]  # (M, P)
     est = np.sum(np.where(w > 0, w * v, 0.0), axis=0)  # NaN corners count only with weight
     hi, lo = np.fmax.reduce(v, axis=0), np.fmin.reduce(v, axis=0)
     est = np.where(inside, est, np.nan)

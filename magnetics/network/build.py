@@ -178,7 +178,8 @@ def network_from_regions(
                 q0, q1 = at[sp.z0], at[sp.z1]
                 e0 = np.where(np.abs(q1 - e0) < 1e-12, np.minimum(e0, q0), e0)
                 e1 = np.where(np.abs(q0 - e1) < 1e-12, np.maximum(e1, q1), e1)
-        near = _window_regions(at, f, radii)  # what the fringes' legs may run through
+        # what the fringes' legs may run through
+        near = _window_layers(at, f, _window_regions(at, f, radii), r1 - r0, mu)
         for z, (zname, z0, z1) in enumerate(zones):
             a, b = wall(inner, zname), wall(outer, zname)
             lo = np.maximum(np.maximum(at[a.z0], at[b.z0]), g0)
@@ -208,8 +209,8 @@ def network_from_regions(
             h_hi = np.maximum(np.minimum(g1, mid if not z else g1) - hi, 0.0)
             x_lo = np.maximum(lo - np.maximum(e0, mid if z else e0), 0.0)
             x_hi = np.maximum(np.minimum(e1, mid if not z else e1) - hi, 0.0)
-            c = np.stack([_fringe_decay(at, f, near, lo, gap, mu, -1),
-                          _fringe_decay(at, f, near, hi, gap, mu, 1)], axis=-1)  # fmt: skip
+            c = np.stack([_fringe_decay(f, near, lo, gap, mu, -1),
+                          _fringe_decay(f, near, hi, gap, mu, 1)], axis=-1)  # fmt: skip
             fringe = (gap / np.pi) * (np.log1p(np.pi * x_lo / gap) + np.log1p(np.pi * x_hi / gap))
             eff = length + (fringe if fringing else 0.0)
             if fringing:
@@ -356,10 +357,37 @@ def _window_regions(
             [sp for sp, k in zip(specs, outside, strict=True) if k and sp is not f])  # fmt: skip
 
 
-def _fringe_decay(
+#: One side of a film's fringe window (``_window_layers``): per region that can lie in it,
+#: its z-extent, its thickness t inside the window, μ·t, and whether it is the film's wall.
+_Layer = tuple[FloatArray, FloatArray, FloatArray, FloatArray, bool]
+
+
+def _window_layers(
     at: Mapping[str, FloatArray],
     f: RegionSpec,
     near: tuple[list[RegionSpec], list[RegionSpec]],
+    gap: FloatArray,
+    mu: Mapping[str, float],
+) -> tuple[list[_Layer], list[_Layer]]:
+    """What ``_fringe_decay`` reads of the regions ``near`` film ``f`` (``_window_regions``),
+    inner side then outer, once per film: a film's four fringes (two zones, two ends)
+    differ only in the plane they probe, not in the layers' radii."""
+    out: list[list[_Layer]] = []
+    for inner, specs in ((True, near[0]), (False, near[1])):
+        r_edge = at[f.r0] if inner else at[f.r1]
+        w0, w1 = (r_edge - gap, r_edge) if inner else (r_edge, r_edge + gap)
+        side = []
+        for sp in specs:
+            t = np.maximum(np.minimum(at[sp.r1], w1) - np.maximum(at[sp.r0], w0), 0.0)
+            wall = sp.role == "steel" and (sp.r1 == f.r0 if inner else sp.r0 == f.r1)
+            side.append((at[sp.z0], at[sp.z1], t, t * mu[sp.material], wall))
+        out.append(side)
+    return out[0], out[1]
+
+
+def _fringe_decay(
+    f: RegionSpec,
+    layers: tuple[list[_Layer], list[_Layer]],
     edge: FloatArray,
     gap: FloatArray,
     mu: Mapping[str, float],
@@ -375,23 +403,20 @@ def _fringe_decay(
     lie at depths s ~ g, whose legs reach about that far. Along its layers a laminate's μ
     is their thickness-weighted mean ([wiener1912]). In fluid only, c = 1: Roters' tubes.
     Steel going on on both sides (no legs): the film goes on at H_e, c → 0, kept at 1e-6 so
-    that (g/cπ)·ln(1 + cπh/g) = h to 1e-6 without 0/0. ``near``: the regions that can lie
-    in the inner and the outer window (``_window_regions``)."""
+    that (g/cπ)·ln(1 + cπh/g) = h to 1e-6 without 0/0. ``layers``: the regions that can lie
+    in the inner and the outer window (``_window_layers``)."""
     probe = edge + side * 1e-9  # just past the walls' end, m
     c = np.zeros_like(gap)
-    for inner in (True, False):
-        r_edge = at[f.r0] if inner else at[f.r1]
-        w0, w1 = (r_edge - gap, r_edge) if inner else (r_edge, r_edge + gap)
+    for near in layers:
         num, den = gap * mu[f.material], gap.copy()
         steel = np.zeros(gap.shape, bool)
-        for sp in near[0 if inner else 1]:
-            there = (at[sp.z0] <= probe) & (probe < at[sp.z1])
-            if sp.role == "steel" and (sp.r1 == f.r0 if inner else sp.r0 == f.r1):
+        for z0, z1, t, tmu, wall in near:
+            there = (z0 <= probe) & (probe < z1)
+            if wall:
                 steel |= there  # the wall itself goes on
-            layer = np.minimum(at[sp.r1], w1) - np.maximum(at[sp.r0], w0)
-            layer = np.where(there, np.maximum(layer, 0.0), 0.0)
-            num = num + layer * mu[sp.material]
-            den = den + layer
+            # μ·t and t where the region is (elsewhere + 0: num, den > 0 stay as they are)
+            np.add(num, tmu, out=num, where=there)
+            np.add(den, t, out=den, where=there)
         air = np.maximum(2 * gap - den, 0.0)  # the window's part no region covers
         c += np.where(steel, 0.0, 0.5 * mu[f.material] * (den + air) / (num + air * MU0))
     return np.maximum(c, 1e-6)
@@ -426,18 +451,24 @@ def _end_leak(rg: Regions, at, mats, walls: list[RegionSpec]) -> FloatArray:  # 
             continue
         edges = np.stack([lo, hi, *(at[e] for sp in cand for e in (sp.z0, sp.z1))], axis=1)
         e = np.sort(np.clip(edges, lo[:, None], hi[:, None]), axis=1)
+        # each candidate's radial span inside [r_c, r_p] and its ln(r1/r0), the same in
+        # every slab
+        radial = []
+        for sp in cand:
+            a0 = np.maximum(at[sp.r0], r_c)
+            a1 = np.minimum(at[sp.r1], r_p)
+            weight = 0.0 if sp.role == "steel" else 1.0 / mu[sp.material]
+            radial.append((at[sp.z0], at[sp.z1], a1 > a0, np.log(np.maximum(a1, a0) / a0),
+                           weight))  # fmt: skip
         perm = np.zeros(size)
         for j in range(e.shape[1] - 1):
             z0, z1 = e[:, j], e[:, j + 1]
             dz, zm = z1 - z0, 0.5 * (z0 + z1)
             series = np.zeros(size)  # Σ ln(r1/r0)/μ over the slab's radial path
             covered = np.zeros(size)
-            for sp in cand:
-                inside = (at[sp.z0] <= zm) & (zm < at[sp.z1]) & (dz > 0)
-                a0 = np.maximum(at[sp.r0], r_c)
-                a1 = np.minimum(at[sp.r1], r_p)
-                ln = np.where(inside & (a1 > a0), np.log(np.maximum(a1, a0) / a0), 0.0)
-                weight = 0.0 if sp.role == "steel" else 1.0 / mu[sp.material]
+            for c0, c1, spans, lnr, weight in radial:
+                inside = (c0 <= zm) & (zm < c1) & (dz > 0)
+                ln = np.where(inside & spans, lnr, 0.0)
                 series += ln * weight
                 covered += ln
             series += np.maximum(np.log(r_p / r_c) - covered, 0.0) / MU0  # air
