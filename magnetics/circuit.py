@@ -127,6 +127,8 @@ def band_series_reluctance(
     for sp in rg:
         r0, r1 = at[sp.r0], at[sp.r1]
         layer = (at[sp.z0] <= at[za1]) & (at[sp.z1] >= at[zb0]) & (r0 >= rc) & (r1 <= rp)
+        if not layer.any():
+            continue  # adds 0 to every design (most regions: no log to take)
         mu = magnetic(sp.material, mats).mu_initial
         s_band = s_band + np.where(layer, np.log(r1 / np.where(layer, r0, r1)) / mu, 0.0)
     return s_band
@@ -192,6 +194,8 @@ def path_from_regions(rg: Regions, materials: Mapping[str, Magnetic] | None = No
     for sp in rg:
         r0, r1, a0, a1 = box(sp)
         spans = (a0 <= za1) & (a1 >= zb0) & (r0 >= rc)
+        if not spans.any():
+            continue  # adds 0 to every design
         area = np.pi * (r1**2 - r0**2)
         layer = spans & (r1 <= rp)
         if sp.role == "fluid":

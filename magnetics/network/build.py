@@ -242,15 +242,15 @@ def network_from_regions(
     for k in range(1, m):
         w = wall(films[k].walls[0], "A")
         for sp in spans:
-            r0, r1, c0, c1 = box(sp)
-            across = (c0 <= za1) & (c1 >= zb0)
-            area = np.pi * (r1**2 - r0**2)
             if sp.r0 == w.r0 and sp.r1 == w.r1:
                 share = 1.0
             elif sp.film == "cylinder" and (sp.r1 == w.r0 or sp.r0 == w.r1):
                 share = 0.5
             else:
                 continue
+            r0, r1, c0, c1 = box(sp)
+            across = (c0 <= za1) & (c1 >= zb0)
+            area = np.pi * (r1**2 - r0**2)
             part = np.where(across, share * area, 0.0)
             if sp.role == "fluid":
                 rung_fluid[:, k] += part
