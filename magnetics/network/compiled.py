@@ -97,9 +97,11 @@ def _kernels() -> dict[str, Any]:
     # no reference counting (NRT): the kernels allocate nothing (the caller's workspace,
     # ``kernels._workspace``), and without it ≈ 20 % less code compiles (IR lines counted)
     jit = numba.njit(cache=True, error_model="numpy", _nrt=False)
+    inline = numba.njit(cache=True, error_model="numpy", _nrt=False, inline="always")
     for name in kernels._KERNELS:
         f = g[name]
-        ns[name] = jit(types.FunctionType(f.__code__, ns, f.__name__, f.__defaults__))
+        code = types.FunctionType(f.__code__, ns, f.__name__, f.__defaults__)
+        ns[name] = (inline if name in _INLINE else jit)(code)
     return ns
 
 
@@ -123,12 +125,16 @@ _SIGNATURES = {
     "_band": f"UniTuple(float64, 3)({_MAT}, {', '.join(['float64'] * 5)}, boolean)",
     "_residual": f"void({_F1}, {_I1}, int64, int64, {_MAT}, {_F1}, float64, {_F1}, boolean, "
     f"{_F1}, {_F1}, {_F2})",
-    "_newton": f"Tuple((boolean, int64))({_F1}, {_I1}, int64, int64, {_MAT}, float64, {_F1}, "
-    f"boolean, float64, float64, int64, {_F1}, {_F2})",
     "_solve_rows": f"void({_F2}, {_I1}, int64, int64, {_MAT}, {_F2}, int64[:, ::1], {_F3}, "
     f"boolean, {_F2}, float64, int64, {_F3}, boolean[::1], {_F2})",
     "_tangent_rows": f"void({_F2}, {_I1}, int64, int64, {_MAT}, {_F3}, {_F2}, {_F1}, {_F3}, {_F2})",
 }
+
+#: Kernels compiled inline into their one caller (numba's ``inline="always"``), not on their
+#: own: the Newton, called once by ``_solve_rows`` (its own compile re-optimised and emitted
+#: the residual's and the solve's code once more, ≈ 2 s of CPU, that ``_solve_rows`` then
+#: optimised again).
+_INLINE = ("_newton",)
 
 #: Kernels a second process compiles into numba's cache while this one compiles the others
 #: (``_Clock``, on a machine of 2 or more cores): the Thomas solve and its ladder (≈ 30 % of
@@ -140,11 +146,12 @@ _BESIDE_WAIT_S = 300.0  # past this the second process is ended and its kernels 
 
 @functools.cache
 def _calls(name: str) -> tuple[str, ...]:
-    """The kernels ``name`` calls, directly or through others, in ``_SIGNATURES``' order."""
+    """The kernels ``name`` calls, directly or through others (those compiled inline too,
+    ``_INLINE``), in ``_SIGNATURES``' order."""
     seen, todo = set(), [name]
     while todo:
         for called in vars(kernels)[todo.pop()].__code__.co_names:
-            if called in _SIGNATURES and called not in seen:
+            if (called in _SIGNATURES or called in _INLINE) and called not in seen:
                 seen.add(called)
                 todo.append(called)
     return tuple(k for k in _SIGNATURES if k in seen and k != name)

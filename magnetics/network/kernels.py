@@ -455,22 +455,23 @@ def _solve_rows(pk, off, m, npole, tab, inv, nseg, ni, order, start, has_start, 
         prev, jrow = -1, 5
         for ci in range(ni.shape[1]):
             c = order[s, ci]
-            g = gain[s, c] if gain.size else 1.0
-            if has_start:
-                conv, jrow = _newton(p, off, m, npole, tab, inv, nseg, ni[s, c], start[s, c],
-                                     True, 1.0, rtol, max_iter, out[s, c], ws)  # fmt: skip
-            else:
-                warm = prev >= 0
-                if warm:  # Euler predictor: x + (dx/dNI)·ΔNI, J·dx/dNI = s at the last answer
-                    _solve(m, ws[jrow], src, guess, ws[7:15])
-                    step = ni[s, c] - ni[s, prev]
-                    for i in range(3 * m + 5):
-                        guess[i] = out[s, prev, i] + guess[i] * step
-                conv, jrow = _newton(p, off, m, npole, tab, inv, nseg, ni[s, c], guess, warm,
-                                     g, rtol, max_iter, out[s, c], ws)  # fmt: skip
-                if not conv and (warm or g != 1.0):  # again from the linear start, as is
-                    conv, jrow = _newton(p, off, m, npole, tab, inv, nseg, ni[s, c], guess,
-                                         False, 1.0, rtol, max_iter, out[s, c], ws)  # fmt: skip
+            # from ``start``, or the continuation's predicted start, or the linear one × g
+            g = 1.0 if has_start or not gain.size else gain[s, c]
+            warm = has_start or prev >= 0
+            x0 = start[s, c] if has_start else guess
+            if warm and not has_start:  # Euler predictor: x + (dx/dNI)·ΔNI, J·dx/dNI = s
+                _solve(m, ws[jrow], src, guess, ws[7:15])  # at the last answer
+                step = ni[s, c] - ni[s, prev]
+                for i in range(3 * m + 5):
+                    guess[i] = out[s, prev, i] + guess[i] * step
+            # one call of the Newton (compiled inline, ``compiled._INLINE``): a failed
+            # continuation or scaled start again from the linear start, as is
+            for _ in range(2):
+                conv, jrow = _newton(p, off, m, npole, tab, inv, nseg, ni[s, c], x0, warm, g,
+                                     rtol, max_iter, out[s, c], ws)  # fmt: skip
+                if conv or has_start or not (warm or g != 1.0):
+                    break
+                warm, g = False, 1.0
             if not conv:
                 ok[s] = False
             prev = c
