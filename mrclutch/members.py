@@ -76,8 +76,19 @@ def judge_beside(designs: list[ClutchDesign], fidelity: str, helper: Executor,
     reference fidelity the helper weighs every B-rep first (``brep_of``: a few 0.1 s) and
     this process reads its masses from there (``report_data.design_mass_from``) instead of
     importing build123d. Each design is judged by the same ``reference_check`` or
-    ``fast_check`` wherever it runs, so the answer is ``judge_all``'s. ``done(n)`` after
-    each of this process's judgements and at the end, ``n`` all judged so far."""
+    ``fast_check`` wherever it runs, so the answer is ``judge_all``'s (and is, all judged
+    here, where the helper breaks). ``done(n)`` after each of this process's judgements and
+    at the end, ``n`` all judged so far."""
+    from concurrent.futures import BrokenExecutor
+
+    try:
+        return _judge_beside(designs, fidelity, helper, done)
+    except BrokenExecutor:  # the helper died (or could not start): every design judged here
+        return judge_all(designs, fidelity, None, done)
+
+
+def _judge_beside(designs: list[ClutchDesign], fidelity: str, helper: Executor,
+                  done: Callable[[int], None] | None) -> list[dict]:  # fmt: skip
     import threading
     from contextlib import ExitStack
 

@@ -4,8 +4,9 @@ reference fidelity this process reads the B-rep masses the helper weighed; the c
 output with its helper is the output without (``--workers 0``)."""
 
 import json
+import multiprocessing
 import os
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import BrokenExecutor, Executor, ProcessPoolExecutor
 from dataclasses import replace
 
 from geometry.mass import brep_mass
@@ -15,8 +16,6 @@ from mrclutch.cli.main import main
 from mrclutch.design import design_preset
 
 PAPER = design_preset("paper")
-#: This test process (a forked helper inherits the value and knows it is not it).
-MAIN = os.getpid()
 _REAL_FAST = members.fast_check
 
 
@@ -28,6 +27,11 @@ def _designs(n: int) -> list:
 def _fast_with_pid(design):
     """``fast_check`` marked with the process that ran it."""
     return {**_REAL_FAST(design), "pid": os.getpid()}
+
+
+def _in_helper() -> bool:
+    """Whether this runs in the helper process (a pool's worker has a parent process)."""
+    return multiprocessing.parent_process() is not None
 
 
 def _dumped(data: list[dict]) -> list[str]:
@@ -44,15 +48,30 @@ def test_both_processes_judge_and_the_answer_is_judge_alls(monkeypatch):
     want = _dumped(members.judge_all(designs, "fast"))
     monkeypatch.setattr(members, "fast_check", _fast_with_pid)
     counts: list[int] = []
-    with ProcessPoolExecutor(1) as helper:
+    with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as helper:
         got = members.judge_beside(designs, "fast", helper, counts.append)
     assert _dumped(got) == want
     pids = [d["pid"] for d in got]
-    here = [i for i, p in enumerate(pids) if p == MAIN]
-    there = [i for i, p in enumerate(pids) if p != MAIN]
+    here = [i for i, p in enumerate(pids) if p == os.getpid()]
+    there = [i for i, p in enumerate(pids) if p != os.getpid()]
     assert here and there and here[0] == 0 and there[-1] == 2
     assert max(here) < min(there)  # the front here, the back there: they met once
     assert counts[-1] == 3 and counts == sorted(counts)
+
+
+class _Broken(Executor):
+    """A helper that died: every submission refused (BrokenExecutor)."""
+
+    def submit(self, fn, /, *args, **kwargs):
+        raise BrokenExecutor("the helper process died")
+
+
+def test_a_broken_helper_leaves_every_judgement_to_this_process():
+    """Where the helper breaks (died, or a spawn that could not start), every design is
+    judged here and the answer is still ``judge_all``'s, in order."""
+    designs = _designs(2)
+    got = members.judge_beside(designs, "fast", _Broken())
+    assert _dumped(got) == _dumped(members.judge_all(designs, "fast"))
 
 
 def _weighed_there(design):
@@ -63,7 +82,7 @@ def _weighed_there(design):
 def _mass_check(design):
     """A stand-in for ``reference_check``: where the B-rep mass came from (this process
     asks ``brep_mass``; the helper returns only its id, weighing nothing)."""
-    if os.getpid() != MAIN:
+    if _in_helper():
         return {"pid": os.getpid()}
     rep = brep_mass(design.clutch, materials=design.materials)
     return {"pid": os.getpid(), "notes": list(rep.notes), "mass": rep.parts["rotor"].mass}
@@ -74,24 +93,48 @@ def test_at_reference_this_process_reads_the_helpers_b_rep_masses(monkeypatch):
     judgements take those masses (``report_data.design_mass_from``): none weighed here."""
     monkeypatch.setattr(members, "brep_of", _weighed_there)
     monkeypatch.setattr(members, "reference_check", _mass_check)
-    with ProcessPoolExecutor(1) as helper:
+    with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as helper:
         got = members.judge_beside(_designs(4), "reference", helper)
-    here = [d for d in got if d["pid"] == MAIN]
+    here = [d for d in got if d["pid"] == os.getpid()]
     assert here and len(here) < 4
     for d in here:
         (note,) = d["notes"]
-        assert note.startswith("weighed in ") and int(note.split()[-1]) != MAIN
+        assert note.startswith("weighed in ") and int(note.split()[-1]) != os.getpid()
         assert d["mass"] == 0.01
 
 
+def _fast_as_reference(design):
+    """A stand-in for ``reference_check`` (the fast path's judgement, which weighs no
+    B-rep), run wherever the member is judged."""
+    return members.fast_check(design)
+
+
+def _paper_fast(base, fidelity, wc):
+    """A stand-in for ``paper_beside`` at reference fidelity: its fast-path judgement."""
+    return members.paper_beside(base, "fast", wc)
+
+
 def test_the_command_with_its_helper_prints_what_it_prints_alone(monkeypatch, capsys):
-    """A small seeded Pareto run (fast path): the JSON with the helper process (the
-    default) equals the JSON with ``--workers 0`` but for the timings."""
+    """A small seeded Pareto run at reference fidelity (its judgement, the paper's and the
+    B-rep's stand-ins: module functions, so the helper runs them too): the JSON with the
+    helper process (the default) equals the JSON with ``--workers 0`` but for the timings,
+    and the helper judged the paper preset and some members."""
     real = pareto_cmd.pareto
     monkeypatch.setattr(pareto_cmd, "pareto",
                         lambda *a, **k: real(*a, **{**k, "pop_size": 16, "generations": 4,
                                                     "members": 3}))  # fmt: skip
-    argv = ["optimize", "--drums", "2", "--seed", "3", "--no-verify", "--json", "--no-progress"]
+    monkeypatch.setattr(members, "reference_check", _fast_as_reference)
+    monkeypatch.setattr(members, "brep_of", _weighed_there)
+    monkeypatch.setattr(pareto_cmd, "paper_beside", _paper_fast)
+    submitted: list[str] = []
+    real_submit = ProcessPoolExecutor.submit
+
+    def submit(self, fn, *args, **kwargs):
+        submitted.append(fn.__name__)
+        return real_submit(self, fn, *args, **kwargs)
+
+    monkeypatch.setattr(ProcessPoolExecutor, "submit", submit)
+    argv = ["optimize", "--drums", "2", "--seed", "3", "--json", "--no-progress"]
     out = []
     for extra in ([], ["--workers", "0"]):
         assert main([*argv, *extra]) == 0
@@ -101,3 +144,8 @@ def test_the_command_with_its_helper_prints_what_it_prints_alone(monkeypatch, ca
         out.append(json.dumps(data, sort_keys=True))
     assert out[0] == out[1]
     assert len(json.loads(out[0])["members"]) == 3
+    assert submitted[0] == "_paper_fast" and submitted.count("_weighed_there") == 3
+    assert "_fast_as_reference" in submitted  # the helper judged some members
+    submitted.clear()
+    assert main([*argv, "--no-verify"]) == 0  # the fast path: no helper
+    assert submitted == [] and json.loads(capsys.readouterr().out)["fidelity"] == "fast"

@@ -200,7 +200,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         type=int,
         default=None,
         help="processes for the reference checks and --verify-top (0: in this process; "
-        "not given: this one, and for the Pareto set one helper process beside it)",
+        "not given: this one, and for the Pareto set's reference checks one helper "
+        "process beside it)",
     )
     p.add_argument(
         "--verify-top",

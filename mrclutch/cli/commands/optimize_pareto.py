@@ -4,12 +4,13 @@ its members judged as their files say (``mrclutch.members``), written, drawn and
 from __future__ import annotations
 
 import argparse
+import multiprocessing
 import os
 import signal
 import sys
 import time
 from collections.abc import Iterator
-from concurrent.futures import Executor, ProcessPoolExecutor
+from concurrent.futures import BrokenExecutor, Executor, ProcessPoolExecutor
 from contextlib import contextmanager, suppress
 from dataclasses import replace
 from pathlib import Path
@@ -79,20 +80,28 @@ def run_pareto(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, .
     old_members = _old_members(args)
     wc = None if args.nominal else robust_verdict(base)
     fidelity = "fast" if args.no_verify else "reference"
-    with _helper(args.workers) as helper:
+    # the helper pays for itself at reference fidelity (an FEM and a B-rep a member), not on
+    # the fast path (--no-verify: a member's judgement ≈ its start-up's imports)
+    with _helper(args.workers is None and fidelity == "reference") as helper:
         return _run(args, base, drums, cons, old_members, wc, fidelity, helper)
 
 
 @contextmanager
-def _helper(workers: int | None) -> Iterator[Executor | None]:
-    """One helper process beside this one (``--workers`` not given): it judges the paper
-    preset while this one searches, then shares the members' judgements
-    (``members.judge_beside``; issue 40). Stopped on the way out, its work or not done."""
-    if workers is not None:
+def _helper(wanted: bool) -> Iterator[Executor | None]:
+    """One helper process beside this one (``wanted``: ``--workers`` not given, reference
+    fidelity): it judges the paper preset while this one searches, then shares the
+    members' judgements (``members.judge_beside``; issue 40). Stopped on the way out, its
+    work done or not."""
+    if not wanted:
         yield None
         return
-    # Ctrl-C is this process's to handle (one line), the helper's to ignore until stopped
-    pool = ProcessPoolExecutor(1, initializer=signal.signal,
+    # a fresh interpreter (spawn), not a fork: a process that has run OpenCascade before
+    # (the suite, a caller of main()) forks its thread pool's held locks, and the fork's
+    # first B-rep fuse waits on them for ever. (A script calling main() unguarded by
+    # `if __name__ == "__main__"` breaks the spawn: all is then judged here.) Ctrl-C is
+    # this process's to handle (one line), the helper's to ignore until stopped
+    pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"),
+                               initializer=signal.signal,
                                initargs=(signal.SIGINT, signal.SIG_IGN))  # fmt: skip
     try:
         yield pool
@@ -153,7 +162,12 @@ def _run(args: argparse.Namespace, base: ClutchDesign, drums: tuple[int, ...],
         for path in old_members - {Path(w) for w in written}:  # --overwrite: none left over
             path.unlink(missing_ok=True)
     notes = shipped[0][1] if shipped else []
-    paper = paper_beside(base, fidelity, wc) if paper_side is None else paper_side.result()
+    paper = None
+    if paper_side is not None:
+        with suppress(BrokenExecutor):  # the helper died or could not start: judged here
+            paper = paper_side.result()
+    if paper is None:
+        paper = paper_beside(base, fidelity, wc)
     if args.plot:
         pareto_set_plot(ps, [r["member"] for r in kept], paper, args.plot)
     data = {
