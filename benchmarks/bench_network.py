@@ -5,7 +5,7 @@ two ways: solved at each current (``max_torque_batch``, its fastest path, the is
 "~6·10⁴/s") and through its torque table (``torque_grid_batch``, what sweeps used).
 
     OPENBLAS_NUM_THREADS=1 python benchmarks/bench_network.py [--designs 100000] [--rounds 3]
-        [--skip-table] [--breakdown]
+        [--skip-table] [--breakdown] [--compile]
 
 ``--skip-table`` leaves the torque table out (it takes 30× the others' time). The network's
 compiled kernels are loaded (or compiled, once per machine) before the clock starts.
@@ -14,11 +14,21 @@ the network's three stages — building the ladder from the region table (NumPy)
 Newton solve (the compiled kernel) and the torque reading (compiled) — against the loop's
 whole time, and the loop's share that building and reading alone take (where the network
 stands if its solve cost nothing).
+``--compile``: instead, a machine's first compile of the solver (``compiled._entry``) in a
+fresh process with an empty numba cache, ``--rounds`` times: each kernel's compile (CPU s
+since the kernel before it ended, the first's with the imports and numba's start; "beside":
+loaded from the second process's cache), this
+process's CPU (the critical path when the second process keeps pace), the second process's
+and the wall time.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
+import subprocess
+import sys
+import tempfile
 import time
 
 import numpy as np
@@ -83,6 +93,43 @@ def breakdown(n: int = 5000, rounds: int = 3) -> None:
     print(f"build + read over the loop: min {min(shares):.2f} max {max(shares):.2f}")
 
 
+#: A first compile of the solver with each kernel's compile timed (CPU), ``--compile``.
+COMPILE = """
+import resource, time
+c0, w0 = time.process_time(), time.perf_counter()
+from numba.core.event import Listener, install_listener
+from magnetics.network import compiled
+ends = []
+class Ends(Listener):
+    def on_start(self, ev): pass
+    def on_end(self, ev):
+        name = compiled._name(ev.data["dispatcher"])
+        if name in compiled._SIGNATURES:
+            ends.append((name, time.process_time() - c0))
+with install_listener("numba:compile", Ends()):
+    compiled._entry("_solve_rows", 10**9)
+child = resource.getrusage(resource.RUSAGE_CHILDREN)
+last, parts = 0.0, []
+for name, t in ends:
+    parts.append(f"{name} {t - last:.2f}")
+    last = t
+parts += [f"{n} beside" for n in compiled._BESIDE if n not in dict(ends)]
+print("  ".join(parts))
+print(f"this process {time.process_time() - c0:.2f} s CPU, the second "
+      f"{child.ru_utime + child.ru_stime:.2f} s CPU, wall {time.perf_counter() - w0:.2f} s")
+"""
+
+
+def first_compile(rounds: int) -> None:
+    """Print a first compile of the solver, ``rounds`` times (module doc, ``--compile``)."""
+    for _ in range(rounds):
+        with tempfile.TemporaryDirectory(prefix="mrclutch-compile-") as cache:
+            env = {**os.environ, "NUMBA_CACHE_DIR": cache}
+            run = subprocess.run([sys.executable, "-c", COMPILE], env=env, check=True,
+                                 capture_output=True, text=True)  # fmt: skip
+            print(run.stdout.strip())
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--designs", type=int, default=100_000)
@@ -90,7 +137,12 @@ def main() -> None:
     ap.add_argument("--skip-table", action="store_true", help="leave the torque table out")
     ap.add_argument("--breakdown", action="store_true",
                     help="per drum count: the network's stages against the loop")  # fmt: skip
+    ap.add_argument("--compile", action="store_true",
+                    help="a first compile of the solver, each kernel timed")  # fmt: skip
     a = ap.parse_args()
+    if a.compile:
+        first_compile(a.rounds)
+        return
     if a.breakdown:
         breakdown()
         return
