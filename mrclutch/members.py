@@ -8,8 +8,10 @@ The CLI (``mrclutch.cli.commands.optimize``, ``.pareto``) parses, calls these an
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable, Mapping, Sequence
-from concurrent.futures import Executor
+from concurrent.futures import BrokenExecutor, Executor
+from contextlib import ExitStack
 from dataclasses import replace
 from typing import Any
 
@@ -30,6 +32,7 @@ from mrclutch.optimize import (
     search_box,
 )
 from mrclutch.pipeline import FAST_BANDWIDTH_ERROR
+from mrclutch.report_data import design_brep_mass, design_mass_from
 from mrclutch.requirements import requirement_violations
 from mrclutch.uncertainty import Uncertainty
 from mrclutch.verdict import for_workshop, judge, verdict_of
@@ -63,8 +66,6 @@ def judge_all(designs: list[ClutchDesign], fidelity: str, executor: Executor | N
 def brep_of(design: ClutchDesign) -> Any:
     """The design's exact B-rep mass as plain data (``report_data.design_brep_mass``): a
     helper process's task, so that this one never imports build123d (issue 40)."""
-    from mrclutch.report_data import design_brep_mass
-
     return design_brep_mass(design)
 
 
@@ -79,8 +80,6 @@ def judge_beside(designs: list[ClutchDesign], fidelity: str, helper: Executor,
     ``fast_check`` wherever it runs, so the answer is ``judge_all``'s (and is, all judged
     here, where the helper breaks). ``done(n)`` after each of this process's judgements and
     at the end, ``n`` all judged so far."""
-    from concurrent.futures import BrokenExecutor
-
     try:
         return _judge_beside(designs, fidelity, helper, done)
     except BrokenExecutor:  # the helper died (or could not start): every design judged here
@@ -89,11 +88,6 @@ def judge_beside(designs: list[ClutchDesign], fidelity: str, helper: Executor,
 
 def _judge_beside(designs: list[ClutchDesign], fidelity: str, helper: Executor,
                   done: Callable[[int], None] | None) -> list[dict]:  # fmt: skip
-    import threading
-    from contextlib import ExitStack
-
-    from mrclutch.report_data import design_mass_from
-
     check = reference_check if fidelity == "reference" else fast_check
     n = len(designs)
     out: list[dict | None] = [None] * n
