@@ -38,6 +38,16 @@ _FAR_B = 1e6  # T: the μ0 extension point (no clutch field comes near)
 _ROW_LOOP, _BLOCK = 8192, 65536
 
 
+def _weighted_sums(
+    mat: LinearMaterial | BHCurve, k: FloatArray, phi: FloatArray, w: FloatArray, wk: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """``h_dh_sum`` as one expression: ``h_dh`` at B = k·Φ, weighted, summed over j."""
+    h, dh = mat.h_dh(k * phi)
+    h *= w
+    dh *= wk
+    return h.sum(0), dh.sum(0)
+
+
 def pchip(x: FloatArray, y: FloatArray, xq: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Monotone piecewise-cubic Hermite interpolant through (x, y) and its derivative at xq.
 
@@ -100,12 +110,8 @@ class LinearMaterial:
     def h_dh_sum(
         self, k: FloatArray, phi: FloatArray, w: FloatArray, wk: FloatArray
     ) -> tuple[FloatArray, FloatArray]:
-        """(Σ_j w_j·H(k_j·Φ), Σ_j wk_j·H'(k_j·Φ)) over the first axis of k, w, wk (J, S, 1)
-        at Φ ≥ 0 (S, C): ``BHCurve.h_dh_sum``, here the plain arrays (a linear H is cheap)."""
-        h, dh = self.h_dh(k * phi)
-        h *= w
-        dh *= wk
-        return h.sum(0), dh.sum(0)
+        """``BHCurve.h_dh_sum`` as the plain weighted sums (a linear H is cheap)."""
+        return _weighted_sums(self, k, phi, w, wk)
 
     def h_mean_dh(self, b: FloatArray) -> tuple[FloatArray, FloatArray]:
         """(H̄, dH̄/dB) at B ≥ 0, H̄ = (1/B)·∫0^B H = B/(2μ) (``BHCurve.h_mean_dh``)."""
@@ -209,12 +215,21 @@ class BHCurve:
         so Newton on a sum of these sees a consistent derivative.
         """
         t = b * self._inv_step
-        np.minimum(t, self._slope.size - 1, out=t)
-        i = t.astype(np.intp)
-        s = np.take(self._slope, i)
-        h = np.take(self._icpt, i)
-        h += s * b
+        n = t.shape  # C order, as take allocates (a sum's order follows the layout)
+        h, s, i = np.empty(n), np.empty(n), np.empty(n, np.intp)
+        self._h_dh_into(b, t, i, h, s)
         return h, s
+
+    def _h_dh_into(self, b: FloatArray, t: FloatArray, i: NDArray[np.intp], h: FloatArray,
+                   s: FloatArray) -> None:  # fmt: skip
+        """``h_dh`` into buffers: t = B/step on entry (scratch after), (h, s) = (H, dH/dB)."""
+        np.minimum(t, self._slope.size - 1, out=t)
+        np.copyto(i, t, casting="unsafe")  # = astype(intp): truncation
+        # mode "wrap": the same element as "raise" wherever that does not raise, unbuffered
+        self._slope.take(i, out=s, mode="wrap")
+        self._icpt.take(i, out=h, mode="wrap")
+        np.multiply(s, b, out=t)
+        h += t
 
     def h_dh_sum(
         self, k: FloatArray, phi: FloatArray, w: FloatArray, wk: FloatArray
@@ -231,11 +246,7 @@ class BHCurve:
         shape = np.broadcast_shapes(k.shape[1:], phi.shape)
         n = k.shape[0]
         if n < 2 or math.prod(shape) < _ROW_LOOP:
-            h, dh = self.h_dh(k * phi)
-            h *= w
-            dh *= wk
-            return h.sum(0), dh.sum(0)
-        last, inv = self._slope.size - 1, self._inv_step
+            return _weighted_sums(self, k, phi, w, wk)
         rows = max(1, _BLOCK // math.prod(shape))  # j's a block: ~_BLOCK elements
         hs, ds = np.empty(shape), np.empty(shape)
         h, s, b, t = (np.empty((rows, *shape)) for _ in range(4))
@@ -244,14 +255,8 @@ class BHCurve:
             m = min(rows, n - j0)
             bj, tj, ij, hj, sj = b[:m], t[:m], i[:m], h[:m], s[:m]
             np.multiply(k[j0 : j0 + m], phi, out=bj)
-            np.multiply(bj, inv, out=tj)
-            np.minimum(tj, last, out=tj)
-            np.copyto(ij, tj, casting="unsafe")  # = astype(intp): truncation
-            # mode "wrap": the same element as "raise" wherever that does not raise, unbuffered
-            self._slope.take(ij, out=sj, mode="wrap")
-            self._icpt.take(ij, out=hj, mode="wrap")
-            np.multiply(sj, bj, out=bj)
-            hj += bj  # H = icpt + slope·B, as h_dh
+            np.multiply(bj, self._inv_step, out=tj)
+            self._h_dh_into(bj, tj, ij, hj, sj)
             hj *= w[j0 : j0 + m]
             sj *= wk[j0 : j0 + m]
             for r in range(m):  # in order of j, as numpy's sum over an outer axis
