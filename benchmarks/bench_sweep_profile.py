@@ -16,9 +16,12 @@ from __future__ import annotations
 import argparse
 import cProfile
 import pstats
+import sys
 import time
+from pathlib import Path
 
-import numpy as np
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # a sibling script's designs
+from bench_chords import fields  # bench_against.py's random designs
 
 #: (stage, [(file suffix, function), ...]): cumulative times summed; the network's calls
 #: (``YieldAt.__call__``) are split by caller: the peak (``fast_batch``'s ``clutch``) and
@@ -40,15 +43,6 @@ STAGES = (
      [("haptics/model.py", "metrics_batch"), ("hand.py", "backdrive_force"),
       ("at_hand.py", "mr_at_hand")]),
 )  # fmt: skip
-
-
-def fields(n: int, seed: int) -> dict[str, np.ndarray]:
-    """bench_against.py's random designs (SI)."""
-    rng = np.random.default_rng(seed)
-    return {"n_drums": rng.integers(1, 5, n), "gap": rng.uniform(0.2e-3, 1.0e-3, n),
-            "drum_thickness": rng.uniform(0.1e-3, 0.6e-3, n),
-            "zone_length": rng.uniform(3e-3, 9e-3, n),
-            "drum_inner_diameter": rng.uniform(6e-3, 18e-3, n)}  # fmt: skip
 
 
 def shares(stats: pstats.Stats) -> tuple[float, dict[str, float]]:
