@@ -175,7 +175,7 @@ def test_html_report_on_a_full_disk(tmp_path, disk_full, capsys, monkeypatch):
     import mrclutch.report_data as report_data
 
     monkeypatch.setattr(report_data, "FEM_CHECK_CURRENTS", (7.0,))  # one FEM solve is enough
-    monkeypatch.setattr(rep, "_view", lambda design, path: write_bytes(path, b"png"))
+    monkeypatch.setattr(rep, "_view", lambda cad_side, design, path: write_bytes(path, b"png"))
     disk_full(".html")
     out = tmp_path / "rep"
     args = ["report", "--out", str(out), "--fidelity", "fast", "--no-progress"]
