@@ -244,12 +244,18 @@ class _Clock:
         if child is not None:
             mine = {id(d) for d, _ in self.before if _name(d) in self.beside}
             self.total -= sum(self.weight[k] for k in mine)
-        for i, (d, sig) in enumerate((*first, *after)):
-            if i == len(first) and child is not None:
-                _wait(child)
-            _one(d, sig)
-            if id(d) not in self.compiled and id(d) not in mine:  # loaded: no compile
-                self.total -= self.weight[id(d)]
+        try:
+            for i, (d, sig) in enumerate((*first, *after)):
+                if i == len(first) and child is not None:
+                    _wait(child)
+                _one(d, sig)
+                if id(d) not in self.compiled and id(d) not in mine:  # loaded: no compile
+                    self.total -= self.weight[id(d)]
+        except BaseException:  # Ctrl-C or a failed compile: no second process left running
+            if child is not None:
+                child.kill()
+                child.wait()
+            raise
 
     def on_end(self, ev: Any) -> None:
         key = id(ev.data["dispatcher"])

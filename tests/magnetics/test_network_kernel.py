@@ -262,3 +262,27 @@ def test_uncompiled_small_batches_give_the_compiled_answer(monkeypatch):
     assert np.all(py > 0)
     np.testing.assert_allclose(py, jit, rtol=1e-12, atol=0.0)
     assert not compiled.uncompiled("network", 1, 10**9)  # loaded: compiled from now on
+
+
+def test_an_interrupted_compile_leaves_no_second_process(monkeypatch):
+    """``compiled._Clock``: Ctrl-C (or a failed compile) while this process compiles ends
+    the second process that compiles ``beside`` kernels meanwhile, before it re-raises."""
+    child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        monkeypatch.setattr(compiled, "_compile_beside", lambda names: child)
+        monkeypatch.setattr(compiled, "_weight", lambda d: 100)
+        monkeypatch.setattr(compiled, "_name", lambda d: d.name)
+        a, entry = types.SimpleNamespace(name="_segment"), types.SimpleNamespace(name="x")
+        clock = compiled._Clock(entry, "the test's kernel", ((a, "sa"),), ("_solve",))
+
+        def one(d, sig):
+            raise KeyboardInterrupt
+
+        monkeypatch.setattr(compiled, "_one", one)
+        with pytest.raises(KeyboardInterrupt):
+            clock.on_start(types.SimpleNamespace(data={"dispatcher": entry}))
+        clock.timer.cancel()
+        assert child.poll() is not None  # ended, not left sleeping
+    finally:
+        child.kill()
+        child.wait()
