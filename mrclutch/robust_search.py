@@ -140,10 +140,9 @@ def _crossing_scan(coeffs: tuple[np.ndarray, ...], k: np.ndarray, b: np.ndarray,
     for a in range(0, rows.size, 256):
         sl = order[a : a + 256]
         r = rows[sl]
-        m = int(np.max(n_lin[sl]))
         lo, hi = np.log(w_lo[r]), np.log(w_top[r])
         w_log = np.exp(lo[:, None] + (hi - lo)[:, None] * t)
-        w_lin = w_top[r, None] * np.linspace(0.0, 1.0, m)[1:]  # step ≤ 0.25/τ
+        w_lin = _linear(w_top[r], n_lin[sl])  # step ≤ 0.25/τ; ends repeated: no sign change
         w = np.sort(np.concatenate([w_log, w_lin], axis=1), axis=1)
         im = im_x(sl, w)
         d, j = np.nonzero(np.sign(im[:, :-1]) * np.sign(im[:, 1:]) < 0)
@@ -156,6 +155,16 @@ def _crossing_scan(coeffs: tuple[np.ndarray, ...], k: np.ndarray, b: np.ndarray,
         ok = (xr.real > 0) & (np.abs(xr.imag) <= 1e-6 * np.abs(xr))
         np.minimum.at(best, g[ok], xr.real[ok])
     return best
+
+
+def _linear(w_top: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """Each row's linear grid ``w_top · np.linspace(0, 1, n)[1:]`` (its values bit for bit:
+    i·(1/(n − 1)), the end exactly 1), rows of fewer points padded to the most with copies of
+    their end: a row's grid is its own whatever rows share the chunk (issue 40)."""
+    i = np.arange(1.0, float(np.max(n)))
+    step = 1.0 / (n - 1.0)
+    t = np.where(i >= (n - 1.0)[:, None], 1.0, i * step[:, None])
+    return w_top[:, None] * t
 
 
 # ---- a bounded search over a box, vectorised over designs ------------------------------
@@ -354,21 +363,31 @@ def _scan(rows: np.ndarray, w_lo: np.ndarray, w_top: np.ndarray, q: tuple[np.nda
     for a in range(0, order.size, 32):  # 32 rows a chunk: little padding to the longest
         i = order[a : a + 32]
         r = rows[i]
-        m = int(np.max(n_lin[r]))
         g_lo, g_hi = np.log(w_lo[r]), np.log(w_top[r])
         w_log = np.exp(g_lo[:, None] + (g_hi - g_lo)[:, None] * t)
-        w_lin = w_top[r, None] * np.linspace(0.0, 1.0, m)[1:]
+        w_lin = _linear(w_top[r], n_lin[r])  # a row's own, its end repeated to the longest
         w = np.sort(np.concatenate([w_log, w_lin], axis=1), axis=1)
         qr = tuple(x[r, None] for x in q)
         # the 8 corners' crossings: limit candidates, and with the midpoints between them
-        # grid points inside every window where a corner or a ray family lives
+        # grid points inside every window where a corner or a ray family lives (a row
+        # without a crossing: its last point once more, as alone)
         best[i], seeds = _corner_crossings(w, qr)
+        own = ~np.isnan(seeds)
+        own[~own.any(axis=1), 0] = True
         seeds = np.where(np.isnan(seeds), w[:, -1:], seeds)
-        w = np.sort(np.concatenate([w, seeds], axis=1), axis=1)
+        # each row's grid as alone (its own linear points and seeds, sorted), then +inf
+        # past its end, there replaced by its last point and ``inside`` False
+        lin = np.arange(w_lin.shape[1]) < (n_lin[r] - 1.0)[:, None]
+        w = np.concatenate([w_log, w_lin, seeds], axis=1)
+        inside = np.concatenate([np.ones(w_log.shape, bool), lin, own], axis=1)
+        w = np.sort(np.where(inside, w, np.inf), axis=1)
+        inside = np.arange(w.shape[1]) < np.sum(inside, axis=1)[:, None]
+        L = np.sum(inside, axis=1)
+        w = np.where(inside, w, w[np.arange(r.size), L - 1][:, None])
         cuv = (*_affine(w, *qr[6:]), *_rot(w, qr[4], qr[5]))
         # the families only where the least |G| over the box, crossing or not, could beat
         # the corners' crossings (with a margin of _MARGIN for the refinement between points)
-        rr, ll = np.nonzero(_nearest(w, qr, cuv) < _MARGIN * best[i][:, None])
+        rr, ll = np.nonzero((_nearest(w, qr, cuv) < _MARGIN * best[i][:, None]) & inside)
         fam = np.full((_FAMILIES, *w.shape), np.inf)
         qa = tuple(x[rr, 0] for x in qr)
         cuv_a = tuple(x[rr, ll] for x in cuv)
@@ -377,11 +396,11 @@ def _scan(rows: np.ndarray, w_lo: np.ndarray, w_top: np.ndarray, q: tuple[np.nda
         # each family's _REFINED least grid minima, each bracketed by its two neighbours
         pad = np.pad(fam, ((0, 0), (0, 0), (1, 1)), constant_values=np.inf)
         low = np.where((fam <= pad[..., :-2]) & (fam <= pad[..., 2:]), fam, np.inf)
-        j = np.argpartition(low, _REFINED - 1, axis=2)[..., :_REFINED]  # (F, R, 3)
+        j = _least(low)  # (F, R, 3)
         best[i] = np.minimum(best[i], np.min(low, axis=(0, 2)))
-        ii, L = np.arange(r.size)[None, :, None], w.shape[1]
+        ii = np.arange(r.size)[None, :, None]
         brackets[0][:, i] = w[ii, np.maximum(j - 1, 0)]
-        brackets[1][:, i] = w[ii, np.minimum(j + 1, L - 1)]
+        brackets[1][:, i] = w[ii, np.minimum(j + 1, L[None, :, None] - 1)]
         brackets[2][:, i] = np.take_along_axis(low, j, 2)
     # the refinement of the brackets whose grid value could beat the least found, all rows
     # at once: zooms of 9 points on each
@@ -403,6 +422,18 @@ def _scan(rows: np.ndarray, w_lo: np.ndarray, w_top: np.ndarray, q: tuple[np.nda
         h = (hi_w - lo_w) / 8.0
         lo_w, hi_w = np.maximum(wj - h, lo_w), np.minimum(wj + h, hi_w)
     return best
+
+
+def _least(low: np.ndarray) -> np.ndarray:
+    """The indices (F, R, ``_REFINED``) of the ``_REFINED`` least values along the last axis,
+    a tie to the lower index (``np.argmin``'s first): the same picks whatever +inf pads a
+    row's end (``np.argpartition`` may pick either of two equal values)."""
+    v = low.copy()
+    out = np.empty((*low.shape[:2], _REFINED), dtype=np.intp)
+    for n in range(_REFINED):
+        out[..., n] = j = np.argmin(v, axis=2)
+        np.put_along_axis(v, j[..., None], np.inf, axis=2)
+    return out
 
 
 def _corner_crossings(w: np.ndarray, q: tuple[np.ndarray, ...]) -> tuple[np.ndarray, np.ndarray]:
