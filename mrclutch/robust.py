@@ -94,10 +94,10 @@ _LIMITS: dict[str, Callable[[HapticParams], Any]] = {
 }
 
 
-#: The limits whose kernel is vectorised over designs row by row (``max_passive_stiffness``:
-#: each row's value is the scalar call's, bit for bit), so a threshold's 13-point grid is
-#: one call (issue 40); ``max_stable_stiffness`` runs design by design anyway.
-_VECTORISED = frozenset({"passive"})
+#: The limits whose kernel is vectorised over designs row by row (each row's value is the
+#: scalar call's, bit for bit: ``max_passive_stiffness``, and ``max_stable_stiffness``'s
+#: scans side by side), so a threshold's 13-point grid is one call (issue 40).
+_VECTORISED = frozenset({"passive", "stable"})
 
 
 def _holds(worst: float, best: float, K: float) -> str:

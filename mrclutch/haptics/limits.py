@@ -177,7 +177,7 @@ def _chunk_grid(w_end: float, step: float, tau: float) -> np.ndarray:
 PHASE_STEP = math.pi / 16.0
 
 
-def _phase_bound(w: np.ndarray, tau: float, roots: np.ndarray) -> np.ndarray:
+def _phase_bound(w: np.ndarray, tau: Any, roots: np.ndarray) -> np.ndarray:
     """Φ(ω) = ωτ + Σ_r atan2(ω − Im r, −Re r): increasing for Re r ≤ 0, and
     |Δ arg X| ≤ ΔΦ over any interval, arg X being ±π/2 + ωτ ± Σ_r arg(jω − r)
     (each arg(jω − r) = atan2(ω − Im r, −Re r) increasing; the sum of the terms'
@@ -196,12 +196,14 @@ def _phase_refine(grid: np.ndarray, tau: float, roots: np.ndarray) -> np.ndarray
 
 
 def _phase_refine_rows(
-    grid: np.ndarray, row: np.ndarray, tau: float, roots: np.ndarray
+    grid: np.ndarray, row: np.ndarray, tau: Any, roots: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """``_phase_refine`` of several grids at once (``hand_scan``: one per hand): ``grid``
     the rows' grids end to end, ``row`` each point's row (non-decreasing), ``roots``
-    (rows, n) each row's; returns the refined (grid, row). MAX_REFINED bounds each row."""
-    phi = _phase_bound(grid, tau, roots[row])
+    (rows, n) and ``tau`` (a float, or (rows,)) each row's; returns the refined (grid,
+    row). MAX_REFINED bounds each row."""
+    per_row = np.ndim(tau) > 0
+    phi = _phase_bound(grid, tau[row] if per_row else tau, roots[row])
     for _ in range(60):  # each pass splits the cells still over the step (Φ of new points)
         same = row[1:] == row[:-1]  # cells within a row
         parts = np.where(same, np.ceil(np.diff(phi) / PHASE_STEP), 1.0)
@@ -211,8 +213,9 @@ def _phase_refine_rows(
         parts = np.where(wide, parts, 1.0)
         total = np.bincount(row[:-1][same], parts[same], minlength=roots.shape[0]) + 1
         if float(np.max(total)) > MAX_REFINED:  # an absurd delay or mode: refuse
+            t = float(tau[np.argmax(total)]) if per_row else tau
             raise StabilitySearchError(
-                f"stability search: delay {tau:.3g} s and modes need more than "
+                f"stability search: delay {t:.3g} s and modes need more than "
                 f"{MAX_REFINED:.0e} frequencies per scan step; not a haptic loop"
             )
         cells = np.nonzero(wide)[0]
@@ -225,7 +228,7 @@ def _phase_refine_rows(
         rnew = np.repeat(row[cells], n - 1)
         finer = np.insert(grid, at, new)  # ascending: in its cell
         rfiner = np.insert(row, at, rnew)
-        pfiner = np.insert(phi, at, _phase_bound(new, tau, roots[rnew]))
+        pfiner = np.insert(phi, at, _phase_bound(new, tau[rnew] if per_row else tau, roots[rnew]))
         # repeats at float resolution dropped (within a row)
         keep = np.concatenate([[True], (np.diff(finer) > 0) | (np.diff(rfiner) != 0)])
         finer, rfiner, pfiner = finer[keep], rfiner[keep], pfiner[keep]
@@ -310,13 +313,13 @@ def max_stable_stiffness(p: HapticParams) -> Any:
     (module docstring; exact for a pure delay). inf if no crossing destabilises; NaN where
     the scan would need more than MAX_GRID frequencies a step (StabilitySearchError: an
     extreme transmission or delay), so the limit is unknown.
-    Vectorised fields are handled design by design (slower than the numeric metrics)."""
+    Vectorised fields: every design's scan at once (``_stable_rows``), each row's value
+    bit for bit the scalar call's."""
     if p.shape:
-        n = int(np.prod(p.shape))
         flat = HapticParams(
             **{f: np.ravel(np.broadcast_to(getattr(p, f), p.shape)) for f in _FIELDS}
         )
-        return np.array([max_stable_stiffness(flat.item(i)) for i in range(n)]).reshape(p.shape)
+        return _stable_rows(flat).reshape(p.shape)
     try:
         _, Kc, dirs = _crossings(p)
     except StabilitySearchError:  # the scan cannot resolve this loop: the limit is unknown
@@ -341,3 +344,97 @@ def is_stable(p: HapticParams, K: float) -> bool:
     if np.any(np.isclose(Kc, K, rtol=1e-12)):
         return False
     return bool(np.sum(2 * dirs[Kc < K]) == 0)
+
+
+def _stable_rows(p: HapticParams) -> np.ndarray:
+    """``max_stable_stiffness`` of each design of a 1-D set, the scans side by side: the
+    same grids (``_start_grid``, ``_chunk_grid``, ``_phase_refine_rows``), sign changes
+    within a row, one Illinois call for every bracket and each row's own stop, so each
+    value is the scalar call's bit for bit (tests/mrclutch/test_robust_one_answer.py); the
+    numpy calls a scan makes are shared by the rows (issue 40). Rows without a delay, with
+    a sample-and-hold or without the pole −k/b, and all rows where a refined grid would
+    pass MAX_REFINED, run one by one."""
+    n = p.m1.size
+    f = {x: np.asarray(getattr(p, x), float) for x in _FIELDS}
+    out = np.full(n, np.nan)
+    alone = (f["sample_period"] > 0) | (f["delay"] == 0) | (f["b"] <= 0)
+    rows = np.nonzero(~alone)[0]
+    if rows.size:
+        try:
+            out[rows] = _scan_rows(HapticParams(**{x: f[x][rows] for x in _FIELDS}))
+        except StabilitySearchError:
+            alone[rows] = True
+    for i in np.nonzero(alone)[0]:
+        out[i] = max_stable_stiffness(p.item(int(i)))
+    return out
+
+
+def _scan_rows(p: HapticParams) -> np.ndarray:
+    """``_stable_rows`` for designs with a pure delay τ > 0 and b > 0 (``_crossings`` and
+    ``_scan_imaginary_axis`` row by row: the same operations on each row's numbers)."""
+    n = p.m1.size
+    a = np.stack(_num_coeffs(p), axis=1)  # (n, 4), descending
+    comp = np.zeros((n, 3, 3))  # np.roots' companion matrices
+    comp[:, 0, :] = -a[:, 1:] / a[:, :1]
+    comp[:, 1, 0] = comp[:, 2, 1] = 1.0
+    roots = np.linalg.eigvals(comp).astype(complex)
+    w_a, w_z = np.max(np.abs(roots), axis=1), np.min(np.abs(roots), axis=1)
+    tau, k, b = p.delay, p.k, p.b
+    rz = np.concatenate([roots, (-k / b)[:, None]], axis=1)  # _poles_and_zeros
+    step = np.minimum(w_a / 50.0, math.pi / (16.0 * tau))
+    w_lo = quiet_below(w_z, tau)
+
+    def X(r: np.ndarray, w: np.ndarray) -> np.ndarray:  # _crossings' X of rows r at w
+        s = 1j * w
+        num = ((a[r, 0] * s + a[r, 1]) * s + a[r, 2]) * s + a[r, 3]
+        return -s * num / ((b[r] * s + k[r]) * np.exp(-1j * w * tau[r]))
+
+    found: list[list[np.ndarray]] = [[] for _ in range(n)]
+    best = np.full(n, math.inf)
+    grids = {i: _start_grid(float(w_a[i]), float(w_lo[i])) for i in range(n)}
+    while grids:
+        act = np.array(sorted(grids))
+        row = np.repeat(act, [grids[i].size for i in act])
+        grid, row = _phase_refine_rows(np.concatenate([grids[i] for i in act]), row,
+                                       tau, rz)  # fmt: skip
+        xi = X(row, grid).imag
+        sc = np.nonzero((np.sign(xi[:-1]) * np.sign(xi[1:]) < 0) & (row[1:] == row[:-1]))[0]
+        br = row[sc]
+        w = illinois(lambda q, x, br=br: X(br[q], x).imag, grid[sc], grid[sc + 1], xi[sc],
+                     xi[sc + 1], 1e-13)  # fmt: skip
+        xv = X(br, w)
+        ok = (xv.real > 0) & (np.abs(xv.imag) <= 1e-6 * np.abs(xv))
+        np.minimum.at(best, br[ok], xv.real[ok])
+        ends = np.nonzero(np.append(row[1:] != row[:-1], True))[0]
+        grids = {}
+        for i, e in zip(act, ends, strict=True):
+            found[i].append(w[br == i])
+            w_end = float(grid[e])
+            y = 0j  # lower(w_end): np.polyval(a, jω), then its modulus over |k + jbω|
+            for c in a[i]:
+                y = y * (1j * w_end) + c
+            low = abs(1j * w_end * y) / abs(k[i] + b[i] * 1j * w_end)
+            if (w_end >= w_a[i] and low > best[i]) or w_end > 1e4 * (w_a[i] + 1 / tau[i]):
+                continue
+            try:
+                grids[i] = _chunk_grid(w_end, float(step[i]), float(tau[i]))
+            except StabilitySearchError:  # this row's limit is unknown (scalar: NaN)
+                found[i] = []
+                best[i] = math.nan
+    out = np.full(n, math.inf)
+    for i in range(n):
+        if math.isnan(best[i]):
+            out[i] = math.nan
+            continue
+        wc = np.concatenate(found[i])
+        q = p.item(i)
+        xv = X(np.full(wc.size, i), wc)
+        ok = (xv.real > 0) & (np.abs(xv.imag) <= 1e-6 * np.abs(xv))
+        wc, Kc = wc[ok], xv.real[ok]
+        s, h = 1j * wc, 1e-6 * wc
+        dchi = (_chi(q, Kc, s + h) - _chi(q, Kc, s - h)) / (2 * h)
+        dirs = np.sign((-(_chi(q, Kc + 1.0, s) - _chi(q, Kc, s)) / dchi).real)
+        order = np.argsort(Kc)
+        bad = np.nonzero(np.cumsum(2 * dirs[order]) > 0)[0]
+        out[i] = float(Kc[order][bad[0]]) if bad.size else math.inf
+    return out

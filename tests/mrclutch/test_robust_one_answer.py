@@ -2,12 +2,19 @@
 stable K from ``robust_search.stable_stiffness_batch`` and its worst over a box from
 ``robust_search.stable_worst_box`` are, bit for bit, what the kernel gives it alone,
 whichever designs share its batch (and so its chunk of like grid sizes: 256 rows in
-``_crossing_scan``, 32 in ``_scan``) and wherever it sits there."""
+``_crossing_scan``, 32 in ``_scan``) and wherever it sits there; the exact kernel
+``limits.max_stable_stiffness`` on many designs is its scalar call on each."""
+
+from dataclasses import replace
 
 import numpy as np
+import pytest
 from test_robust import _random_boxes
 
-from mrclutch.haptics.actuator import HapticParams
+from mrclutch import robust
+from mrclutch.haptics import limits
+from mrclutch.haptics.actuator import TABLE2_MR, HapticParams
+from mrclutch.haptics.limits import max_stable_stiffness
 from mrclutch.robust_search import stable_stiffness_batch, stable_worst_box
 
 
@@ -71,3 +78,65 @@ def test_stable_worst_box_gives_each_box_its_own_answer():
             worst, done = stable_worst_box(L, H, k, b, m2)
             assert np.array_equal(worst[at : at + 8], a_worst), (scale, at)
             assert np.array_equal(done[at : at + 8], a_done), (scale, at)
+
+
+def test_max_stable_stiffness_of_many_designs_is_each_scalar_call():
+    """The exact kernel on a vectorised set (the scans side by side, ``limits._stable_rows``)
+    against its scalar call design by design, bit for bit: 40 random designs, and beside
+    them rows the side-by-side scan leaves to the scalar path (a sample-and-hold, no
+    delay, no transmission damping) and a row whose scan cannot resolve the loop (NaN)."""
+    rng = np.random.default_rng(42)
+    p = _params(_random_boxes(rng, 40))
+    one = np.array([max_stable_stiffness(p.item(i)) for i in range(40)])
+    assert np.array_equal(max_stable_stiffness(p), one)
+    # a sample-and-hold, no delay, no transmission damping: left to the scalar path
+    f = {x: np.r_[getattr(p, x)[:10], [3e-3, 0.4, 4000.0, 20.0, 14e-3][i] * np.ones(3)]
+         for i, x in enumerate(("m1", "b1", "k", "b", "m2"))}  # fmt: skip
+    f["b"][12] = 0.0
+    both = HapticParams(**f, delay=np.r_[p.delay[:10], 1e-3, 0.0, 1e-3],
+                        sample_period=np.r_[np.zeros(10), 1e-3, 0.0, 0.0])  # fmt: skip
+    alone = np.array([max_stable_stiffness(both.item(i)) for i in range(13)])
+    assert np.array_equal(max_stable_stiffness(both), alone)
+    far = HapticParams(np.r_[p.m1[:3], 3e-3], np.r_[p.b1[:3], 0.4], np.r_[p.k[:3], 1e5],
+                       np.r_[p.b[:3], 20.0], np.r_[p.m2[:3], 14e-3],
+                       delay=np.r_[p.delay[:3], 30.0])  # fmt: skip
+    got = max_stable_stiffness(far)
+    assert np.isnan(got[3]) and np.array_equal(got[:3], one[:3])
+
+
+@pytest.mark.parametrize("field", ["b1", "delay"])
+def test_stable_threshold_grid_in_one_call_is_the_scalar_calls(monkeypatch, field):
+    """The stability threshold's 13-point grid in one vectorised call (robust._VECTORISED)
+    gives the value and sense of 13 scalar calls exactly, at a K between its limits."""
+    p = replace(TABLE2_MR, delay=2e-3)
+    K = 0.7 * float(max_stable_stiffness(p))
+    fast = robust.threshold(p, K, "stable", field)
+    monkeypatch.setattr(robust, "_VECTORISED", frozenset({"passive"}))
+    slow = robust.threshold(p, K, "stable", field)
+    assert fast is not None and slow is not None
+    assert fast == slow  # value and sense, to the bit
+
+
+def test_max_stable_stiffness_rows_that_scan_on_in_chunks(monkeypatch):
+    """Designs over wide ranges (m1 1 mg–0.1 kg, k 0.1–1000 kN/m, τ 1 µs–30 ms, ...), of
+    which some scan on past ω_a in linear chunks: side by side each is its scalar call,
+    bit for bit, and so is a row whose chunk passes MAX_GRID (NaN, the others scanning on)."""
+    rng = np.random.default_rng(5)
+
+    def lg(a, b):
+        return 10 ** rng.uniform(np.log10(a), np.log10(b), 300)
+
+    p = HapticParams(lg(1e-6, 1e-1), lg(1e-3, 30), lg(1e2, 1e6), lg(1e-2, 1e3), lg(1e-4, 1e-1),
+                     delay=lg(1e-6, 3e-2))  # fmt: skip
+    one = np.array([max_stable_stiffness(p.item(i)) for i in range(300)])
+    p = _take(p, ~np.isnan(one))  # MAX_REFINED (NaN) sends a whole set to the scalar path
+    one = one[~np.isnan(one)]
+    chunks = []
+    chunk_grid = limits._chunk_grid
+    monkeypatch.setattr(limits, "_chunk_grid", lambda *a: chunks.append(a) or chunk_grid(*a))
+    assert np.array_equal(max_stable_stiffness(p), one)
+    assert len(chunks) >= 10
+    monkeypatch.setattr(limits, "MAX_GRID", 30)
+    one = np.array([max_stable_stiffness(p.item(i)) for i in range(one.size)])
+    assert 0 < np.isnan(one).sum() < one.size
+    assert np.array_equal(max_stable_stiffness(p), one, equal_nan=True)
