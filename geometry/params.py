@@ -21,6 +21,7 @@ radius follows from it, the gaps and the thicknesses.
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 from collections.abc import Mapping
@@ -391,9 +392,15 @@ FIELD_NAMES = tuple(f.name for f in fields(DrumClutch))
 INTEGER_FIELDS = frozenset({"n_drums", "coil_turns", "hub_holes"})
 LENGTH_FIELDS = frozenset(n for n in FIELD_NAMES if n not in INTEGER_FIELDS)
 _LENGTH_RULE = {name: (lo, hi, lo_open) for name, lo, hi, lo_open in LENGTH_RANGES}
-_SI_LENGTH = re.compile(
-    r"\b(" + "|".join(sorted(LENGTH_FIELDS)) + r") = ([-+0-9.eE]+|nan|inf|-inf) m\b"
-)
+
+
+@functools.cache
+def _si_length() -> re.Pattern[str]:
+    """``NAME = VALUE m`` of any length field in a message: compiled when a file's value is
+    first refused, not at import: an alternation of every field, issue 40)."""
+    return re.compile(
+        r"\b(" + "|".join(sorted(LENGTH_FIELDS)) + r") = ([-+0-9.eE]+|nan|inf|-inf) m\b"
+    )
 
 
 def _length_from_mm(prefix: str, key: str, value: Any) -> float:
@@ -417,7 +424,7 @@ def _length_from_mm(prefix: str, key: str, value: Any) -> float:
 
 def _in_mm(message: str) -> str:
     """``gap = 0.0007 m`` in a DrumClutch message → ``gap_mm = 0.7 mm`` (the file's key)."""
-    return _SI_LENGTH.sub(lambda m: f"{m[1]}_mm = {float(m[2]) * 1e3:.6g} mm", message)
+    return _si_length().sub(lambda m: f"{m[1]}_mm = {float(m[2]) * 1e3:.6g} mm", message)
 
 
 # ---- arrays of designs -------------------------------------------------------------------
