@@ -6,7 +6,10 @@ Checks the base revision out into a temporary git worktree and times, alternatel
 subprocesses of each tree, the sweep's evaluator (``evaluate_batch`` on random designs of
 1–4 drums, the spec of examples/random_sweep.toml's ranges) and ``mrclutch --help``.
 Prints the median time of each and the ratio current/base (< 1: faster now). Alternating
-rounds keep the ratio honest on a shared, noisy machine.
+rounds keep the ratio honest on a shared, noisy machine. Each run of the sweep's evaluator
+also hashes every column of every row it computed (SHA-256, after its timing): the line
+``rows: ... bit-identical to base`` compares the two trees' rows, and a tree whose rounds
+disagree with each other is named.
 
 ``--robust-designs N`` (default 300; 0: skip) also times, in each tree, the sweep's robust
 columns (``RobustBatchEvaluator`` with the three worst-case columns, what ``sweep --with
@@ -40,11 +43,20 @@ f = {"n_drums": rng.integers(1, 5, S), "gap": rng.uniform(0.2e-3, 1.0e-3, S),
      "zone_length": rng.uniform(3e-3, 9e-3, S),
      "drum_inner_diameter": rng.uniform(6e-3, 18e-3, S)}
 chunk = 20000  # the sweep's chunk size
-evaluate_batch({k: v[:100] for k, v in f.items()})  # warm-up (imports, caches)
+# warm-up on a whole chunk: imports, caches, and the compiled kernels loaded (a small call
+# runs them as Python, magnetics.network.compiled.uncompiled; a fresh worktree compiles)
+evaluate_batch({k: v[:chunk] for k, v in f.items()})
 t, c = time.perf_counter(), time.process_time()
-for i in range(0, S, chunk):
-    out = evaluate_batch({k: v[i:i + chunk] for k, v in f.items()})
-print(time.perf_counter() - t, time.process_time() - c)
+outs = [evaluate_batch({k: v[i:i + chunk] for k, v in f.items()}) for i in range(0, S, chunk)]
+t, c = time.perf_counter() - t, time.process_time() - c
+import hashlib  # every column of every row, in column order, after the timing
+h = hashlib.sha256()
+for out in outs:
+    for k, v in out.items():
+        h.update(k.encode())
+        h.update(np.ascontiguousarray(v, dtype=float).tobytes())
+print(f"rows {S} columns {len(outs[0])} sha256 {h.hexdigest()}")
+print(t, c)
 """
 
 ROBUST = r"""
@@ -76,13 +88,18 @@ print(time.perf_counter() - t)
 """
 
 
-def _time(tree: Path, code: str, *args: str) -> list[float]:
+def _time(tree: Path, code: str, *args: str, rows: list[str] | None = None) -> list[float]:
+    """The script's last line's figures (wall[, CPU] s); ``rows`` gets its row digest line
+    (the sweep's), if given."""
     env = {**os.environ, "PYTHONPATH": str(tree)}
     out = subprocess.run(
         [sys.executable, "-c", code, *args], cwd=tree, env=env, check=True,
         capture_output=True, text=True,
     )  # fmt: skip
-    return [float(v) for v in out.stdout.strip().splitlines()[-1].split()]  # wall[, CPU] s
+    lines = out.stdout.strip().splitlines()
+    if rows is not None:
+        rows.append(next(x for x in lines if x.startswith("rows ")))
+    return [float(v) for v in lines[-1].split()]
 
 
 @contextlib.contextmanager
@@ -99,6 +116,16 @@ def base_tree(rev: str) -> Iterator[Path]:
                            check=False, capture_output=True)  # fmt: skip
 
 
+def _rows_line(digests: dict[str, list[str]]) -> str:
+    """Whether the two trees' sweeps gave the same rows, bit for bit (their digests)."""
+    for label, seen in digests.items():
+        if len(set(seen)) > 1:
+            return f"rows: the {label} tree's rounds differ from each other: {sorted(set(seen))}"
+    now, base = digests["now"][0], digests["base"][0]
+    verdict = "bit-identical to base" if now == base else f"DIFFER from base ({base})"
+    return f"rows: {now} — {verdict}"
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--base", required=True, help="git revision to compare with")
@@ -112,9 +139,11 @@ def main() -> None:
             ("mrclutch --help", HELP, ()),
         ):
             now, then = [], []
+            digests: dict[str, list[str]] = {"now": [], "base": []}
             for _ in range(a.rounds):
-                then.append(_time(base, code, *args))
-                now.append(_time(ROOT, code, *args))
+                sweep = code is SWEEP
+                then.append(_time(base, code, *args, rows=digests["base"] if sweep else None))
+                now.append(_time(ROOT, code, *args, rows=digests["now"] if sweep else None))
             mn, mb = (statistics.median(t[0] for t in x) for x in (now, then))
             print(f"{name:<38} now {mn:8.3f} s   base {mb:8.3f} s   ratio {mn / mb:5.2f}")
             if code is SWEEP:  # one core's rate: rows per second of the sweep's evaluator
@@ -123,6 +152,7 @@ def main() -> None:
                     f"{'':<38} rows/s now {a.designs / mn:.0f}, base {a.designs / mb:.0f}; "
                     f"per CPU second now {a.designs / cn:.0f}, base {a.designs / cb:.0f}"
                 )
+                print(_rows_line(digests))
         if a.robust_designs > 0:  # the robust columns against the default, in each tree
             ratio = {}
             for tree, label in ((ROOT, "now"), (base, "base")):
