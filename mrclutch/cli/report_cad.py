@@ -12,18 +12,26 @@ kills the process if it still runs and waits for it, so nothing it writes lands 
 caller removes ``folder``. The process runs in a session of its own: a terminal's Ctrl-C
 reaches the report only, which stops and closes it (a KeyboardInterrupt raised inside
 OpenCascade's C++ could abort it instead: see ``mrclutch.sweep.run.sigterm_as_interrupt``).
+
+The process defers the packages build123d imports and its work never calls (``DEFERRED``:
+sklearn, IPython, scipy; ``defer_imports``), so build123d's import costs about half.
 """
 
 from __future__ import annotations
 
 import ctypes
+import dis
+import importlib
+import importlib.abc
 import os
 import pickle
 import signal
 import subprocess
 import sys
+import types
 import warnings
 from collections.abc import Callable
+from importlib.machinery import ModuleSpec
 from multiprocessing.connection import Connection
 from pathlib import Path
 from typing import Any
@@ -153,6 +161,141 @@ class CadProcess:
         self._conn.close()
 
 
+#: Packages that build123d's ``__init__`` imports and the CAD work never calls: sklearn (its
+#: STL primitive detection), IPython (its notebook display) and scipy (curve fits and convex
+#: hulls; sklearn's scipy.stats): ~2.9 s of build123d's ~5.5 s import (issue 40). The CAD
+#: process defers them (``defer_imports``). ezdxf is not among them: build123d's DXF exporter
+#: reads its constants while its classes are defined, so it would load at once anyway.
+DEFERRED = ("sklearn", "IPython", "scipy")
+#: The instruction that binds a name in ``from module import name``.
+_IMPORT_FROM = dis.opmap["IMPORT_FROM"]
+
+
+class _DeferredModule(types.ModuleType):
+    """A module of a deferred package, not run yet. ``from module import name`` binds a
+    ``_Later`` of ``name``; any other use of an attribute (``module.name``) loads the
+    package for real and gives the real attribute."""
+
+    def __getattr__(self, attr: str) -> Any:
+        if attr.startswith("__"):  # the import system's and inspect's probes
+            raise AttributeError(attr)
+        real = sys.modules.get(self.__name__)
+        if real is None or isinstance(real, _DeferredModule):  # not loaded yet
+            if _binding(sys._getframe(1)):
+                return _Later(self.__name__, attr)
+            real = _load(self.__name__)
+        return getattr(real, attr)
+
+
+def _binding(frame: types.FrameType) -> bool:
+    """True when ``frame`` runs an import statement's ``from module import name``: the
+    statement's own IMPORT_FROM, or importlib's check that each name exists (CPython)."""
+    code = frame.f_code
+    if code.co_name == "_handle_fromlist" and code.co_filename.startswith("<frozen importlib"):
+        return True
+    return code.co_code[frame.f_lasti] == _IMPORT_FROM
+
+
+class _Later:
+    """``module.attr`` of a deferred package, bound by ``from module import attr``: the
+    package loads for real where it is first called, asked for an attribute, compared,
+    hashed, or-ed into a type union, subclassed or used in ``isinstance``. Meant for the
+    functions and classes build123d binds at import and calls in its own functions; the
+    report's CAD outputs are the same with and without the deferral
+    (tests/mrclutch/test_report_cad.py)."""
+
+    __slots__ = ("_real", "_where")
+
+    def __init__(self, module: str, attr: str) -> None:
+        object.__setattr__(self, "_where", (module, attr))
+
+    def _resolve(self) -> Any:
+        try:
+            return object.__getattribute__(self, "_real")
+        except AttributeError:
+            pass
+        module, attr = object.__getattribute__(self, "_where")
+        real = _load(module)
+        try:
+            found = getattr(real, attr)
+        except AttributeError:  # a submodule its package does not import itself
+            found = _load(f"{module}.{attr}")
+        object.__setattr__(self, "_real", found)
+        return found
+
+    def __getattr__(self, attr: str) -> Any:
+        return getattr(self._resolve(), attr)
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        return self._resolve()(*args, **kwargs)
+
+    def __or__(self, other: Any) -> Any:
+        return self._resolve() | other
+
+    def __ror__(self, other: Any) -> Any:
+        return other | self._resolve()
+
+    def __eq__(self, other: object) -> bool:
+        return bool(self._resolve() == other)
+
+    def __hash__(self) -> int:
+        return hash(self._resolve())
+
+    def __instancecheck__(self, obj: object) -> bool:
+        return isinstance(obj, self._resolve())
+
+    def __subclasscheck__(self, cls: type) -> bool:
+        return issubclass(cls, self._resolve())
+
+    def __mro_entries__(self, bases: tuple) -> tuple:
+        return (self._resolve(),)
+
+    def __repr__(self) -> str:
+        return repr(self._resolve())
+
+
+class _DeferFinder(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+    """Finds the modules of the packages ``names`` (submodules included) as
+    ``_DeferredModule``s, until a package of them is loaded for real (``_load``)."""
+
+    def __init__(self, names: tuple[str, ...]) -> None:
+        self.names = set(names)
+
+    def find_spec(self, fullname: str, path: Any, target: Any = None) -> ModuleSpec | None:
+        if fullname.partition(".")[0] not in self.names:
+            return None
+        return ModuleSpec(fullname, self, is_package=True)  # a __path__: submodules too
+
+    def create_module(self, spec: ModuleSpec) -> types.ModuleType:
+        return _DeferredModule(spec.name)
+
+    def exec_module(self, module: types.ModuleType) -> None:
+        """Nothing runs until the module is used."""
+
+
+_FINDERS: list[_DeferFinder] = []
+
+
+def defer_imports(names: tuple[str, ...] = DEFERRED) -> None:
+    """From now on, in this process, importing a module of the packages ``names`` runs
+    nothing until the module is used (``_DeferredModule``); then its package loads for real.
+    For the CAD process, before build123d's import (``DEFERRED``)."""
+    finder = _DeferFinder(names)
+    _FINDERS.append(finder)
+    sys.meta_path.insert(0, finder)
+
+
+def _load(module: str) -> types.ModuleType:
+    """``module`` imported for real, its package's deferred modules forgotten first."""
+    top = module.partition(".")[0]
+    for finder in _FINDERS:
+        finder.names.discard(top)
+    for name in [n for n, m in sys.modules.items() if isinstance(m, _DeferredModule)
+                 and n.partition(".")[0] == top]:  # fmt: skip
+        del sys.modules[name]
+    return importlib.import_module(module)
+
+
 def _die_with(parent: int) -> None:
     """End this process when ``parent`` ends, however it ends (Linux: the kernel's
     PR_SET_PDEATHSIG), so a report killed by SIGKILL leaves no CAD process writing into
@@ -165,5 +308,6 @@ def _die_with(parent: int) -> None:
 
 if __name__ == "__main__":  # the child: its two pipes' file descriptors and its parent
     _die_with(int(sys.argv[3]))
+    defer_imports()  # before build123d's import (geometry.mass, geometry.export)
     _serve(Connection(int(sys.argv[1]), writable=False),
            Connection(int(sys.argv[2]), readable=False))  # fmt: skip
