@@ -17,6 +17,7 @@ from __future__ import annotations
 import errno
 import os
 import stat
+import sys
 import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -28,6 +29,7 @@ __all__ = [
     "check_target",
     "fsync_dir",
     "output_error",
+    "user_cache",
     "write_bytes",
     "write_text",
 ]
@@ -134,6 +136,17 @@ def write_text(path: str | os.PathLike[str], text: str, newline: str | None = No
     with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8", newline=newline) as f:
         f.write(text)
     return Path(path)
+
+
+def user_cache(name: str) -> Path:
+    """The folder ``name`` of mrclutch's caches in the user's cache folder
+    (``$XDG_CACHE_HOME``, ``~/.cache``; ``%LOCALAPPDATA%`` on Windows), never inside the
+    installed package (issue 39); not created here."""
+    if sys.platform == "win32" and os.environ.get("LOCALAPPDATA"):
+        base = Path(os.environ["LOCALAPPDATA"])
+    else:
+        base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    return base / "mrclutch" / name
 
 
 def _umask() -> int:

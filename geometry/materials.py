@@ -15,15 +15,19 @@ on its regions (``geometry.regions.table``) and every model reads them from ther
 
 from __future__ import annotations
 
+import hashlib
+import marshal
 import math
 import re
+import sys
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
-from geometry.reading import read_toml
+from geometry.atomic import OutputError, user_cache, write_bytes
+from geometry.reading import decode_text, parse_toml, read_bytes
 from geometry.validation import ParameterError
 
 STEEL = "steel_1018"  # the default magnetic yoke and the drums' active zones
@@ -126,9 +130,47 @@ def is_builtin(name: str) -> bool:
     return name in _BUILTIN
 
 
+#: The parsed registry's cache: a file per content (``_parsed``), in the user's cache folder.
+CACHE = user_cache("materials")
+#: Changes when what the cache holds changes shape (the key includes it).
+_CACHE_FORMAT = b"mrclutch materials 1"
+
+
+def _parsed(paths: list[Path]) -> list[tuple[str, dict[str, Any]]]:
+    """(file name, parsed TOML) of each registry file, as ``read_toml`` gives it. Parsing the
+    files costs every command that reads a design more than the rest of this module
+    (tomllib is pure Python), so the parse is cached across processes in ``CACHE``: one
+    file named by the SHA-256 of the format, the Python version and every file's name and
+    bytes, so any change to any file (or a new or removed file) reads the files afresh. A
+    cache that cannot be read, is not this shape or cannot be written is passed over: the
+    files are parsed, as without it."""
+    blobs = [read_bytes(p, "material file") for p in paths]
+    key = hashlib.sha256(_CACHE_FORMAT + sys.version.encode())
+    for p, raw in zip(paths, blobs, strict=True):
+        key.update(b"%d %s %d\n" % (len(p.name.encode()), p.name.encode(), len(raw)) + raw)
+    cache = CACHE / f"{key.hexdigest()}.marshal"
+    names = [p.name for p in paths]
+    try:
+        cached = marshal.loads(cache.read_bytes())
+    except (OSError, ValueError, EOFError, TypeError):
+        cached = None
+    if (isinstance(cached, list) and [c[0] if isinstance(c, tuple) else None for c in cached]
+            == names and all(len(c) == 2 and isinstance(c[1], dict) for c in cached)):  # fmt: skip
+        return cached
+    parsed = [(p.name, parse_toml(decode_text(raw, p, "material file"), p, "material file"))
+              for p, raw in zip(paths, blobs, strict=True)]  # fmt: skip
+    try:
+        data = marshal.dumps(parsed)
+        CACHE.mkdir(parents=True, exist_ok=True)
+        write_bytes(cache, data)
+    except (OSError, OutputError, ValueError):  # no cache folder, or a value marshal refuses
+        pass
+    return parsed
+
+
 def _load_builtin() -> None:
-    for path in sorted(DATA.glob("*.toml")):
-        rec = read_toml(path, "material file")
+    paths = sorted(DATA.glob("*.toml"))
+    for path, (_, rec) in zip(paths, _parsed(paths), strict=True):
         if rec.get("name") != path.stem:
             raise ParameterError(
                 f"{path.name}: name = {rec.get('name')!r}: must be the file's stem"

@@ -92,7 +92,11 @@ def read_bytes(path: str | Path, what: str, cap: int = MAX_INPUT_BYTES) -> bytes
 def read_text(path: str | Path, what: str, cap: int = MAX_INPUT_BYTES) -> str:
     """The UTF-8 text of the regular file ``path`` (``read_bytes``); a file that is not
     UTF-8 (random bytes, UTF-16) is one line naming the file."""
-    raw = read_bytes(path, what, cap)
+    return decode_text(read_bytes(path, what, cap), path, what)
+
+
+def decode_text(raw: bytes, path: str | Path, what: str) -> str:
+    """``raw`` (the bytes of ``path``) as UTF-8 text, or ``read_text``'s one line."""
     try:
         return raw.decode("utf-8")
     except UnicodeDecodeError as exc:
@@ -105,7 +109,11 @@ def read_text(path: str | Path, what: str, cap: int = MAX_INPUT_BYTES) -> str:
 
 def read_toml(path: str | Path, what: str) -> dict[str, Any]:
     """``read_text`` parsed as TOML, its nesting checked (``check_depth``)."""
-    text = read_text(path, what)
+    return parse_toml(read_text(path, what), path, what)
+
+
+def parse_toml(text: str, path: str | Path, what: str) -> dict[str, Any]:
+    """``text`` (of ``path``) parsed as TOML, its nesting checked, or ``read_toml``'s line."""
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
