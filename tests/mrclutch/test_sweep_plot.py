@@ -8,6 +8,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 from mrclutch.cli.plots.design import (
     BINS,
@@ -225,3 +226,40 @@ def test_sweep_says_it_draws_the_plot_on_stderr(tmp_path):
     assert r.returncode == 0, r.stderr
     assert (tmp_path / "p.png").stat().st_size > 1000
     assert "drawing the plot of 40 designs …" in r.stderr and "drawing" not in r.stdout
+
+
+def _boxes_overlap(a, b) -> bool:
+    return a.x0 < b.x1 and b.x0 < a.x1 and a.y0 < b.y1 and b.y0 < a.y1
+
+
+@pytest.mark.parametrize("n", [3000, 20_000])  # every point drawn; binned
+def test_the_fixed_layout_keeps_every_text_inside_and_apart(tmp_path, monkeypatch, n):
+    """The plot's fixed layout (no layout engine, issue 40) at the widest text a sweep
+    gives: 3-digit bandwidths, 4-digit damping (µN·m·s) and masses (g), the titles at their
+    most lines. Every drawn text lies inside the figure, no panel's text (ticks, labels,
+    title, legend) overlaps another panel's or the colour bar's, and the figure's title
+    overlaps none."""
+    rng = np.random.default_rng(3)
+    bw, tq = rng.uniform(100, 950, n), rng.uniform(0.001, 20, n)
+    damp, mass = rng.uniform(1e-4, 9e-3, n), rng.uniform(0.05, 5.0, n)
+    csv = _results_csv(tmp_path / "r.csv", {
+        "valid": np.ones(n), "bandwidth_hz": bw, "max_torque_N_m": tq,
+        "drag_damping_N_m_s": damp, "clutch_mass_kg": mass})  # fmt: skip
+    figs = _drawn(monkeypatch)
+    pareto_plot(csv, tmp_path / "p.png")
+    (fig,) = figs
+    assert fig.get_layout_engine() is None  # the layout is the one fixed in the module
+    renderer = fig.canvas.get_renderer()
+    page = fig.bbox
+    # each panel's drawn text as constrained layout measures it: its ticks, labels, title
+    # and legend (tick labels outside the view limits are kept by matplotlib, not drawn)
+    boxes = [ax.get_tightbbox(renderer) for ax in fig.axes]
+    assert len(boxes) == 4  # three panels and the colour bar
+    for i, a in enumerate(boxes):
+        assert page.x0 - 0.5 <= a.x0 and a.x1 <= page.x1 + 0.5
+        assert page.y0 - 0.5 <= a.y0 and a.y1 <= page.y1 + 0.5
+        for b in boxes[i + 1 :]:
+            assert not _boxes_overlap(a, b)
+    title = fig._suptitle.get_window_extent(renderer)
+    assert fig._suptitle.get_text().count("\n") == (2 if n > 10_000 else 1)
+    assert page.y1 >= title.y1 and not any(_boxes_overlap(title, b) for b in boxes)

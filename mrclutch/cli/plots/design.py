@@ -30,6 +30,21 @@ MAX_REST_LINES = 2000
 MAX_POINTS = 10_000
 #: Cells (across, up) of a scatter panel's 2-D histogram past ``MAX_POINTS`` designs.
 BINS = (120, 90)
+#: Inches: the sweep plot's figure (across, up).
+FIGSIZE = (6.0, 11.0)
+#: Inches: the sweep plot's fixed layout (issue 40: a layout engine measures every tick
+#: label in extra passes before the one draw; benchmarks/bench_sweep_plot.py). Each margin
+#: is sized for the text it holds: left of the panels their y label and 3-digit ticks;
+#: below the bottom panel its three-line axis names; between the top two panels an x
+#: label; above the bottom one an x label and its title of up to three lines; above the top
+#: one the figure's title of up to three lines; right of the panels the colour bar, its
+#: ticks and label. tests/mrclutch/test_sweep_plot.py checks that no text leaves the figure
+#: or overlaps another panel's, at the widest values a sweep gives.
+LEFT, PANEL_WIDTH, BOTTOM, GAP, TITLED_GAP, TOP = 0.66, 3.8, 0.62, 0.52, 1.12, 0.8
+#: Inches: from the figure's top edge to its title's first line.
+TITLE_PAD = 0.08
+#: Inches: the colour bar's distance from the panels and its width.
+BAR_GAP, BAR_WIDTH = 0.28, 0.25
 #: The columns ``pareto_plot`` reads (a sweep's CSV has ~40: only these are parsed).
 PLOT_COLUMNS = ("valid", "bandwidth_hz", "max_torque_N_m", "drag_damping_N_m_s",
                 "clutch_mass_kg")  # fmt: skip
@@ -92,6 +107,22 @@ def _cells(v: np.ndarray, bins: int) -> tuple[np.ndarray, np.ndarray]:
     return np.minimum(np.searchsorted(edges, v, side="right") - 1, bins - 1), edges
 
 
+def _panel_rects() -> list[tuple[float, float, float, float]]:
+    """The three panels' rectangles, top to bottom, in figure fractions (``FIGSIZE``):
+    equal heights between the fixed margins."""
+    w, h = FIGSIZE
+    height = (h - BOTTOM - TITLED_GAP - GAP - TOP) / 3
+    bottoms = (BOTTOM + 2 * height + TITLED_GAP + GAP, BOTTOM + height + TITLED_GAP, BOTTOM)
+    return [(LEFT / w, y / h, PANEL_WIDTH / w, height / h) for y in bottoms]
+
+
+def _colorbar_rect() -> tuple[float, float, float, float]:
+    """The colour bar's rectangle beside the top two panels, in figure fractions."""
+    top, middle, _ = _panel_rects()
+    x = top[0] + top[2] + BAR_GAP / FIGSIZE[0]
+    return (x, middle[1], BAR_WIDTH / FIGSIZE[0], top[1] + top[3] - middle[1])
+
+
 def _span(values: np.ndarray, unit: str) -> str:
     """An axis' range in its unit, worst to best as drawn."""
     return f"{values[0]:.3g} – {values[1]:.3g} {unit}"
@@ -125,9 +156,9 @@ def pareto_plot(results: str | Path, out: str | Path,
     damp, mass = r["drag_damping_N_m_s"][ok] * 1e6, r["clutch_mass_kg"][ok] * 1e3
     front = pareto_front(np.column_stack([bw, tq, damp]), [True, True, False])
     step(2)
-    fig = Figure(figsize=(6, 11), layout="constrained")  # no pyplot: nothing to manage
+    fig = Figure(figsize=FIGSIZE)  # no pyplot: nothing to manage
     FigureCanvasAgg(fig)
-    axes = fig.subplots(3, 1)
+    axes = [fig.add_axes(rect) for rect in _panel_rects()]  # a fixed layout (issue 40)
     binned = bw.size > MAX_POINTS
     span = {"vmin": np.nanmin(mass), "vmax": np.nanmax(mass)} if mass.size else {}  # all rows'
     for ax, x, label, big in ((axes[0], tq, "max torque (N·m; more is better)", True),
@@ -152,7 +183,7 @@ def pareto_plot(results: str | Path, out: str | Path,
         ax.set_ylabel("bandwidth at K_max (Hz)")
         ax.grid(alpha=0.3)
         ax.legend(loc="lower right", fontsize=9)  # not "best": a search among 10⁵ points
-    fig.colorbar(sc, ax=axes[:2], label="clutch mass (g)")
+    fig.colorbar(sc, cax=fig.add_axes(_colorbar_rect()), label="clutch mass (g)")
     ax = axes[2]
     title = "the three-objective front (crimson) on its own axes"
     names = ["bandwidth (Hz)\n(max)", "max torque (N·m)\n(max)", "damping (µN·m·s)\n(min)"]
@@ -191,7 +222,8 @@ def pareto_plot(results: str | Path, out: str | Path,
     how = (f";\nbinned in {BINS[0]} × {BINS[1]} cells, each the mean mass of its designs"
            if binned else "")  # fmt: skip
     fig.suptitle(f"Pareto front: max bandwidth, max torque, min damping\n"
-                 f"({ok.sum()} valid designs of {ok.size}{how})", fontsize=11)  # fmt: skip
+                 f"({ok.sum()} valid designs of {ok.size}{how})", fontsize=11,
+                 y=1 - TITLE_PAD / FIGSIZE[1])  # fmt: skip
     step(3)
     save_png(fig, out, dpi=110)
     step(PLOT_STEPS)
