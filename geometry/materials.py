@@ -15,11 +15,11 @@ on its regions (``geometry.regions.table``) and every model reads them from ther
 
 from __future__ import annotations
 
-import hashlib
 import marshal
 import math
 import re
 import sys
+import zlib
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from pathlib import Path
@@ -132,40 +132,41 @@ def is_builtin(name: str) -> bool:
 
 #: The parsed registry's cache: a file per content (``_parsed``), in the user's cache folder.
 CACHE = user_cache("materials")
-#: Changes when what the cache holds changes shape (the key includes it).
-_CACHE_FORMAT = b"mrclutch materials 1"
+#: Changes when what the cache holds changes shape (the cache holds it, and checks it).
+_CACHE_FORMAT = "mrclutch materials 1 " + sys.version
 
 
 def _parsed(paths: list[Path]) -> list[tuple[str, dict[str, Any]]]:
     """(file name, parsed TOML) of each registry file, as ``read_toml`` gives it. Parsing the
     files costs every command that reads a design more than the rest of this module
-    (tomllib is pure Python), so the parse is cached across processes in ``CACHE``: one
-    file named by the SHA-256 of the format, the Python version and every file's name and
-    bytes, so any change to any file (or a new or removed file) reads the files afresh. A
-    cache that cannot be read, is not this shape or cannot be written is passed over: the
-    files are parsed, as without it."""
+    (tomllib is pure Python), so the parse is cached across processes in ``CACHE``, beside
+    the files' names and bytes it came from: it is used only where the format, the Python
+    version and every file's name and bytes are equal to the cached ones (compared, not
+    hashed: hashlib's import alone costs a good part of a parse), so any change to any file,
+    or a new or removed one, reads the files afresh. The file is named by the CRC-32 of the
+    same, so two contents keep two files. A cache that cannot be read, is not this shape or
+    cannot be written is passed over: the files are parsed, as without it."""
     blobs = [read_bytes(p, "material file") for p in paths]
-    key = hashlib.sha256(_CACHE_FORMAT + sys.version.encode())
-    for p, raw in zip(paths, blobs, strict=True):
-        key.update(b"%d %s %d\n" % (len(p.name.encode()), p.name.encode(), len(raw)) + raw)
-    cache = CACHE / f"{key.hexdigest()}.marshal"
-    names = [p.name for p in paths]
+    source = [_CACHE_FORMAT, [p.name for p in paths], blobs]
+    key = marshal.dumps(source)
+    cache = CACHE / f"{zlib.crc32(key):08x}.marshal"
     try:
         cached = marshal.loads(cache.read_bytes())
     except (OSError, ValueError, EOFError, TypeError):
         cached = None
-    if (isinstance(cached, list) and [c[0] if isinstance(c, tuple) else None for c in cached]
-            == names and all(len(c) == 2 and isinstance(c[1], dict) for c in cached)):  # fmt: skip
-        return cached
-    parsed = [(p.name, parse_toml(decode_text(raw, p, "material file"), p, "material file"))
+    if (isinstance(cached, list) and len(cached) == 2 and cached[0] == source
+            and isinstance(cached[1], list) and len(cached[1]) == len(paths)
+            and all(isinstance(rec, dict) for rec in cached[1])):  # fmt: skip
+        return list(zip(source[1], cached[1], strict=True))
+    parsed = [parse_toml(decode_text(raw, p, "material file"), p, "material file")
               for p, raw in zip(paths, blobs, strict=True)]  # fmt: skip
     try:
-        data = marshal.dumps(parsed)
+        data = marshal.dumps([source, parsed])
         CACHE.mkdir(parents=True, exist_ok=True)
         write_bytes(cache, data)
     except (OSError, OutputError, ValueError):  # no cache folder, or a value marshal refuses
         pass
-    return parsed
+    return list(zip(source[1], parsed, strict=True))
 
 
 def _load_builtin() -> None:
