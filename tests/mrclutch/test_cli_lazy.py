@@ -139,3 +139,17 @@ def test_the_interactive_commands_load_nothing_heavy(fresh_python) -> None:
     assert not {n for n in loaded if n.split(".")[0] in HEAVY}, sorted(
         {n.split(".")[0] for n in loaded if n.split(".")[0] in HEAVY}
     )
+
+
+def test_a_torque_curve_loads_no_report_module(fresh_python) -> None:
+    """``torque`` builds the design's section itself (geometry.section): the report's data
+    module and the CAD export it imports (its dataclasses, JSON sidecars) are not loaded
+    for a torque curve (issue 40 item 1)."""
+    code = (
+        "import sys\nfrom mrclutch.cli.main import main\n"
+        "assert main(['torque', '--preset', 'paper']) == 0\n"
+        "print('\\n'.join(sys.modules), file=sys.stderr)"
+    )
+    loaded = set(fresh_python(code).stderr.split())
+    assert "mrclutch.torque_curves" in loaded and "geometry.section" in loaded  # it ran
+    assert "mrclutch.report_data" not in loaded and "geometry.export" not in loaded
