@@ -6,7 +6,6 @@ same figures on arrays (``mrclutch.fast_batch``)."""
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -29,7 +28,7 @@ from magnetics.torque import (
     network_yield_at,
     torque_curve,
 )
-from mrclutch.design import ClutchDesign, current_limit
+from mrclutch.design import ClutchDesign, current_notes
 from mrclutch.design_network import network_curve, section_network
 from mrclutch.trust import choose, circuit_trust
 
@@ -157,7 +156,7 @@ def clutch_figures(
         mass = brep_mass(c, materials=design.materials)
     d, length = section.envelope
     notes = (tuple(mass.notes) + extra + drag.notes + _thermal_notes(design, thermal)
-             + _density_notes(design) + _supply_notes(design))  # fmt: skip
+             + current_notes(design))  # fmt: skip
     return ClutchFigures(
         max_current=i_max,
         max_torque=float(curve.torque[0]),
@@ -238,41 +237,6 @@ def _thermal_notes(design: ClutchDesign, th: Mapping[str, float]) -> tuple[str, 
                    f"({which}, ambient {op.ambient_temperature:g} °C); no current can be held "
                    "continuously — slower input speed, wider gaps or more cooling")  # fmt: skip
     return tuple(out)
-
-
-def _density_notes(design: ClutchDesign) -> tuple[str, ...]:
-    """Say when the current-density limit, not max_current, sets the current limit (the
-    design is evaluated at a current the user did not type)."""
-    op = design.operating
-    area = math.pi * design.clutch.wire_diameter**2 / 4
-    cap = op.current_density_limit * area  # A = (A/m²)·m²
-    if cap >= op.max_current or design.supply_current < cap:  # not the binding limit
-        return ()
-    source = ("max_current_density_A_per_mm2" if op.max_current_density is not None
-              else f"IEC 60949 adiabatic limit for {op.peak_duration:g} s")  # fmt: skip
-    return (f"the current-density limit caps the current at {cap:.4g} A, below "
-            f"max_current_A = {op.max_current:g}: {op.current_density_limit * 1e-6:.4g} A/mm² "
-            f"({source}) in the {design.clutch.wire_diameter * 1e3:.3g} mm wire; every "
-            f"figure is at {cap:.4g} A",)  # fmt: skip
-
-
-def _supply_notes(design: ClutchDesign) -> tuple[str, ...]:
-    """Say when the amplifier's supply, not max_current, sets the current limit."""
-    op, supply = design.operating, design.supply_current
-    if supply >= current_limit(op, design.clutch.wire_diameter):  # capped without the supply
-        return ()
-    volts = design.amplifier.supply_voltage
-    return (f"the amplifier's {volts:g} V supply holds at most {supply:.3g} A through the "
-            f"coil ({volts / supply:.3g} Ω at {op.coil_temperature:g} °C): the current "
-            f"limit is {supply:.3g} A, below max_current_A = {op.max_current:g}; raise "
-            "[amplifier] supply_voltage_V to reach it",)  # fmt: skip
-
-
-def current_notes(design: ClutchDesign) -> tuple[str, ...]:
-    """Why the design's current limit is below its typed max_current_A (the current
-    density in the wire, the amplifier's supply), as ``evaluate`` prints it; () if it is
-    not."""
-    return _density_notes(design) + _supply_notes(design)
 
 
 def dynamic_range_db(max_torque: Any, off_torque: Any) -> Any:

@@ -121,8 +121,8 @@ from mrclutch.uncertainty import (
 #: re-exported for the commands that import them from here.
 __all__ = [
     "DELAY_SOURCES", "DESIGNS", "MAX_DELAY", "MIN_INPUT_SPEED", "ClutchDesign",
-    "Operating", "current_limit", "design_from_mapping", "design_preset", "design_to_toml",
-    "load_design",
+    "Operating", "current_limit", "current_notes", "design_from_mapping", "design_preset",
+    "design_to_toml", "load_design",
 ]  # fmt: skip
 
 
@@ -174,6 +174,41 @@ class ClutchDesign:
         c = self.clutch
         st = regions.stations(vars(c), c.n_drums)
         return float(supply_current(vars(c), st, self.amplifier, self.operating.coil_temperature))
+
+
+def _density_notes(design: ClutchDesign) -> tuple[str, ...]:
+    """Say when the current-density limit, not max_current, sets the current limit (the
+    design is evaluated at a current the user did not type)."""
+    op = design.operating
+    area = math.pi * design.clutch.wire_diameter**2 / 4
+    cap = op.current_density_limit * area  # A = (A/m²)·m²
+    if cap >= op.max_current or design.supply_current < cap:  # not the binding limit
+        return ()
+    source = ("max_current_density_A_per_mm2" if op.max_current_density is not None
+              else f"IEC 60949 adiabatic limit for {op.peak_duration:g} s")  # fmt: skip
+    return (f"the current-density limit caps the current at {cap:.4g} A, below "
+            f"max_current_A = {op.max_current:g}: {op.current_density_limit * 1e-6:.4g} A/mm² "
+            f"({source}) in the {design.clutch.wire_diameter * 1e3:.3g} mm wire; every "
+            f"figure is at {cap:.4g} A",)  # fmt: skip
+
+
+def _supply_notes(design: ClutchDesign) -> tuple[str, ...]:
+    """Say when the amplifier's supply, not max_current, sets the current limit."""
+    op, supply = design.operating, design.supply_current
+    if supply >= current_limit(op, design.clutch.wire_diameter):  # capped without the supply
+        return ()
+    volts = design.amplifier.supply_voltage
+    return (f"the amplifier's {volts:g} V supply holds at most {supply:.3g} A through the "
+            f"coil ({volts / supply:.3g} Ω at {op.coil_temperature:g} °C): the current "
+            f"limit is {supply:.3g} A, below max_current_A = {op.max_current:g}; raise "
+            "[amplifier] supply_voltage_V to reach it",)  # fmt: skip
+
+
+def current_notes(design: ClutchDesign) -> tuple[str, ...]:
+    """Why the design's current limit is below its typed max_current_A (the current
+    density in the wire, the amplifier's supply), as ``evaluate`` and ``torque`` print it;
+    () if it is not. Beside the limit, so ``torque`` reads it without mrclutch.clutch."""
+    return _density_notes(design) + _supply_notes(design)
 
 
 #: Named designs. "paper": the paper's clutch on the paper's MR bench (170 mm lever).

@@ -23,8 +23,7 @@ from magnetics.fem.grid import check_memory, time_estimate
 from magnetics.network import flux_linkage as network_flux_linkage
 from magnetics.network import network_from_regions
 from magnetics.torque import TorqueCurve, torque_curve
-from mrclutch.clutch import current_notes
-from mrclutch.design import ClutchDesign
+from mrclutch.design import ClutchDesign, current_notes
 from mrclutch.torque_for import current_for
 
 #: m: the FEM's element size for the torque curves (magnetics.fem.DEFAULT_SIZE).

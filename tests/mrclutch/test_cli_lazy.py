@@ -142,9 +142,10 @@ def test_the_interactive_commands_load_nothing_heavy(fresh_python) -> None:
 
 
 def test_a_torque_curve_loads_no_report_module(fresh_python) -> None:
-    """``torque`` builds the design's section itself (geometry.section): the report's data
-    module and the CAD export it imports (its dataclasses, JSON sidecars) are not loaded
-    for a torque curve (issue 40 item 1)."""
+    """``torque`` builds the design's section itself (geometry.section) and reads the current
+    notes beside the limit (mrclutch.design): neither the report's data module and the CAD
+    export it imports nor the clutch's figures (mrclutch.clutch, its trust maps and masses)
+    are loaded for a torque curve (issue 40 item 1)."""
     code = (
         "import sys\nfrom mrclutch.cli.main import main\n"
         "assert main(['torque', '--preset', 'paper']) == 0\n"
@@ -153,3 +154,4 @@ def test_a_torque_curve_loads_no_report_module(fresh_python) -> None:
     loaded = set(fresh_python(code).stderr.split())
     assert "mrclutch.torque_curves" in loaded and "geometry.section" in loaded  # it ran
     assert "mrclutch.report_data" not in loaded and "geometry.export" not in loaded
+    assert "mrclutch.clutch" not in loaded and "mrclutch.trust" not in loaded

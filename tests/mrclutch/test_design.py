@@ -94,3 +94,24 @@ def test_design_file_writer_round_trips(tmp_path):
     assert back.operating.max_current == d.operating.max_current
     assert back.operating.input_speed == pytest.approx(d.operating.input_speed, rel=1e-12)
     assert back.transmission.ratio == pytest.approx(d.transmission.ratio, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("table", "says", "digits"),
+    [({"amplifier": {"supply_voltage_V": 3.0}}, "the amplifier's 3 V supply holds at most", 3),
+     ({"operating": {"max_current_density_A_per_mm2": 5.0}},
+      "the current-density limit caps the current at", 4)],
+)  # fmt: skip
+def test_current_notes_say_what_caps_the_limit(table, says, digits):
+    """``current_notes`` (beside the current limit, so ``torque`` reads it without
+    mrclutch.clutch, issue 40) says which limit binds, with the limit's own value; the paper
+    design has none; ``clutch`` and ``pipeline`` read the same function."""
+    from mrclutch import clutch, pipeline
+    from mrclutch.design import current_notes, design_from_mapping, design_preset
+
+    d = design_from_mapping({"clutch": {"base": "paper"}, **table})
+    (note,) = current_notes(d)
+    assert note.startswith(f"{says} {d.current_limit:.{digits}g} A")
+    assert d.current_limit < d.operating.max_current
+    assert current_notes(design_preset("paper")) == ()
+    assert clutch.current_notes is current_notes and pipeline.current_notes is current_notes

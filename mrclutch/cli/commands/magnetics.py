@@ -19,7 +19,7 @@ from mrclutch.cli.commands._common import (
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.longjobs import announce
 from mrclutch.cli.plots.magnetics import plot_field, plot_torque
-from mrclutch.clutch import current_notes
+from mrclutch.design import current_notes
 from mrclutch.torque_curves import (
     FEM_SIZE,
     b_max,
