@@ -150,9 +150,9 @@ def _parsed(paths: list[Path]) -> list[tuple[str, dict[str, Any]]]:
     source = [_CACHE_FORMAT, [p.name for p in paths], blobs]
     key = marshal.dumps(source)
     cache = CACHE / f"{zlib.crc32(key):08x}.marshal"
-    try:
-        cached = marshal.loads(cache.read_bytes())
-    except (OSError, ValueError, EOFError, TypeError):
+    try:  # the bounded reader: a FIFO or a device there is refused, not read
+        cached = marshal.loads(read_bytes(cache, "materials cache"))
+    except (ParameterError, ValueError, EOFError, TypeError):
         cached = None
     if (isinstance(cached, list) and len(cached) == 2 and cached[0] == source
             and isinstance(cached[1], list) and len(cached[1]) == len(paths)

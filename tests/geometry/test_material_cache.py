@@ -4,7 +4,9 @@ change to a file is read afresh, and a cache that is broken or cannot be written
 over."""
 
 import marshal
+import os
 import shutil
+import stat
 from pathlib import Path
 
 import pytest
@@ -82,6 +84,16 @@ def test_a_broken_cache_is_passed_over(registry, content) -> None:
     cache.write_bytes(content)
     assert materials._parsed(registry) == fresh
     assert marshal.loads(cache.read_bytes())[1] == [rec for _, rec in fresh]  # written again
+
+
+def test_a_fifo_in_the_caches_place_is_passed_over(registry) -> None:
+    """Read through the bounded reader: a FIFO (no writer) is refused, not waited on."""
+    fresh = materials._parsed(registry)
+    (cache,) = materials.CACHE.glob("*.marshal")
+    cache.unlink()
+    os.mkfifo(cache)
+    assert materials._parsed(registry) == fresh  # parsed; the FIFO is not replaced
+    assert stat.S_ISFIFO(cache.lstat().st_mode)
 
 
 def test_a_cache_that_cannot_be_written_is_passed_over(registry, monkeypatch) -> None:
