@@ -5,9 +5,11 @@ at all (an error or Ctrl-C leaves any previous file untouched), and a write that
 (disk full, read-only) is one ``OutputError`` line naming the file and the reason.
 ``export_clutch`` then checks the round trip: the STEP re-imported gives every part's
 volume to ``1e-6`` relative, and every STL read back is watertight; a failed check raises
-ParameterError (nothing is half-done: the files that passed stay, the message names the
-one that failed). Each STL's volume is compared with its B-rep's: a difference above
-``STL_VOLUME_RTOL`` is written as a note.
+ParameterError naming the part that failed. Each STL's volume is compared with its
+B-rep's: a difference above ``STL_VOLUME_RTOL`` is written as a note. The set is whole or
+absent: its files are written in a staging folder inside the target and moved into place
+only once all are written and checked, so an error, a failed check or Ctrl-C part way
+leaves the target folder as it was (a previous export in it whole).
 
 Materials: in the STEP a part that mixes materials is a sub-assembly of one solid per
 material (``geometry.cad.solid_label``); beside it, ``<stem>.materials.json``
@@ -17,15 +19,25 @@ so ``mrclutch inertia clutch.step`` can weigh the tool's own export (``read_mate
 
 from __future__ import annotations
 
+import errno
 import json
 import math
 import os
+import shutil
 import tempfile
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from geometry.atomic import OutputError, atomic_path, write_bytes, write_text
+from geometry.atomic import (
+    OutputError,
+    atomic_path,
+    check_target,
+    fsync_dir,
+    output_error,
+    write_bytes,
+    write_text,
+)
 from geometry.cad import (
     assembly,
     brep_volume_mm3,
@@ -207,35 +219,68 @@ def export_clutch(
     """Write ``clutch.step`` and ``<part>.stl`` into ``out_dir`` and check the round trip;
     every part is made of (and coloured as) the material ``materials`` chooses for it.
 
-    A write that fails (OutputError: disk full, read-only) removes the files this call
-    wrote and the folder when this call made it: an export is whole or absent."""
+    Whole or absent: the files are written in a staging folder inside ``out_dir`` and moved
+    into place once every one is written and checked. A write that fails (OutputError:
+    disk full, read-only), a failed check or Ctrl-C removes the staging folder, and the
+    folder itself when this call made it; a previous export in ``out_dir`` stays whole."""
     check_positive("tolerance", tolerance, " m")
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise ParameterError(f"--out {out}: exists and is not a directory")
     created = not out.exists()
-    written: list[Path] = []
+    stage: Path | None = None
+    done = False
     try:
-        return _export(clutch, out, tolerance, angular_tolerance, check, written, materials)
-    except OutputError:
-        for p in written:
-            p.unlink(missing_ok=True)
-        if created:
+        try:
+            out.mkdir(parents=True, exist_ok=True)
+            stage = Path(tempfile.mkdtemp(prefix=f".clutch-export-{os.getpid()}-", dir=out))
+        except OSError as exc:
+            raise output_error(out, exc) from None
+        res = _publish(_export(clutch, stage, tolerance, angular_tolerance, check, materials), out)
+        done = True
+        return res
+    finally:
+        if stage is not None:
+            shutil.rmtree(stage, ignore_errors=True)
+        if created and not done:
             try:
                 out.rmdir()
             except OSError:  # not empty (someone else's file) or already gone
                 pass
-        raise
+
+
+def _publish(res: ExportResult, out: Path) -> ExportResult:
+    """Move the staged files of ``res`` into ``out`` (renames within one folder: the STLs
+    and the sidecar first, the STEP last), the result with their paths in ``out``. A
+    target that is a link to another file system is written through it by a copy."""
+    staged = [*res.stl.values(), res.materials, res.step]
+    moved: dict[Path | None, Path] = {}
+    for src in staged:
+        assert src is not None  # _export always writes the sidecar
+        dest = out / src.name
+        try:
+            target = check_target(dest)
+            try:
+                os.replace(src, target)
+            except OSError as exc:
+                if exc.errno != errno.EXDEV:
+                    raise
+                with atomic_path(dest) as tmp:  # a link out of this file system: copy through
+                    shutil.copyfile(src, tmp)
+        except OSError as exc:
+            raise output_error(dest, exc) from None
+        moved[src] = dest
+    fsync_dir(out)
+    return replace(res, step=moved[res.step], materials=moved[res.materials],
+                   stl={n: moved[p] for n, p in res.stl.items()})  # fmt: skip
 
 
 def _export(clutch: DrumClutch, out: Path, tolerance: float, angular_tolerance: float,
-            check: bool, written: list[Path],
-            materials: MaterialChoice = DEFAULT_CHOICE) -> ExportResult:  # fmt: skip
+            check: bool, materials: MaterialChoice) -> ExportResult:  # fmt: skip
     section = build_section(clutch, materials)
     parts = part_solids(clutch, section)
     mats = material_solids(clutch, section)
     step = write_step(assembly(clutch, parts, mats, materials), out / "clutch.step")
-    written.append(step)
     solids = []
     for part in parts:
         own = [(m, sh) for (p, m), sh in mats.items() if p == part]
@@ -244,13 +289,11 @@ def _export(clutch: DrumClutch, out: Path, tolerance: float, angular_tolerance: 
             rho = float(section.densities[material])
             solids.append((part, name, material, rho, brep_volume_mm3(sh)))
     side = write_materials(step, solids)
-    written.append(side)
     stl = {name: out / f"{name}.stl" for name in parts}
     tris: dict[str, int] = {}
     stl_vols: dict[str, float] = {}
     for n, s in parts.items():
         tris[n], stl_vols[n] = write_stl(s, stl[n], tolerance, angular_tolerance)
-        written.append(stl[n])
     vols = {n: brep_volume_mm3(s) for n, s in parts.items()}
     notes = tuple(
         f"{n}.stl: mesh volume {stl_vols[n]:.6g} mm³ is {(stl_vols[n] / v - 1) * 100:+.2g} % "

@@ -50,6 +50,66 @@ def test_interrupted_write_leaves_the_old_file(tmp_path, monkeypatch):
     assert [p.name for p in tmp_path.iterdir()] == ["shaft.stl"]  # no temp file left
 
 
+def test_the_folder_holds_the_export_alone(exported):
+    """The staging folder is gone once the files are in place, and each path returned is
+    in the folder asked for."""
+    out = exported.step.parent
+    names = {p.name for p in out.iterdir()}
+    assert names == {"clutch.step", "clutch.materials.json"} | {f"{n}.stl" for n in exported.stl}
+    assert exported.materials.parent == out
+    assert all(p.parent == out for p in exported.stl.values())
+
+
+def _interrupt_second_stl(monkeypatch):
+    import geometry.export as ex
+
+    real, calls = ex.write_stl, []
+
+    def write_stl_then_ctrl_c(shape, path, *args):
+        calls.append(path)
+        if len(calls) == 2:  # clutch.step, its sidecar and one STL written
+            raise KeyboardInterrupt
+        return real(shape, path, *args)
+
+    monkeypatch.setattr(ex, "write_stl", write_stl_then_ctrl_c)
+    return calls
+
+
+@pytest.mark.slow
+def test_an_interrupted_export_is_absent_and_a_previous_one_stays_whole(tmp_path, monkeypatch):
+    """Ctrl-C after clutch.step and one STL: a folder the call made is gone again, and a
+    folder holding a previous export keeps every one of its files as they were (a STEP
+    without its STLs, or a new STEP beside old STLs, was the defect); no staging folder."""
+    calls = _interrupt_second_stl(monkeypatch)
+    fresh = tmp_path / "fresh"
+    with pytest.raises(KeyboardInterrupt):
+        export_clutch(preset("paper"), fresh, 1e-4, check=False)
+    assert len(calls) == 2 and not fresh.exists()
+
+    old = tmp_path / "old"
+    old.mkdir()
+    before = {n: f"old {n}" for n in ("clutch.step", "clutch.materials.json", "rotor.stl",
+                                      "notes.txt")}  # fmt: skip
+    for name, text in before.items():
+        (old / name).write_text(text)
+    calls.clear()
+    with pytest.raises(KeyboardInterrupt):
+        export_clutch(preset("paper"), old, 1e-4, check=False)
+    assert len(calls) == 2
+    assert {p.name: p.read_text() for p in old.iterdir()} == before
+
+
+@pytest.mark.slow
+def test_a_failed_round_trip_writes_nothing(tmp_path, monkeypatch):
+    import geometry.export as ex
+
+    monkeypatch.setattr(ex, "read_step_parts", lambda step: {})  # every part lost
+    out = tmp_path / "cad"
+    with pytest.raises(ParameterError, match="missing after re-import"):
+        export_clutch(preset("paper"), out, 1e-4)
+    assert not out.exists()
+
+
 def test_bad_inputs(tmp_path):
     with pytest.raises(ParameterError, match="tolerance"):
         export_clutch(preset("paper"), tmp_path, 0.0)
