@@ -136,22 +136,36 @@ def threshold(p: HapticParams, K: float, verdict: str, field: str) -> dict[str, 
 
     lo, hi = math.log(x0 * 1e-3), math.log(min(x0 * 1e3, 1.0) if field == "delay" else x0 * 1e3)
     us = np.linspace(lo, hi, 13)
-    if verdict in _VECTORISED:  # the grid in one call: its rows are the scalar calls' bits
-        vs = limit(replace(p, **{field: np.array([math.exp(u) for u in us])}))
-        gs = [gain(v) for v in vs]
-    else:
-        gs = [g(u) for u in us]
-    # the crossing nearest the value in p
+    gs: dict[int, float] = {}  # the grid's values, evaluated as the search reaches them
+
+    def at(idx: list[int]) -> None:
+        new = [i for i in idx if i not in gs]
+        if new and verdict in _VECTORISED:  # in one call: its rows are the scalar calls' bits
+            vs = limit(replace(p, **{field: np.array([math.exp(us[i]) for i in new])}))
+            gs.update(zip(new, (gain(v) for v in vs), strict=True))
+        elif new:
+            gs.update((i, g(us[i])) for i in new)
+
+    # the crossing nearest the value in p (the lowest cell of equal nearness): cells in order
+    # of their distance from it, each one's root no nearer than that, so the search stops
+    # (unevaluated beyond) at a cell farther than the nearest root found (issue 40: the
+    # delay's far cells, up to 1 s, were most of a threshold's work)
     u0 = math.log(x0)
+    near = [max(float(us[i]) - u0, u0 - float(us[i + 1]), 0.0) for i in range(12)]
     best = None
-    for a, b, ga, gb in zip(us[:-1], us[1:], gs[:-1], gs[1:], strict=True):
+    for i in sorted(range(12), key=lambda i: (near[i], i)):
+        if best is not None and near[i] > best[0] + 1e-9 * (1.0 + abs(u0)):
+            break
+        at([i, i + 1] if near[i] > 0 else [j for j in range(13) if near[min(j, 11)] == 0
+                                            or near[max(j - 1, 0)] == 0])  # fmt: skip
+        a, b, ga, gb = us[i], us[i + 1], gs[i], gs[i + 1]
         if ga == 0 or ga * gb < 0:
             r = a if ga == 0 else root(a, b, ga, gb)
-            if best is None or abs(r - u0) < abs(best[0] - u0):
-                best = (r, ga, gb)
+            if best is None or (abs(r - u0), i) < (best[0], best[1]):
+                best = (abs(r - u0), i, r, ga, gb)
     if best is None:
         return None
-    r, ga, gb = best
+    _, _, r, ga, gb = best
     return {"value": math.exp(r), "sense": "≥" if gb > ga else "≤"}
 
 

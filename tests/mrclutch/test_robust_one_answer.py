@@ -5,12 +5,14 @@ whichever designs share its batch (and so its chunk of like grid sizes: 256 rows
 ``_crossing_scan``, 32 in ``_scan``) and wherever it sits there; the exact kernel
 ``limits.max_stable_stiffness`` on many designs is its scalar call on each."""
 
+import math
 from dataclasses import replace
 
 import numpy as np
 import pytest
 from test_robust import _random_boxes
 
+from geometry.numerics import illinois
 from mrclutch import robust
 from mrclutch.haptics import limits
 from mrclutch.haptics.actuator import TABLE2_MR, HapticParams
@@ -140,3 +142,55 @@ def test_max_stable_stiffness_rows_that_scan_on_in_chunks(monkeypatch):
     one = np.array([max_stable_stiffness(p.item(i)) for i in range(one.size)])
     assert 0 < np.isnan(one).sum() < one.size
     assert np.array_equal(max_stable_stiffness(p), one, equal_nan=True)
+
+
+def _threshold_on_the_whole_grid(p, K, verdict, field):
+    """``robust.threshold`` as it was before its search stopped at the nearest crossing:
+    every point of the 13-point grid by a scalar call, every cell with a sign change
+    root-found, the root nearest the value in p kept (the lowest cell of equal nearness)."""
+    limit = robust._LIMITS[verdict]
+    x0 = float(getattr(p, field))
+
+    def g(u):
+        return math.log(min(float(limit(replace(p, **{field: math.exp(u)}))), 1e12) / K)
+
+    def root(a, b, ga, gb):
+        one = np.ones(1)
+        v = illinois(lambda _act, v: np.array([g(float(v[0]) + a - 1.0)]), one,
+                     one * (b - a + 1.0), one * ga, one * gb, 1e-11)  # fmt: skip
+        return float(v[0]) + a - 1.0
+
+    lo, hi = math.log(x0 * 1e-3), math.log(min(x0 * 1e3, 1.0) if field == "delay" else x0 * 1e3)
+    us = np.linspace(lo, hi, 13)
+    gs = [g(u) for u in us]
+    u0, best = math.log(x0), None
+    for a, b, ga, gb in zip(us[:-1], us[1:], gs[:-1], gs[1:], strict=True):
+        if ga == 0 or ga * gb < 0:
+            r = a if ga == 0 else root(a, b, ga, gb)
+            if best is None or abs(r - u0) < abs(best[0] - u0):
+                best = (r, ga, gb)
+    if best is None:
+        return None
+    r, ga, gb = best
+    return {"value": math.exp(r), "sense": "≥" if gb > ga else "≤"}
+
+
+@pytest.mark.parametrize("verdict", ["stable", "passive"])
+@pytest.mark.parametrize("field", ["b1", "delay"])
+def test_threshold_searched_outward_is_the_whole_grids(verdict, field):
+    """The threshold searched outward from the value in p (grid points evaluated only up to
+    the nearest crossing) gives the whole grid's answer exactly, value and sense, or None
+    where it does: the paper's pair and two random ones, K from well inside to beyond the
+    limit and far outside (a crossing, none)."""
+    rng = np.random.default_rng(43)
+    pairs = [replace(TABLE2_MR, delay=1e-3), *(_take(_params(_random_boxes(rng, 2)), [i]).item(0)
+                                               for i in range(2))]  # fmt: skip
+    seen = set()
+    for p in pairs:
+        lim = float(robust._LIMITS[verdict](p))
+        for f in (1e-4, 0.05, 0.5, 0.9, 1.1, 3.0, 1e4):
+            K = f * lim
+            got = robust.threshold(p, K, verdict, field)
+            assert got == _threshold_on_the_whole_grid(p, K, verdict, field), (p, f)
+            seen.add(got is None)
+    assert seen == {True, False}  # a crossing found, and none
