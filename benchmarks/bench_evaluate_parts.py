@@ -39,6 +39,7 @@ PARTS = (
     ("duty (hot holds: the thermal march)", "mrclutch.pipeline", "evaluation_duty", 1),
     ("robust box (hand box, limits)", "mrclutch.verdict", "robust_box", 1),
     ("robust verdicts (searches, thresholds)", "mrclutch.verdict", "robust_verdicts", 1),
+    ("of which the thresholds (b1, delay)", "mrclutch.robust", "threshold", 2),
     ("network kernel in Python (_solve_rows)", "magnetics.network.kernels", "_solve_rows", 1),
     ("text", "mrclutch.cli.commands.evaluate", "format_evaluation", 0),
 )
