@@ -159,8 +159,13 @@ def _judged_once() -> Iterator[None]:
     it computed its own (the FEM at reference fidelity, 1-2 s a call; the box over the
     ranges, ~0.5 s); a command that calls them with other arguments (another fidelity,
     nominal only) still computes its own. A report's evaluation (the B-rep mass from its
-    CAD process) is left outside by the tests that use it."""
-    from mrclutch import pipeline, verdict
+    CAD process) is left outside by the tests that use it. The modules that bind the two by
+    name (compare and haptic's ``haptic_design``, device's ``handoff``) are imported first
+    and patched too, so they share the evaluation inside and, outside, call the real ones
+    (imported lazily inside, they kept the first context's functions and cache for the rest
+    of the process)."""
+    from mrclutch import handoff, pipeline, verdict
+    from mrclutch.cli.commands import haptic_design
 
     real_evaluate, real_judge = pipeline.evaluate, verdict.judge_evaluation
     evs: dict = {}
@@ -179,9 +184,10 @@ def _judged_once() -> Iterator[None]:
         return copy.deepcopy(judged[key][1])
 
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(pipeline, "evaluate", evaluate)
-        mp.setattr(verdict, "evaluate", evaluate)
-        mp.setattr(verdict, "judge_evaluation", judge_evaluation)
+        for module in (pipeline, verdict, haptic_design, handoff):
+            mp.setattr(module, "evaluate", evaluate)
+        for module in (verdict, haptic_design):
+            mp.setattr(module, "judge_evaluation", judge_evaluation)
         yield
 
 

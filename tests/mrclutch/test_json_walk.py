@@ -149,8 +149,8 @@ def _json(capsys, argv: list[str]) -> Any:
 
 
 def test_every_commands_json_on_presets_examples_and_extremes(tmp_path, capsys, judged_once):
-    """Each design's commands share its evaluation (``judged_once``: evaluate, compare and
-    haptic evaluated it each, the last two judged it each)."""
+    """Each design's commands share its evaluation (``judged_once``: evaluate, compare,
+    haptic and device evaluated it each, compare and haptic judged it each)."""
     designs = _designs(tmp_path)
     assert {"paper", "paper_bench", "thin_drums", "many", "big", "hot"} <= set(designs)
     found: list[tuple[str, str, str, Any]] = []
@@ -161,11 +161,11 @@ def test_every_commands_json_on_presets_examples_and_extremes(tmp_path, capsys, 
             for cmd, extra in COMMANDS if wide else COMMANDS[:1]:
                 data = _json(capsys, [cmd, *args, *extra])
                 found += [(name, cmd, k, v) for k, v in unexplained(data)]
-        if not wide:
-            continue
-        out = tmp_path / f"device_{name}.json"
-        assert main(["device", *args, "--out", str(out)]) == 0, capsys.readouterr().err
-        capsys.readouterr()
+            if not wide:
+                continue
+            out = tmp_path / f"device_{name}.json"
+            assert main(["device", *args, "--out", str(out)]) == 0, capsys.readouterr().err
+            capsys.readouterr()
         found += [(name, "device", k, v) for k, v in unexplained(json.loads(out.read_text()))]
     # 20 drums: the drums route cannot add one (once a refusal of the whole study)
     data = _json(capsys, ["scale", *designs["many"], "--json"])
