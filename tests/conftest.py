@@ -16,26 +16,34 @@ import pytest
 
 from mrclutch import docs_figures
 
-#: The heaviest work units of the last full run (``CI=1 python -m pytest --durations=25``,
-#: 766 s on 2 workers: the install test 166 s, test_one_answer's members 47 s + 23 s, the
-#: optimiser's figures 42 s, ...), heaviest first. xdist hands the units out in collection
-#: order (``--no-loadscope-reorder``; its default, most tests first, sent these few-test
-#: files last, where one of them ran alone on one worker at the end); a unit not named
-#: here follows, those holding more ``slow`` tests first. Only the order changes.
+#: The heaviest work units of the last full run with durations (``CI=1 python -m pytest
+#: --durations=30``, 552 s on 2 workers, loaded machine: each unit's sum of its tests in the
+#: slowest 30, a lower bound for a unit with more tests: the install test 109 s,
+#: test_one_answer 63 s, the GetDP comparisons 54 s, test_report 38 s, the dense robust
+#: sampling 32 s, the kernel's compile tests 28 s, ...), heaviest first. xdist hands the
+#: units out in collection order (``--no-loadscope-reorder``; its default, most tests
+#: first, sent these few-test files last, where one of them ran alone on one worker at the
+#: end); a unit not named here follows, those holding more ``slow`` tests first. Only the
+#: order changes.
 HEAVY_FIRST = (
     "tests/test_install.py",
     "tests/mrclutch/test_one_answer.py",
     "tests/magnetics/test_onelab.py",
-    "tests/mrclutch/test_optimize_pareto.py",
-    "figures:mrclutch optimize --no-verify --json",
-    "tests/mrclutch/test_sweep_scaleout.py",
+    "tests/mrclutch/test_report.py",
     "tests/mrclutch/test_robust.py",
     "tests/magnetics/test_network_kernel.py",
-    "tests/mrclutch/test_json_walk.py",
-    "figures:mrclutch fidelity --preset paper --out {tmp}/fidelity",
     "tests/mrclutch/test_output_faults.py",
+    "tests/mrclutch/test_json_walk.py",
+    "figures:mrclutch optimize --no-verify --json",
+    "tests/mrclutch/test_sweep_scaleout.py",
+    "figures:mrclutch fidelity --preset paper --out {tmp}/fidelity",
     "tests/mrclutch/test_sweep_categorical.py",
-    "tests/mrclutch/test_report.py",
+    "tests/mrclutch/test_optimize_pareto.py",
+    "tests/mrclutch/test_sweep_interrupts.py",
+    "figures:python benchmarks/measure_fem_ripple.py",
+    "tests/mrclutch/test_cli_geometry.py",
+    "tests/mrclutch/test_help_files.py",
+    "tests/mrclutch/test_robust_inputs.py",
 )
 
 
