@@ -126,18 +126,18 @@ def test_max_stable_stiffness_rows_that_scan_on_in_chunks(monkeypatch):
     rng = np.random.default_rng(5)
 
     def lg(a, b):
-        return 10 ** rng.uniform(np.log10(a), np.log10(b), 300)
+        return 10 ** rng.uniform(np.log10(a), np.log10(b), 120)
 
     p = HapticParams(lg(1e-6, 1e-1), lg(1e-3, 30), lg(1e2, 1e6), lg(1e-2, 1e3), lg(1e-4, 1e-1),
                      delay=lg(1e-6, 3e-2))  # fmt: skip
-    one = np.array([max_stable_stiffness(p.item(i)) for i in range(300)])
+    one = np.array([max_stable_stiffness(p.item(i)) for i in range(120)])
     p = _take(p, ~np.isnan(one))  # MAX_REFINED (NaN) sends a whole set to the scalar path
     one = one[~np.isnan(one)]
     chunks = []
     chunk_grid = limits._chunk_grid
     monkeypatch.setattr(limits, "_chunk_grid", lambda *a: chunks.append(a) or chunk_grid(*a))
     assert np.array_equal(max_stable_stiffness(p), one)
-    assert len(chunks) >= 10
+    assert len(chunks) >= 5
     monkeypatch.setattr(limits, "MAX_GRID", 30)
     one = np.array([max_stable_stiffness(p.item(i)) for i in range(one.size)])
     assert 0 < np.isnan(one).sum() < one.size
@@ -180,15 +180,14 @@ def _threshold_on_the_whole_grid(p, K, verdict, field):
 def test_threshold_searched_outward_is_the_whole_grids(verdict, field):
     """The threshold searched outward from the value in p (grid points evaluated only up to
     the nearest crossing) gives the whole grid's answer exactly, value and sense, or None
-    where it does: the paper's pair and two random ones, K from well inside to beyond the
-    limit and far outside (a crossing, none)."""
+    where it does: the paper's pair and a random one, K inside and beyond the limit and far
+    outside (a crossing, none)."""
     rng = np.random.default_rng(43)
-    pairs = [replace(TABLE2_MR, delay=1e-3), *(_take(_params(_random_boxes(rng, 2)), [i]).item(0)
-                                               for i in range(2))]  # fmt: skip
+    pairs = [replace(TABLE2_MR, delay=1e-3), _take(_params(_random_boxes(rng, 1)), [0]).item(0)]
     seen = set()
     for p in pairs:
         lim = float(robust._LIMITS[verdict](p))
-        for f in (1e-4, 0.05, 0.5, 0.9, 1.1, 3.0, 1e4):
+        for f in (1e-4, 0.5, 1.1, 1e4):
             K = f * lim
             got = robust.threshold(p, K, verdict, field)
             assert got == _threshold_on_the_whole_grid(p, K, verdict, field), (p, f)
