@@ -85,13 +85,34 @@ def test_importing_the_materials_does_not_import_scipy() -> None:
     subprocess.run([sys.executable, "-c", code], check=True)
 
 
+def _leggauss(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """numpy's ``legendre.leggauss(n)`` (its steps: the companion matrix's eigenvalues, one
+    Newton step, the weights from the derivative, symmetrised, summing to 2) with the
+    eigenvalues from the symmetric tridiagonal solver: O(n²) instead of a dense n × n
+    eigvalsh (4.4 s of CPU at n = 2000, against 0.14 s); nodes equal to 1e-16, weights to
+    5e-10 relative (the closed form's error against it: 1.4944199e-9 either way)."""
+    from numpy.polynomial import legendre as leg
+    from scipy.linalg import eigvalsh_tridiagonal
+
+    k = np.arange(1.0, n)
+    x = eigvalsh_tridiagonal(np.zeros(n), k / np.sqrt((2 * k - 1) * (2 * k + 1)))
+    c = np.zeros(n + 1)
+    c[-1] = 1.0
+    df = leg.legval(x, leg.legder(c))
+    x -= leg.legval(x, c) / df
+    fm = leg.legval(x, c[1:])
+    w = 1.0 / (fm / np.abs(fm).max() * (df / np.abs(df).max()))
+    w, x = (w + w[::-1]) / 2, (x - x[::-1]) / 2
+    return x, w * (2.0 / w.sum())
+
+
 def test_yield_stress_along_a_hyperbolic_decay_in_closed_form() -> None:
     """MRFluid.tau_y_decay, ∫0^W τy(H·e^−v)·e^v dv, against 2000 Gauss–Legendre points of
     τy itself from the weak field to deep saturation (to 1e-8: the table's Hermite
     interpolation, rounding at the smallest W), and its two limits: a·W·τ_max where τy is
     linear in H, (e^W − 1)·τ_max where τy is τ_max along the whole decay."""
     fluid = MRF_132DG
-    u, wt = np.polynomial.legendre.leggauss(2000)
+    u, wt = _leggauss(2000)
     h = np.array([1e-3, 1e2, 3e4, 1.6e5, 4e5, 2e6, 3e7, 1e9])[:, None]
     w = np.array([1e-3, 0.3, 1.0, 3.0, 8.0])[None, :]
     v = 0.5 * w[..., None] * (u + 1)
