@@ -8,6 +8,10 @@ The CLI (``mrclutch.cli.commands.optimize``, ``.pareto``) parses, calls these an
 
 from __future__ import annotations
 
+import atexit
+import os
+import signal
+import sys
 import threading
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import BrokenExecutor, Executor
@@ -63,10 +67,51 @@ def judge_all(designs: list[ClutchDesign], fidelity: str, executor: Executor | N
     return out
 
 
+#: The B-rep masses this process weighed (``brep_of``) and has not judged yet, by (clutch,
+#: materials): a helper's own judgement of a design it weighed for the other process reads
+#: its mass here (``judged_there``) instead of weighing it a second time (issue 40).
+_WEIGHED: dict[tuple[Any, Any], Any] = {}
+
+
 def brep_of(design: ClutchDesign) -> Any:
     """The design's exact B-rep mass as plain data (``report_data.design_brep_mass``): a
-    helper process's task, so that this one never imports build123d (issue 40)."""
-    return design_brep_mass(design)
+    helper process's task, so that this one never imports build123d (issue 40); kept for
+    this process's own judgement of the design (``judged_there``)."""
+    data = design_brep_mass(design)
+    _WEIGHED[(design.clutch, design.materials)] = data
+    return data
+
+
+def judged_there(check: Callable[[ClutchDesign], dict], design: ClutchDesign) -> dict:
+    """``check(design)`` in the helper process, the design's B-rep mass the one ``brep_of``
+    weighed here if it did (read as this process reads the helper's masses:
+    ``report_data.design_mass_from``), else weighed where ``check`` asks."""
+    data = _WEIGHED.pop((design.clutch, design.materials), None)
+    if data is None:
+        return check(design)
+    with design_mass_from(design, lambda: data):
+        return check(design)
+
+
+def helper_start() -> None:
+    """A helper process's start (its pool's initializer): Ctrl-C is the parent's to handle
+    (one line), ignored here until the parent stops it; and at its exit, every task's
+    result sent, the process ends without the interpreter's teardown (``_exit_now``)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    atexit.register(_exit_now)
+
+
+def _exit_now() -> None:
+    """The helper's exit: its streams flushed, the process ended at once. The exit handlers
+    its tasks' imports registered have run (later ones run first); those registered before
+    it (multiprocessing's, run already by the worker's own exit; logging's, which has no
+    handler here) and the teardown of its modules are skipped: freeing OpenCascade's,
+    VTK's and numba's objects took ≈ 1–2 s CPU after the last result, on the path of the
+    parent's ``shutdown`` and so of the command's wall time (issue 40)."""
+    for stream in (sys.stdout, sys.stderr):
+        if stream is not None:
+            stream.flush()
+    os._exit(0)
 
 
 def judge_beside(designs: list[ClutchDesign], fidelity: str, helper: Executor,
@@ -74,9 +119,10 @@ def judge_beside(designs: list[ClutchDesign], fidelity: str, helper: Executor,
     """``judge_all`` shared between this process and one ``helper`` process (an executor of
     one worker, e.g. started before the search so that its imports are behind it): this one
     judges from the first design on, the helper from the last back, until they meet; at
-    reference fidelity the helper weighs every B-rep first (``brep_of``: a few 0.1 s) and
-    this process reads its masses from there (``report_data.design_mass_from``) instead of
-    importing build123d. Each design is judged by the same ``reference_check`` or
+    reference fidelity the helper weighs every B-rep first (``brep_of``: ≈ 0.1 s CPU each)
+    and this process reads its masses from there (``report_data.design_mass_from``) instead
+    of importing build123d, as the helper's own judgements do (``judged_there``: each B-rep
+    weighed once). Each design is judged by the same ``reference_check`` or
     ``fast_check`` wherever it runs, so the answer is ``judge_all``'s (and is, all judged
     here, where the helper breaks). ``done(n)`` after each of this process's judgements and
     at the end, ``n`` all judged so far."""
@@ -105,7 +151,7 @@ def _judge_beside(designs: list[ClutchDesign], fidelity: str, helper: Executor,
                         return
                     ends["back"] -= 1
                     i = ends["back"]
-                out[i] = helper.submit(check, designs[i]).result()
+                out[i] = helper.submit(judged_there, check, designs[i]).result()
         except BaseException as exc:  # re-raised here below, after the join
             failed.append(exc)
 

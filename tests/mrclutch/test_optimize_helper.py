@@ -1,7 +1,8 @@
 """Issue 40: the Pareto members judged by this process and one helper process together
 (``members.judge_beside``) get ``judge_all``'s answer, each judged once, in order; at
-reference fidelity this process reads the B-rep masses the helper weighed; the command's
-output with its helper is the output without (``--workers 0``)."""
+reference fidelity this process reads the B-rep masses the helper weighed, and so do the
+helper's own judgements; the command's output with its helper is the output without
+(``--workers 0``); the helper ends without its interpreter's teardown."""
 
 import json
 import multiprocessing
@@ -129,8 +130,8 @@ def test_the_command_with_its_helper_prints_what_it_prints_alone(monkeypatch, ca
     submitted: list[str] = []
     real_submit = ProcessPoolExecutor.submit
 
-    def submit(self, fn, *args, **kwargs):
-        submitted.append(fn.__name__)
+    def submit(self, fn, *args, **kwargs):  # a member's check by its own name
+        submitted.append((args[0] if fn is members.judged_there else fn).__name__)
         return real_submit(self, fn, *args, **kwargs)
 
     monkeypatch.setattr(ProcessPoolExecutor, "submit", submit)
@@ -149,3 +150,57 @@ def test_the_command_with_its_helper_prints_what_it_prints_alone(monkeypatch, ca
     submitted.clear()
     assert main([*argv, "--no-verify"]) == 0  # the fast path: no helper
     assert submitted == [] and json.loads(capsys.readouterr().out)["fidelity"] == "fast"
+
+
+def test_the_helpers_own_judgement_reads_the_b_rep_it_weighed(monkeypatch):
+    """A design ``brep_of`` weighed in this process is judged (``judged_there``) with that
+    mass, not weighed again, and the mass is used once."""
+    weighed: list[str] = []
+
+    def weigh(design):
+        weighed.append(f"weighing {len(weighed) + 1}")
+        return ("brep", {"rotor": (0.01, 1e-6)}, (weighed[-1],))
+
+    monkeypatch.setattr(members, "design_brep_mass", weigh)
+    monkeypatch.setattr(members, "_WEIGHED", {})
+    (d,) = _designs(1)
+    assert members.brep_of(d)[2] == ("weighing 1",)
+    got = members.judged_there(_mass_check, d)
+    assert got["notes"] == ["weighing 1"] and got["mass"] == 0.01  # the weighed mass, read
+    assert weighed == ["weighing 1"] and members._WEIGHED == {}  # weighed once, used once
+
+
+class _Kept:
+    """An object whose finaliser writes a file: run when the interpreter tears down the
+    module holding it, not where the process ends without that teardown."""
+
+    def __init__(self, path: str) -> None:
+        self.path = path
+
+    def __del__(self, _open=open) -> None:
+        with _open(self.path, "w") as f:
+            f.write("torn down")
+
+
+_KEEP: list = []
+
+
+def _keep_till_exit(path: str) -> int:
+    """In the helper: a ``_Kept`` held by this module till the process ends."""
+    _KEEP.append(_Kept(path))
+    return os.getpid()
+
+
+def test_the_helper_ends_without_its_interpreters_teardown(tmp_path):
+    """A helper started by ``members.helper_start`` ends with status 0 once its pool is shut
+    down, without tearing its modules down: an object it holds is never finalised there,
+    where a worker started without it finalises the same object at its exit."""
+    ctx = multiprocessing.get_context("spawn")
+    for start, marked in ((members.helper_start, False), (None, True)):
+        mark = tmp_path / f"{start is None}.txt"
+        pool = ProcessPoolExecutor(1, mp_context=ctx, initializer=start)
+        pid = pool.submit(_keep_till_exit, str(mark)).result()
+        (proc,) = pool._processes.values()
+        pool.shutdown()
+        assert proc.pid == pid and proc.exitcode == 0
+        assert mark.exists() is marked

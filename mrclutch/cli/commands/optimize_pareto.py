@@ -24,6 +24,7 @@ from mrclutch.cli.plots.design import pareto_set_plot
 from mrclutch.cli.progress import bar as progress_bar
 from mrclutch.design import ClutchDesign, design_to_toml
 from mrclutch.members import (
+    helper_start,
     judge_members,
     limits_record,
     paper_beside,
@@ -99,10 +100,10 @@ def _helper(wanted: bool) -> Iterator[Executor | None]:
     # (the suite, a caller of main()) forks its thread pool's held locks, and the fork's
     # first B-rep fuse waits on them for ever. (A script calling main() unguarded by
     # `if __name__ == "__main__"` breaks the spawn: all is then judged here.) Ctrl-C is
-    # this process's to handle (one line), the helper's to ignore until stopped
+    # this process's to handle (one line), the helper's to ignore until stopped; the
+    # helper's exit skips its interpreter's teardown (members.helper_start)
     pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"),
-                               initializer=signal.signal,
-                               initargs=(signal.SIGINT, signal.SIG_IGN))  # fmt: skip
+                               initializer=helper_start)  # fmt: skip
     try:
         yield pool
     except BaseException:  # an error or Ctrl-C: no judgement left running after the exit
