@@ -138,7 +138,7 @@ def pareto(
 
     class Clutches(Problem):  # type: ignore[misc]
         def __init__(self) -> None:
-            terms = len(cons.terms(_probe))
+            terms = len(cons.terms(_SearchRows()))  # the limits, no design evaluated
             super().__init__(
                 n_var=len(names) + 1 + len(cats),
                 n_obj=len(objectives),
@@ -167,11 +167,6 @@ def pareto(
             r.update(robust.proxy(f, base, r))
         return r
 
-    one = {k: np.array([box[k][0]]) for k in names}
-    one["n_drums"] = np.array([counts[0]])
-    for slot, choices in cats.items():
-        one[slot] = np.array(choices[:1], dtype=object)
-    _probe = rows(one)
     # pymoo calls its callback unchecked: none is passed without a progress report
     tick = {} if progress is None else {"callback": lambda alg: progress(alg.n_gen, generations)}
     minimize(Clutches(), NSGA2(pop_size=pop_size), ("n_gen", generations), seed=seed,
@@ -199,6 +194,7 @@ def pareto(
     alive = np.ones(n_ok, bool)
     stable_ok = np.full(n_ok, -1)  # 1 passes, 0 fails, -1 not computed yet
     robust_ok = np.full(n_ok, -1)
+    checked: list[tuple[np.ndarray, dict[str, np.ndarray]]] = []  # each full check's batch
     drop_s = drop_r = 0
     while True:
         idx = np.flatnonzero(alive)
@@ -227,6 +223,7 @@ def pareto(
             r = rows(fl, stability=cons.stable)
             r.update(robust.full(fl, base, r))
             robust_ok[todo] = cons.violation(r) == 0
+            checked.append((todo, r))
         elif todo.size:
             robust_ok[todo] = 1
         bad = pick[robust_ok[pick] == 0]
@@ -246,9 +243,16 @@ def pareto(
         return ParetoSet((), objectives, 0, evaluations, drop_s, drop_r, box, source, counts,
                          how, front)  # fmt: skip
     fl = fields_of(x_ok[pick])
-    r_pick = rows(fl, stability=cons.stable)
-    if robust is not None:
-        r_pick.update(robust.full(fl, base, r_pick))
+    same = [(t, r) for t, r in checked if np.array_equal(np.sort(t), np.sort(pick))]
+    if same:  # the members' rows as their full check took them, a batch of these designs
+        # (rows that do not depend on the batch's order): not evaluated a second time
+        t, r = same[0]
+        at = {int(i): j for j, i in enumerate(t)}
+        r_pick = {k: v[[at[int(i)] for i in pick]] for k, v in r.items()}
+    else:
+        r_pick = rows(fl, stability=cons.stable)
+        if robust is not None:
+            r_pick.update(robust.full(fl, base, r_pick))
     out_members = []
     for j in range(len(pick)):
         values = {k: float(fl[k][j]) for k in names}
@@ -260,6 +264,20 @@ def pareto(
                                   range_edges(d, box, source, counts)))  # fmt: skip
     return ParetoSet(tuple(out_members), objectives, len(x_front), evaluations, drop_s, drop_r,
                      box, source, counts, how, front)  # fmt: skip
+
+
+class _SearchRows(dict):  # type: ignore[type-arg]
+    """The search's rows as ``Constraints.terms`` reads them, to count its limits without
+    evaluating a design (a fast-path call costs mostly per call: one more generation's):
+    every column it reads is there (ones), and none of those whose presence it tests: the
+    search takes no stable K (``evaluate_rows`` without stability) and no worst-case column
+    (``WorstCase.proxy`` adds none)."""
+
+    def __missing__(self, key: str) -> np.ndarray:
+        return np.ones(1)
+
+    def __contains__(self, key: object) -> bool:
+        return False
 
 
 def _stable_K(base: ClutchDesign, r: Mapping[str, np.ndarray], idx: np.ndarray) -> np.ndarray:

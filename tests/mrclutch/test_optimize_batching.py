@@ -1,15 +1,16 @@
 """Issue 40: the Pareto search's shortcuts give the numbers of the long way, row for row.
 The limits' transient runs once over a batch of every drum count and fluid, not once per
 region table; the front's stability is read from the search's own rows, not from the
-designs evaluated a second time."""
+designs evaluated a second time; the members' rows are those of their worst-case check, not
+evaluated a third time; the search's count of limits is taken without evaluating a design."""
 
 from dataclasses import replace
 
 import numpy as np
 
 from mrclutch.design import design_preset
-from mrclutch.optimize import Constraints, evaluate_rows, limit_columns
-from mrclutch.optimize.pareto import _stable_K
+from mrclutch.optimize import Constraints, evaluate_rows, limit_columns, pareto, robust_verdict
+from mrclutch.optimize.pareto import _SearchRows, _stable_K
 from mrclutch.pipeline import evaluate_batch
 
 PAPER = design_preset("paper")
@@ -64,3 +65,40 @@ def test_front_stability_from_the_search_rows_is_a_fresh_evaluations():
     got = _stable_K(PAPER, r, idx)
     assert np.all(np.isfinite(got) & (got > 0))
     assert np.array_equal(got, again)
+
+
+def test_the_search_counts_the_limits_its_rows_give():
+    """``_SearchRows`` gives ``Constraints.terms`` the limits, in order, that the search's
+    own rows give (``evaluate_rows`` without stability, the worst case's proxy), with each
+    optional limit on or off."""
+    f = _mixed(4)
+    wc = robust_verdict(PAPER)
+    for cons in (Constraints(), Constraints(stable=False, passive=False, min_continuous_torque=0,
+                 peak_time=0), Constraints(duty_torque=0.1, duty_time=5.0, max_residual_torque=1e-3,
+                 max_ripple_force=0.1, min_life=10.0)):  # fmt: skip
+        cons = cons.resolved(PAPER)
+        for robust in (None, wc):
+            r = evaluate_rows(f, PAPER, cons)
+            if robust is not None:
+                r.update(robust.proxy(f, PAPER, r))
+            assert list(cons.terms(_SearchRows())) == list(cons.terms(r))
+
+
+def test_the_members_rows_are_their_batchs_fresh_evaluation():
+    """A small worst-case Pareto run: the members' rows (read from their worst-case check)
+    equal the members' designs evaluated again as one batch in the members' order
+    (``evaluate_rows`` with stability, the proxy, the full worst case: the long way),
+    column for column, to the bit. (Alone, a design's network Newton stops at its own
+    tolerance: its torque may differ in the last bits from a batch's.)"""
+    wc = robust_verdict(PAPER)
+    ps = pareto(PAPER, robust=wc, drum_counts=(2, 3), pop_size=16, generations=3, members=3)
+    cons = Constraints().resolved(PAPER)
+    assert len(ps.members) == 3 and ps.dropped_robust == 0
+    f = {k: np.array([getattr(m.design.clutch, k) for m in ps.members]) for k in KEYS}
+    r = evaluate_rows(f, PAPER, cons, stability=True)
+    r.update(wc.proxy(f, PAPER, r))
+    r.update(wc.full(f, PAPER, r))
+    for j, m in enumerate(ps.members):
+        assert sorted(r) == sorted(m.row)
+        for k, v in r.items():
+            assert np.array_equal(float(v[j]), m.row[k], equal_nan=True), k
