@@ -25,8 +25,17 @@ W = np.logspace(-1.0, 6.0, 100_001)
 
 
 def dense_reference(m1, b1, k, b, m2, tau, K) -> float:  # type: ignore[no-untyped-def]
-    f = _k_eff(m1, b1, k, b, m2, tau, K, W)
-    j = int(np.nonzero((f[:-1] > 0) & (f[1:] <= 0))[0][0])
+    """The first + → − sign change of k_eff on W, W read a block of 10⁴ intervals at a time
+    from its low end (blocks share their end point): the same change and root as the whole
+    grid at once, without k_eff past the block that holds it."""
+    for a in range(0, W.size - 1, 10_000):
+        f = _k_eff(m1, b1, k, b, m2, tau, K, W[a : a + 10_001])
+        changes = np.nonzero((f[:-1] > 0) & (f[1:] <= 0))[0]
+        if changes.size:
+            j = a + int(changes[0])
+            break
+    else:
+        raise AssertionError("k_eff never turns negative on the reference grid")
     root = brentq(lambda x: _k_eff(m1, b1, k, b, m2, tau, K, x), W[j], W[j + 1], xtol=1e-14,
                   rtol=1e-13)  # fmt: skip
     return root / (2 * math.pi)
