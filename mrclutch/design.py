@@ -87,6 +87,7 @@ from typing import Any
 from geometry import regions
 from geometry.materials import MaterialChoice
 from geometry.params import DrumClutch, preset
+from geometry.section import Section, build_section
 from geometry.validation import ParameterError, check_range
 from magnetics.drag import Support
 from magnetics.dynamics import Amplifier, Laminations, supply_current
@@ -153,6 +154,11 @@ class ClutchDesign:
         lo, hi = FLUIDS[self.materials.fluid].temperature_range
         check_range("fluid_temperature", self.operating.fluid_temperature, lo, hi,
                     f" °C ({self.materials.fluid}'s range)")  # fmt: skip
+
+    def section(self) -> Section:
+        """The clutch's r–z section with the design's materials (what the solvers read
+        and the section drawing shows)."""
+        return build_section(self.clutch, self.materials)
 
     @property
     def ranges(self) -> Uncertainty:

@@ -18,7 +18,6 @@ from geometry.export import export_clutch
 from geometry.mass import MassReport, PartMass, brep_mass, brep_mass_from
 from geometry.materials import MaterialChoice
 from geometry.params import DrumClutch
-from geometry.section import Section, build_section
 from magnetics.torque import TorqueCurve, torque_curve
 from mrclutch.design import ClutchDesign
 
@@ -26,11 +25,6 @@ from mrclutch.design import ClutchDesign
 CURVE_CURRENTS = np.linspace(0.0, 7.0, 29)
 #: Currents at which the FEM checks the circuit in the report (A).
 FEM_CHECK_CURRENTS = (1.0, 3.0, 5.0, 7.0)
-
-
-def section_of(design: ClutchDesign) -> Section:
-    """The design's cross-section with its materials (what the section drawing shows)."""
-    return build_section(design.clutch, design.materials)
 
 
 def export_cad(design: ClutchDesign, folder: Path) -> dict[str, Any]:
@@ -54,7 +48,7 @@ def torque_curves(design: ClutchDesign) -> tuple[list[TorqueCurve], dict[str, An
     FEM_CHECK_CURRENTS, at the design's input speed (to draw), and as JSON with each fast
     model's largest relative error against the FEM points."""
     rpm = design.operating.input_speed_rpm
-    sec = section_of(design)
+    sec = design.section()
     circ = torque_curve(sec, CURVE_CURRENTS, method="circuit", speed_rpm=rpm)
     net = torque_curve(sec, CURVE_CURRENTS, method="network", speed_rpm=rpm)
     fem = torque_curve(sec, FEM_CHECK_CURRENTS, method="fem", speed_rpm=rpm)

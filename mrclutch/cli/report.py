@@ -56,7 +56,7 @@ from mrclutch.cli.view import compose
 from mrclutch.design import ClutchDesign
 from mrclutch.outputs import CLUTCH_ROWS, HAND_ROWS, output, row_label
 from mrclutch.pipeline import evaluate
-from mrclutch.report_data import design_mass_from, section_of, torque_curves
+from mrclutch.report_data import design_mass_from, torque_curves
 from mrclutch.sweep import sigterm_as_interrupt
 from mrclutch.verdict import judge_evaluation
 
@@ -167,7 +167,7 @@ def _steps(design: ClutchDesign, out: Path, fidelity: str, tick: Callable[[str],
          "for the B-rep mass, STEP/STL and 3D view")  # fmt: skip
     curve = _torque(design, tmp / "torque.png")
     tick("section drawing")
-    section_figure(section_of(design), tmp / "section.png")
+    section_figure(design.section(), tmp / "section.png")
     tick("evaluating the design" + (" (its B-rep mass from the CAD process)"
                                     if fidelity == "reference" else ""))  # fmt: skip
 

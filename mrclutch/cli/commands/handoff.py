@@ -32,7 +32,6 @@ from mrclutch.handoff import (
     solver_files,
     torque_map,
 )
-from mrclutch.report_data import section_of
 from mrclutch.torque_curves import FEM_SIZE, fem_seconds
 
 
@@ -147,7 +146,7 @@ def write_torque_map(args: argparse.Namespace, currents: Any) -> int:
     design = load_design_args(args)
     if args.method == "fem" and len(currents) > 1:  # the yield is solved once per current
         announce("torque", f"{len(currents)} FEM solves at {FEM_SIZE * 1e3:g} mm",
-                 fem_seconds(section_of(design), len(currents)),
+                 fem_seconds(design.section(), len(currents)),
                  "the FEM's measured rate per grid node, magnetics.fem.grid.SECONDS_PER_NODE",
                  args.yes)  # fmt: skip
     cols = torque_map(design, currents, speeds, temps, method=args.method)

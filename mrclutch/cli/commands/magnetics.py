@@ -9,7 +9,6 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from geometry.section import build_section
 from geometry.validation import check_choice, check_range
 from mrclutch.cli.commands._common import (
     add_design_args,
@@ -134,9 +133,7 @@ def _torque(args: argparse.Namespace) -> int:
         from mrclutch.cli.commands.handoff import write_torque_map  # the map's alone
 
         return write_torque_map(args, currents)
-    # the design's section with its materials (as report_data.section_of builds it, without
-    # the report's hand-offs: CAD export, B-rep mass, issue 40)
-    clutch = build_section(design.clutch, design.materials)
+    clutch = design.section()
     methods = ("network", "fem") if args.method == "both" else (args.method,)
     if "fem" in methods and currents.size > 1:  # long FEM work says how long first
         seconds = fem_seconds(clutch, int(currents.size))
