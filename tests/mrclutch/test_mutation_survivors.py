@@ -71,23 +71,26 @@ def test_sweep_rate_is_designs_timed_over_the_time_they_took(monkeypatch):
     assert rate == pytest.approx(1600.0, rel=1e-12)
 
 
-def test_threshold_takes_the_crossing_nearest_the_value_in_p(monkeypatch):
+@pytest.mark.parametrize("far", [100.0, math.e])
+def test_threshold_takes_the_crossing_nearest_the_value_in_p(monkeypatch, far):
     """``robust.threshold``: where the limit crosses K twice over its 10⁻³–10³ window, the
     crossing nearest the value in ``p`` (in log) is the threshold. A stand-in limit
-    K·exp((u − u1)(u − u2)) of u = ln b1 crosses K at b1 = b0/2 and b1 = 100·b0, with b0 =
-    0.01 N·s/m; the nearer is b0/2 = 0.005 N·s/m (|ln 0.5| = 0.69 < ln 100 = 4.6), and
-    the limit falls through K there, so the verdict holds below it ("≤"). The mutant
-    ``abs(best[0] + u0)`` (robust.py:487 at d2d4f2c) compares with |2 ln b0 − 0.69| = 9.9
-    and takes b1 = 1.0."""
+    K·exp((u − u1)(u − u2)) of u = ln b1 crosses K at b1 = b0/2 and b1 = far·b0, with b0 =
+    0.01 N·s/m; the nearer is b0/2 = 0.005 N·s/m (|ln 0.5| = 0.69 < ln far), and the limit
+    falls through K there, so the verdict holds below it ("≤"). far = 100 puts the other
+    crossing cells away (the mutant ``abs(best[0] + u0)`` at d2d4f2c took b1 = 1.0); far = e
+    puts it in the cell beside b0's, which the outward search (c3679c9) reaches before it
+    stops, so the comparison of the two roots decides: the mutant ``abs(r + u0)`` compares
+    |2 ln b0 − 0.69| = 9.9 with |2 ln b0 + 1| = 8.2 and takes e·b0."""
     from mrclutch import robust
     from mrclutch.haptics.actuator import TABLE2_MR
 
     K, b0 = 50.0, 0.01
-    u1, u2 = math.log(b0 / 2), math.log(100 * b0)
+    u1, u2 = math.log(b0 / 2), math.log(far * b0)
 
-    def limit(p):
-        u = math.log(p.b1)
-        return K * math.exp((u - u1) * (u - u2))
+    def limit(p):  # vectorised over b1 as the "stable" kernel is (robust._VECTORISED)
+        u = np.log(p.b1)
+        return K * np.exp((u - u1) * (u - u2))
 
     monkeypatch.setitem(robust._LIMITS, "stable", limit)
     t = robust.threshold(replace(TABLE2_MR, b1=b0), K, "stable", "b1")
