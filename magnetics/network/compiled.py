@@ -22,6 +22,7 @@ import types
 from pathlib import Path
 from typing import Any
 
+from geometry.atomic import user_cache
 from magnetics.network import kernels
 
 _COMPILE_NOTICE_S = 1.0  # a first compile longer than this says so on stderr
@@ -62,13 +63,7 @@ def cache_dir() -> Path:
     ``mrclutch/numba``. Never inside the installed package: a cache left there outlives a
     reinstall, and Python then takes its folder for the package (issue 39)."""
     env = os.environ.get("NUMBA_CACHE_DIR")
-    if env:
-        return Path(env)
-    if sys.platform == "win32" and os.environ.get("LOCALAPPDATA"):
-        base = Path(os.environ["LOCALAPPDATA"])
-    else:
-        base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
-    return base / "mrclutch" / "numba"
+    return Path(env) if env else user_cache("numba")
 
 
 def numba_module() -> Any:
