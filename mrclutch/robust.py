@@ -109,6 +109,18 @@ def _holds(worst: float, best: float, K: float) -> str:
     return "depends"
 
 
+def bracket_root(g: Callable[[float], float], a: float, b: float, ga: float, gb: float
+                 ) -> float:  # fmt: skip
+    """The root of ``g`` in [a, b] (``ga``, ``gb`` its values there, of opposite signs): the
+    Illinois variant of regula falsi ([dowell-jarratt1971], geometry.numerics; not scipy's
+    brentq, whose import alone cost a one-design evaluate ≈ 0.9 s of CPU, issue 40) on
+    v = u − a + 1 ∈ [1, 1 + b − a], where its relative tolerance 1e-11 is absolute."""
+    one = np.ones(1)
+    v = illinois(lambda _act, v: np.array([g(float(v[0]) + a - 1.0)]), one,
+                 one * (b - a + 1.0), one * ga, one * gb, 1e-11)  # fmt: skip
+    return float(v[0]) + a - 1.0
+
+
 def threshold(p: HapticParams, K: float, verdict: str, field: str) -> dict[str, Any] | None:
     """The value x* of ``field`` (others as in ``p``) at which ``verdict`` ("stable" or
     "passive") at K flips: the limit's exact kernel equals K there (a bracketed root-find on
@@ -124,15 +136,6 @@ def threshold(p: HapticParams, K: float, verdict: str, field: str) -> dict[str, 
 
     def g(u: float) -> float:
         return gain(limit(replace(p, **{field: math.exp(u)})))
-
-    def root(a: float, b: float, ga: float, gb: float) -> float:
-        # the Illinois variant of regula falsi ([dowell-jarratt1971], geometry.numerics; not
-        # scipy's brentq, whose import alone cost a one-design evaluate ≈ 0.9 s of CPU, issue
-        # 40) on v = u − a + 1 ∈ [1, 1 + b − a], where its relative tolerance is absolute
-        one = np.ones(1)
-        v = illinois(lambda _act, v: np.array([g(float(v[0]) + a - 1.0)]), one,
-                     one * (b - a + 1.0), one * ga, one * gb, 1e-11)  # fmt: skip
-        return float(v[0]) + a - 1.0
 
     lo, hi = math.log(x0 * 1e-3), math.log(min(x0 * 1e3, 1.0) if field == "delay" else x0 * 1e3)
     us = np.linspace(lo, hi, 13)
@@ -160,7 +163,7 @@ def threshold(p: HapticParams, K: float, verdict: str, field: str) -> dict[str, 
                                             or near[max(j - 1, 0)] == 0])  # fmt: skip
         a, b, ga, gb = us[i], us[i + 1], gs[i], gs[i + 1]
         if ga == 0 or ga * gb < 0:
-            r = a if ga == 0 else root(a, b, ga, gb)
+            r = a if ga == 0 else bracket_root(g, a, b, ga, gb)
             if best is None or (abs(r - u0), i) < (best[0], best[1]):
                 best = (abs(r - u0), i, r, ga, gb)
     if best is None:

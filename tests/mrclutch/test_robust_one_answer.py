@@ -12,7 +12,6 @@ import numpy as np
 import pytest
 from test_robust import _random_boxes
 
-from geometry.numerics import illinois
 from mrclutch import robust
 from mrclutch.haptics import limits
 from mrclutch.haptics.actuator import TABLE2_MR, HapticParams
@@ -147,18 +146,13 @@ def test_max_stable_stiffness_rows_that_scan_on_in_chunks(monkeypatch):
 def _threshold_on_the_whole_grid(p, K, verdict, field):
     """``robust.threshold`` as it was before its search stopped at the nearest crossing:
     every point of the 13-point grid by a scalar call, every cell with a sign change
-    root-found, the root nearest the value in p kept (the lowest cell of equal nearness)."""
+    root-found (robust.bracket_root, the same root-finder), the root nearest the value in p
+    kept (the lowest cell of equal nearness)."""
     limit = robust._LIMITS[verdict]
     x0 = float(getattr(p, field))
 
     def g(u):
         return math.log(min(float(limit(replace(p, **{field: math.exp(u)}))), 1e12) / K)
-
-    def root(a, b, ga, gb):
-        one = np.ones(1)
-        v = illinois(lambda _act, v: np.array([g(float(v[0]) + a - 1.0)]), one,
-                     one * (b - a + 1.0), one * ga, one * gb, 1e-11)  # fmt: skip
-        return float(v[0]) + a - 1.0
 
     lo, hi = math.log(x0 * 1e-3), math.log(min(x0 * 1e3, 1.0) if field == "delay" else x0 * 1e3)
     us = np.linspace(lo, hi, 13)
@@ -166,7 +160,7 @@ def _threshold_on_the_whole_grid(p, K, verdict, field):
     u0, best = math.log(x0), None
     for a, b, ga, gb in zip(us[:-1], us[1:], gs[:-1], gs[1:], strict=True):
         if ga == 0 or ga * gb < 0:
-            r = a if ga == 0 else root(a, b, ga, gb)
+            r = a if ga == 0 else robust.bracket_root(g, a, b, ga, gb)
             if best is None or abs(r - u0) < abs(best[0] - u0):
                 best = (r, ga, gb)
     if best is None:
