@@ -177,3 +177,30 @@ def test_dask_local_cluster_executor_gives_the_same_rows(tmp_path):
         run_sweep(spec, tmp_path / "b.csv", geometric_outputs, OUTPUTS, executor=executor,
                   progress=False)  # fmt: skip
     assert (tmp_path / "a.csv").read_text() == (tmp_path / "b.csv").read_text()
+
+
+def test_the_local_clusters_workers_print_no_error_log(capfd):
+    """--dask-local's workers print no log of their own, ERROR included: after a Ctrl-C a
+    worker's heartbeat can meet the scheduler closing and log an ERROR with a traceback
+    under the sweep's one line (seen once in a full suite run). The workers write to this
+    process's stderr (fd 2), which capfd reads."""
+    distributed = pytest.importorskip("distributed")
+    from mrclutch.cli.executors import local_cluster
+
+    def heartbeat_error():  # nested: pickled by value, run on the worker
+        import logging
+
+        text = "Failed to communicate with scheduler during heartbeat."
+        logging.getLogger("distributed.worker").error(text)
+        return "logged"
+
+    try:
+        cluster = local_cluster(1)
+    except OSError as exc:  # pragma: no cover - a sandbox without local sockets
+        pytest.skip(f"distributed cannot start a cluster here: {exc}")
+    try:
+        with distributed.Client(cluster) as client:
+            assert list(client.run(heartbeat_error).values()) == ["logged"]
+    finally:
+        cluster.close()
+    assert "Failed to communicate" not in capfd.readouterr().err
