@@ -175,7 +175,7 @@ def box_search(
     lo: np.ndarray,
     hi: np.ndarray,
     *,
-    sense: int = -1,
+    sense: int | np.ndarray = -1,
     points: int = 5,
     zooms: int = 3,
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -184,9 +184,13 @@ def box_search(
     grids of the same size centred on the best point so far, each half as wide (5 points:
     the two cells beside it; 3 points: half a cell each side), within the box. ``fn(x)``
     takes points x of shape (N, M, d) and returns (N, M); NaN counts as no value.
+    ``sense``: one for every design, or (N,) of ±1, each design's own (the worst and the
+    best over one box as two designs of one search: one ``fn`` call a zoom, not two).
     Returns (value (N,), argument (N, d))."""
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
     n, d = lo.shape
+    if np.ndim(sense):  # a design's values × its own ±1 (× ±1 is exact, as a scalar's)
+        sense = np.asarray(sense, dtype=float).reshape(n, 1)
     t = np.linspace(0.0, 1.0, points)
     unit = np.stack(np.meshgrid(*([t] * d), indexing="ij"), axis=-1).reshape(-1, d)  # (M, d)
     best = np.full(n, np.inf)
@@ -205,7 +209,8 @@ def box_search(
         arg = np.where(better[:, None], x[np.arange(n), j], arg)
         half = (b - a) / 4  # (points − 1)/4 cells: each zoom halves the cell
         a, b = np.maximum(arg - half, lo), np.minimum(arg + half, hi)
-    return np.where(seen, -sense * best, np.nan), arg
+    out = -sense[:, 0] * best if np.ndim(sense) else -sense * best
+    return np.where(seen, out, np.nan), arg
 
 
 # ---- the worst largest stable K over a box, by the frequency of the crossing ----------

@@ -31,9 +31,10 @@ def test_passive_threshold_grid_in_one_call_is_the_scalar_calls(monkeypatch, fie
     assert fast == slow  # value and sense, to the bit
 
 
-def test_same_points_answers_a_repeated_grid_once():
-    """The worst and the best search over one box share their first grid: fn runs once
-    for it, and both results equal those of the searches without the memo."""
+def test_worst_and_best_in_one_search_are_the_two_searches():
+    """The worst and the best search over one box as two designs of one ``box_search``
+    (a sense each, ``robust._rows_once``): fn runs once a zoom, their common first grid is
+    asked once, and both results equal those of the two searches alone, to the bit."""
     calls = []
 
     def fn(x):
@@ -42,13 +43,36 @@ def test_same_points_answers_a_repeated_grid_once():
 
     lo, hi = np.array([[0.0, -1.0, 0.5]]), np.array([[2.0, 1.0, 1.5]])
     ref = [box_search(fn, lo, hi, sense=s, points=3, zooms=2) for s in (-1, 1)]
-    plain = len(calls)
+    assert len(calls) == 6
     calls.clear()
-    once = robust._same_points(fn)
-    got = [box_search(once, lo, hi, sense=s, points=3, zooms=2) for s in (-1, 1)]
-    assert len(calls) == plain - 1  # the best's first grid answered from memory
-    for (v, a), (rv, ra) in zip(got, ref, strict=True):
-        assert np.array_equal(v, rv) and np.array_equal(a, ra)
+    v, a = box_search(robust._rows_once(fn), np.repeat(lo, 2, 0), np.repeat(hi, 2, 0),
+                      sense=np.array([-1, 1]), points=3, zooms=2)  # fmt: skip
+    assert calls == [(1, 27, 3), (2, 27, 3), (2, 27, 3)]  # the first grid once, then both
+    for i, (rv, ra) in enumerate(ref):
+        assert v[i] == rv[0] and np.array_equal(a[i], ra[0])
+    assert v[0] < v[1]  # the smallest and the largest, not one of them twice
+
+
+def test_z_width_and_area_rows_are_their_own_in_a_shared_call():
+    """``robust_verdicts`` asks the worst's and the best's zoom grids of the Z-width and
+    the rendering area in one call: each point's value there equals its value asked alone
+    (the paper pair's box, random points), to the bit."""
+    from mrclutch.design import design_preset
+    from mrclutch.haptics.model import rendering_area
+    from mrclutch.haptics.zwidth import zwidth
+    from mrclutch.pipeline import evaluate
+
+    ev = evaluate(design_preset("paper"))
+    box = robust.robust_box(ev).box
+    lo = np.array([box.m1[1][0], box.b1[1][0], box.delay[1][0]])
+    hi = np.array([box.m1[2][0], box.b1[2][0], box.delay[2][0]])
+    x = lo + (hi - lo) * np.random.default_rng(3).random((2, 27, 3))
+    K = float(ev.haptic["K_N_per_m"])
+    for fn in (lambda p: zwidth(p)["zwidth_area_N2_s_per_m2"], lambda p: rendering_area(p, K)):
+        both = fn(box.params(x[..., 0], x[..., 1], x[..., 2]))
+        for i in range(2):
+            alone = fn(box.params(x[i : i + 1, :, 0], x[i : i + 1, :, 1], x[i : i + 1, :, 2]))
+            assert np.array_equal(both[i : i + 1], alone)
 
 
 def test_hand_box_nominal_rows_in_the_corners_call_are_their_own():
