@@ -97,12 +97,12 @@ def _columns(p: HapticParams) -> HapticParams:
         n: np.ravel(np.broadcast_to(np.asarray(getattr(p, n), float), shape))[:, None]
         for n in ("m1", "b1", "k", "b", "m2", "delay", "sample_period")
     }
-    return HapticParams(**f)
+    return HapticParams._of_checked(**f)  # p's fields, checked when p was made
 
 
 def _rows(q: HapticParams, idx: np.ndarray) -> HapticParams:
     names = ("m1", "b1", "k", "b", "m2", "delay", "sample_period")
-    return HapticParams(**{n: getattr(q, n)[idx] for n in names})
+    return HapticParams._of_checked(**{n: getattr(q, n)[idx] for n in names})  # q's rows
 
 
 def _parts(q: HapticParams, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -383,3 +383,29 @@ def test_zwidth_reads_the_coarse_grid_once_and_its_damping_end_is_max_passive_da
         assert len(full) == 1
         bm = np.asarray(max_passive_damping(p))
         assert np.asarray(r["B_max_at_K0_N_s_per_m"]).tobytes() == bm.tobytes()
+
+
+def test_rows_of_checked_params_equal_checked_construction():
+    """zwidth's rows (``_rows``, ``_columns``) are built without checking their fields a
+    second time (``HapticParams._of_checked``): the same fields, float64 arrays and
+    defaults as the checked construction gives, and the Z-width of a set equals the
+    Z-width of its designs asked one by one, to the bit."""
+    from mrclutch.haptics import zwidth as zw
+
+    rng = np.random.default_rng(4)
+    p = HapticParams(m1=1e-3 * (1 + rng.random(6)), b1=0.3 + rng.random(6), k=4000.0, b=20.0,
+                     m2=14e-3, delay=1e-3 * rng.random(6), sample_period=0.0)  # fmt: skip
+    q = zw._columns(p)
+    idx = np.array([4, 1])
+    for got in (q, zw._rows(q, idx)):
+        names = ("m1", "b1", "k", "b", "m2", "delay", "sample_period")
+        ref = HapticParams(**{n: getattr(got, n) for n in names})
+        for f in ("m1", "b1", "k", "b", "m2", "delay", "f_max", "workspace", "sample_period"):
+            a, b = getattr(got, f), getattr(ref, f)
+            assert type(a) is type(b) and np.array_equal(a, b), f
+        assert got.shape == ref.shape
+    whole = zwidth(p)
+    for i in range(6):
+        one = zwidth(p.item(i))
+        for key in ZWIDTH_KEYS:
+            assert np.array_equal(whole[key][i], one[key], equal_nan=True), key
