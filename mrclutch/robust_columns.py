@@ -142,10 +142,17 @@ def bandwidth_worst_delay_K(box: HandBox, m1: np.ndarray, b1: np.ndarray,
     col = (-1,) + (1,) * (len(sh) - 1)
     k, b, m2 = (np.broadcast_to(x.reshape(col), sh) for x in (box.k, box.b, box.m2))
     (ta, tb), (ka, kb) = ((np.broadcast_to(x.reshape(col), sh) for x in t) for t in (tau, K))
+    # the four corners (τ, K) side by side in one bandwidth call (each point's bandwidth is
+    # its own, bit for bit, whatever points share the call), taken in the same order
+    corners = [(t, kk) for t in (ta, tb) for kk in (ka, kb)]
+    side = [
+        np.concatenate([np.broadcast_to(x, sh) for x in xs], axis=-1)
+        for xs in ((m1,) * 4, (b1,) * 4, [t for t, _ in corners], [kk for _, kk in corners])
+    ]
+    bw = np.split(bandwidth(box.params(*side[:3]), side[3]), 4, axis=-1)
     out = np.full(sh, np.inf)
-    for t in (ta, tb):
-        for kk in (ka, kb):
-            out = np.fmin(out, bandwidth(box.params(m1, b1, t), kk))
+    for one in bw:
+        out = np.fmin(out, one)
     # env's roots: polynomials in x = u/s (s = k/(m1 + m2), the rigid lever's ω²), ascending
     s = k / (m1 + m2)
     bb = b1 + b

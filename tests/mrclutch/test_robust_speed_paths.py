@@ -195,3 +195,31 @@ def test_stable_worst_finds_the_slow_delayed_mode_below_the_old_start():
     assert done[0] and got[0] == pytest.approx(kc, rel=1e-5)
     wide, done = stable_worst_box(lo, lo * np.array([[1.2, 1.5, 1.5]]), 1e6, 50.0, m2)
     assert done[0] and wide[0] <= got[0] * (1 + 1e-9)
+
+
+def test_bandwidth_of_points_side_by_side_is_each_points_own():
+    """``bandwidth_worst_delay_K`` takes the four corners (τ, K) of each (m1, b1) in one
+    ``bandwidth`` call: a point's bandwidth there equals its bandwidth in a call of its own
+    corner, to the bit (120 random designs x 3 points; the corners' bisection and root-find
+    are each point's own), and the worst over them is the least of the four calls."""
+    box = _random_boxes(np.random.default_rng(11), 120)
+    u = np.random.default_rng(12).random((2, 120, 3))
+    m1 = box.m1[1][:, None] + (box.m1[2] - box.m1[1])[:, None] * u[0]
+    b1 = box.b1[1][:, None] + (box.b1[2] - box.b1[1])[:, None] * u[1]
+    (_, ta, tb), (_, ka, kb) = box.delay, box.K
+    one = [
+        bandwidth(
+            box.params(m1, b1, np.broadcast_to(t[:, None], m1.shape)),
+            np.broadcast_to(k[:, None], m1.shape),
+        )
+        for t in (ta, tb)
+        for k in (ka, kb)
+    ]
+    side = bandwidth(box.params(np.tile(m1, 4), np.tile(b1, 4),
+                                np.repeat(np.stack([ta, ta, tb, tb], 1), 3, axis=1)),
+                     np.repeat(np.stack([ka, kb, ka, kb], 1), 3, axis=1))  # fmt: skip
+    assert np.array_equal(side, np.concatenate(one, axis=1), equal_nan=True)
+    corners = np.fmin.reduce(np.stack(one), axis=0)
+    got = bandwidth_worst_delay_K(box, m1, b1, (ta, tb), (ka, kb))
+    assert np.all((got <= corners) | np.isnan(corners))
+    assert np.isfinite(got).sum() > 300
