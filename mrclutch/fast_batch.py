@@ -119,11 +119,14 @@ def evaluate_batch(
     passivity: bool = False,
     stability: bool = False,
     zwidth: bool = False,
+    continuous: bool = True,
 ) -> dict[str, np.ndarray]:
     """The fast path for S designs at once; returns arrays under ``SWEEP_COLUMNS``, and
     opt-in columns after them: ``max_passive_K_N_per_m`` (``passivity``, about ×1.7 the
     cost), ``max_stable_K_N_per_m`` (``stability``: ``robust_search.stable_stiffness_batch``),
     ``zwidth_area_N2_s_per_m2`` (``zwidth``, about ×7) (``outputs.SWEEP_OPTIONAL``).
+    ``continuous`` False: ``continuous_torque_N_m`` NaN, its thermal network and chords not
+    computed (the hand box reads none of it; every other column is unchanged, bit for bit).
 
     The same physics as ``evaluate(design, "fast")``, on arrays: per drum count, the region
     table gives the analytic mass (``region_mass``), the max torque by the reluctance
@@ -172,6 +175,9 @@ def evaluate_batch(
                                coil_temperature=op.coil_temperature,
                                flux_peak=flux[:, 0])  # fmt: skip
         out["torque_delay"] = resp.equivalent_delay
+        if not continuous:  # the chords are the last solves: nothing above reads them
+            out["continuous_torque"] = np.full(np.shape(out["off_torque"]), np.nan)
+            return out
         limit = fluid_limit(rg.materials)
         net = thermal.network(rg, op.ambient_temperature, limit)
         out["continuous_torque"] = continuous_torque(

@@ -127,12 +127,14 @@ def hand_box_batch(
         q["gap"] = np.concatenate([p["gap"] + dg for dg, _ in corners])
         q["drum_thickness"] = np.concatenate([p["drum_thickness"] + dt for _, dt in corners])
         if nominal is None:  # the nominal rows in the same call (a row's figures are its own)
-            both = evaluate_batch({k: np.concatenate([at[k], q[k]]) for k in q}, base)
+            both = evaluate_batch({k: np.concatenate([at[k], q[k]]) for k in q}, base,
+                                  continuous=False)  # fmt: skip
             nominal = {k: v[:size] for k, v in both.items()}
             corner_rows = {k: v[size:] for k, v in both.items()}
         else:
-            corner_rows = evaluate_batch(q, base)
-    rows0 = nominal if nominal is not None else evaluate_batch(at, base)
+            corner_rows = evaluate_batch(q, base, continuous=False)
+    # the box reads m1, b1, F_max and τ_eq of the rows: no continuous torque (issue 40)
+    rows0 = nominal if nominal is not None else evaluate_batch(at, base, continuous=False)
     m1_0, b1_0, f_0, teq_0, ok = _hand_of(rows0, base)
     stack = [x[None] for x in (m1_0, b1_0, f_0, teq_0)]
     if corner_rows is not None:

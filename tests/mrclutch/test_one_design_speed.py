@@ -193,3 +193,20 @@ def test_passivity_batch_is_metrics_batch_passivity_bit_for_bit():
     for key in ("passive", "max_passive_K_N_per_m"):
         assert got[key].dtype == full[key].dtype
         assert got[key].tobytes() == full[key].tobytes()
+
+
+def test_fast_path_without_the_continuous_torque_changes_no_other_column():
+    """``evaluate_batch(..., continuous=False)`` (what the hand box asks: it reads no
+    continuous torque) leaves that column NaN and every other column as the full call
+    gives it, to the bit, on designs of two drum counts and one the validation refuses."""
+    base = ClutchDesign()
+    f = {k: np.full(4, float(v)) for k, v in vars(base.clutch).items()}
+    f["gap"] = f["gap"] * np.array([0.8, 1.0, 1.25, 0.1])
+    f["n_drums"] = np.array([1.0, 2.0, 2.0, 1.0])
+    full, cut = evaluate_batch(f, base), evaluate_batch(f, base, continuous=False)
+    assert list(full) == list(cut)
+    assert np.isfinite(full["continuous_torque_N_m"][:3]).all()
+    assert np.isnan(cut["continuous_torque_N_m"]).all()
+    for k in full:
+        if k != "continuous_torque_N_m":
+            assert np.array_equal(full[k], cut[k], equal_nan=True), k
