@@ -292,7 +292,22 @@ def coupled_stability(
     dirs = [(name, sgn, lo, hi) for name, (lo, hi) in bounds.items() if hi > lo
             for sgn in (-1.0, 1.0)]  # fmt: skip
     step = 0.5 * math.log(2.0)
-    for _ in range(8):
+    known: dict[Hand, float] = {}  # the limits scanned so far, by hand
+
+    def polled(cands: list[Hand], level: int) -> list[float]:
+        """The limits of ``cands``; those not yet scanned are scanned in one call with,
+        ahead of need, the polls of every later step from ``worst`` (what the search asks
+        next unless it moves: a search that never moves scans twice, not nine times). A
+        hand's limit is its own in any scan, so the answers are those of the polls alone."""
+        if any(c not in known for c in cands):
+            ahead = [m for j in range(level + 1, 8) for name, sgn, lo, hi in dirs
+                     if (m := _compass_move(worst, name, sgn, step * 0.5 ** (j - level),
+                                            lo, hi)) is not None]  # fmt: skip
+            ask = list(dict.fromkeys(h for h in (*cands, *ahead) if h not in known))
+            known.update(zip(ask, map(float, _limits_hands(p, _hand_rows(ask))), strict=True))
+        return [known[c] for c in cands]
+
+    for level in range(8):
         moved = True
         while moved:
             moved = False
@@ -304,7 +319,7 @@ def coupled_stability(
                 if not cands:
                     break
                 i = len(dirs)
-                lims_c = _limits_hands(p, _hand_rows([c for _, c in cands]))
+                lims_c = polled([c for _, c in cands], level)
                 for (d, cand), lim in zip(cands, lims_c, strict=True):
                     checked += 1
                     if lim < best * (1 - 1e-9):

@@ -429,3 +429,28 @@ def test_the_scan_over_hands_in_row_chunks_finds_what_one_whole_scan_finds(monke
     for a, b in zip(whole, rows, strict=True):
         np.testing.assert_array_equal(a, b)
     assert whole[0].size > 0 and set(whole[0]) <= {0, 1, 2, 3}
+
+
+def test_a_hands_limit_is_its_own_in_any_scan_and_the_search_scans_ahead(monkeypatch) -> None:
+    # coupled_stability scans the polls of the later steps ahead of need, beside the ones
+    # asked now: that gives the same answer only because a hand's limit does not depend on
+    # the hands scanned with it, to the bit
+    hands = [*HAND_RANGE.grid(3), Hand(), Hand(m=0.3), Hand(b=5.0), Hand(k=100.0)]
+    for p in _designs_for_batch()[:6]:
+        together = _limits_hands(p, _hand_rows(hands))
+        for i in (0, 13, 27, 30):
+            alone = _limits_hands(p, _hand_rows(hands[i]))
+            assert np.array_equal(together[i : i + 1], alone), (p, i)
+    import mrclutch.haptics.hand as hand_mod
+
+    scans = []
+    real = hand_mod._limits_hands
+
+    def counted(p, rows):
+        scans.append(len(rows))
+        return real(p, rows)
+
+    monkeypatch.setattr(hand_mod, "_limits_hands", counted)
+    r = coupled_stability(TABLE2_MR, 100.0)
+    assert scans == [28, 24]  # the grid and hands off, then every step's 3 polls at once
+    assert r.hands_checked == 27 + 8 * 3  # the polls of the search that never moves
