@@ -37,7 +37,7 @@ def caught(monkeypatch):
 
     figs: list = []
 
-    def keep(fig, path, dpi=110):
+    def keep(fig, path, dpi=110, relayout=None):
         figs.append(fig)
 
     monkeypatch.setattr(haptic_plots, "save_png", keep)

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from mrclutch.cli.plots import save_png
+from mrclutch.cli.plots import save_png, stack_axes
 from mrclutch.solids import material_colour, material_label
 from mrclutch.sweep import is_parquet, pareto_front, read_results
 
@@ -242,6 +242,13 @@ MATERIAL_COLOURS = {
 }
 
 
+#: Inches: the section drawing's fixed margins (left, right, bottom, top; ``stack_axes``):
+#: the y label and 3-character tick labels, half the last x tick label, the x tick labels
+#: and label, the title; the drawing at equal scale inside them. Text that does not fit:
+#: constrained layout (``save_png``'s ``relayout``).
+SECTION_MARGINS = (0.62, 0.2, 0.55, 0.36)
+
+
 def section_figure(section: object, out: str | Path) -> Path:
     """The r–z half-section: every region coloured by material, gaps and zones marked."""
     import matplotlib
@@ -250,7 +257,8 @@ def section_figure(section: object, out: str | Path) -> Path:
     import matplotlib.pyplot as plt
     from matplotlib.patches import Patch, Rectangle
 
-    fig, ax = plt.subplots(figsize=(6, 6), constrained_layout=True)
+    fig, ax = plt.subplots(figsize=(6, 6))
+    stack_axes(fig, 1, SECTION_MARGINS, 0.0)  # a fixed layout (issue 40)
     for reg in section.regions:  # type: ignore[attr-defined]
         colour = MATERIAL_COLOURS.get(reg.material, material_colour(reg.material))
         ax.add_patch(
@@ -276,7 +284,7 @@ def section_figure(section: object, out: str | Path) -> Path:
     ax.legend(handles=[Patch(color=MATERIAL_COLOURS.get(m, material_colour(m)),
                              label=material_label(m))
                        for m in present], loc="lower right", fontsize=9)  # fmt: skip
-    save_png(fig, out, dpi=130)
+    save_png(fig, out, dpi=130, relayout="constrained")
     return Path(out)
 
 

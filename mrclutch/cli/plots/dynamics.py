@@ -8,7 +8,12 @@ from typing import Any
 
 import numpy as np
 
-from mrclutch.cli.plots import save_png
+from mrclutch.cli.plots import save_png, stack_axes
+
+#: Inches: the fixed layout's margins (left, right, bottom, top; ``stack_axes``, issue 40):
+#: the y label and 3-character tick labels, half the last x tick label, the x tick labels
+#: and label, the title. Text that does not fit: tight layout (``save_png``'s ``relayout``).
+MARGINS = (0.72, 0.2, 0.58, 0.36)
 
 
 def plot_torque_step(
@@ -38,5 +43,5 @@ def plot_torque_step(
     ax.grid(True, alpha=0.3)
     ax.set_title("torque after a step of the current command to the peak", fontsize=11)
     ax.legend(fontsize=9)
-    fig.tight_layout()
-    save_png(fig, path, dpi=120)
+    stack_axes(fig, 1, MARGINS, 0.0)
+    save_png(fig, path, dpi=120, relayout="tight")

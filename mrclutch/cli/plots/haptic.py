@@ -8,8 +8,21 @@ from typing import Any
 
 import numpy as np
 
-from mrclutch.cli.plots import save_png
+from mrclutch.cli.plots import save_png, stack_axes
 from mrclutch.impedance import band_frequencies, impedance_curves
+
+#: Inches: both figures' fixed margins (left, right, bottom) beside and below the panels
+#: (``stack_axes``; issue 40): left the y label and tick labels of up to five characters
+#: ("−1000", "10000"), right half of the last x tick label, below the x tick labels and
+#: label. A design whose tick labels do not fit is laid out by constrained layout instead
+#: (``save_png``'s ``relayout``).
+LEFT, RIGHT, BOTTOM = 0.8, 0.25, 0.55
+#: Inches: above the |Z| panel, the figure's title; each line of the legend above it, and
+#: the legend's border; between the three panels, which share their x axis.
+TITLE, LEGEND_LINE, LEGEND_PAD, SHARED_GAP = 0.4, 0.19, 0.1, 0.12
+#: Inches: above each Z-width panel its title; between them the upper one's x tick labels
+#: and label and the lower one's title.
+PANEL_TITLE, PANEL_GAP = 0.3, 0.85
 
 
 def compare_figure(
@@ -30,7 +43,10 @@ def compare_figure(
     import matplotlib.pyplot as plt
 
     f = band_frequencies(band)
-    fig, axes = plt.subplots(3, 1, figsize=(6, 8.4), sharex=True, constrained_layout=True)
+    fig, axes = plt.subplots(3, 1, figsize=(6, 8.4), sharex=True)
+    legend_lines = 2 * min(len(sides), 3)  # closed loop and passive, of each side drawn
+    top = TITLE + legend_lines * LEGEND_LINE + LEGEND_PAD
+    stack_axes(fig, 3, (LEFT, RIGHT, BOTTOM, top), SHARED_GAP)
     ax_z, ax_k, ax_b = axes
     colors = ("tab:blue", "tab:red", "tab:green")
     for j, ((label, p), color) in enumerate(zip(sides.items(), colors, strict=False)):
@@ -61,7 +77,7 @@ def compare_figure(
     ax_z.legend(fontsize=9, loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=1, frameon=False)
     ax_k.legend(fontsize=9)
     ax_b.legend(fontsize=9)
-    save_png(fig, path, dpi=110)
+    save_png(fig, path, dpi=110, relayout="constrained")
 
 
 def zwidth_figure(sides: dict[str, dict[str, Any]], K: float, path: str | os.PathLike[str]) -> None:
@@ -73,7 +89,8 @@ def zwidth_figure(sides: dict[str, dict[str, Any]], K: float, path: str | os.Pat
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(len(sides), 1, figsize=(6, 3.6 * len(sides)), constrained_layout=True)
+    fig, axes = plt.subplots(len(sides), 1, figsize=(6, 3.6 * len(sides)))
+    stack_axes(fig, len(sides), (LEFT, RIGHT, BOTTOM, PANEL_TITLE), PANEL_GAP)
     colors = ("tab:blue", "tab:red", "tab:green")
     for ax, (label, zw), color in zip(np.atleast_1d(axes), sides.items(), colors, strict=False):
         b = np.asarray(zw["B_N_s_per_m"], dtype=float)
@@ -98,4 +115,4 @@ def zwidth_figure(sides: dict[str, dict[str, Any]], K: float, path: str | os.Pat
         ax.set_ylim(0, None)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=9)
-    save_png(fig, path, dpi=110)
+    save_png(fig, path, dpi=110, relayout="constrained")

@@ -8,7 +8,13 @@ from typing import Any
 
 import numpy as np
 
-from mrclutch.cli.plots import save_png
+from mrclutch.cli.plots import save_png, stack_axes
+
+#: Inches: the torque curve's fixed layout's margins (left, right, bottom, top;
+#: ``stack_axes``, issue 40): the y label and 4-character tick labels, half the last x tick
+#: label, the x tick labels and label, the title. Text that does not fit: tight layout
+#: (``save_png``'s ``relayout``).
+TORQUE_MARGINS = (0.72, 0.2, 0.55, 0.36)
 
 
 def plot_torque(curves: Sequence[Any], path: str | Path, title: str = "") -> None:
@@ -27,8 +33,8 @@ def plot_torque(curves: Sequence[Any], path: str | Path, title: str = "") -> Non
     ax.legend()
     if title:
         ax.set_title(title)
-    fig.tight_layout()
-    save_png(fig, path, dpi=120)
+    stack_axes(fig, 1, TORQUE_MARGINS, 0.0)
+    save_png(fig, path, dpi=120, relayout="tight")
 
 
 def plot_field(section: Any, sol: Any, path: str | Path) -> None:
