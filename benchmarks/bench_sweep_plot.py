@@ -15,6 +15,9 @@ included: what ``sweep --pareto`` adds after its rows), ``pareto_plot`` on those
 Prints the median wall and CPU time (user + system of the child, what a loaded machine
 inflates least) of ``--rounds`` runs, each step's share (read, fronts, drawing, PNG) and
 the ratio of the two, with the machine and its load average: times are this machine's.
+Then the shipped plot as ``sweep --pareto`` waits for it after its bar: in a process that
+has first loaded what that command has (its module, and through it the plot's), the plot's
+own wall and CPU, from the plot module's import to the PNG.
 ``--against DIR`` (another checkout) times its shipped plot beside this one's, each round
 alternating between the two, so that both see the same load.
 """
@@ -39,14 +42,16 @@ GOAL_S = 2.0
 #: One plot in a fresh process: its steps' times as JSON on stdout.
 CHILD = r"""
 import json, sys, time
-t0 = time.perf_counter()
+if sys.argv[4] == "command":  # what sweep --pareto has loaded when its rows are written
+    import mrclutch.cli.commands.sweep
+t0, c0 = time.perf_counter(), time.process_time()
 import mrclutch.cli.plots.design as d
 if sys.argv[3] == "all":
     d.MAX_POINTS = d.MAX_LINES = d.MAX_REST_LINES = 10**9
 marks = [time.perf_counter()]
 d.pareto_plot(sys.argv[1], sys.argv[2], progress=lambda n: marks.append(time.perf_counter()))
 print(json.dumps({"import": marks[0] - t0, "steps": [b - a for a, b in zip(marks, marks[1:])],
-                  "total": marks[-1] - t0, "file": d.__file__}))
+                  "total": marks[-1] - t0, "cpu": time.process_time() - c0, "file": d.__file__}))
 """
 STEPS = ("read", "fronts", "drawing", "PNG")
 
@@ -56,17 +61,23 @@ def _child_cpu() -> float:
     return r.ru_utime + r.ru_stime
 
 
-def plot_once(csv: Path, png: Path, mode: str, root: Path = ROOT) -> tuple[float, float, dict]:
+def plot_once(csv: Path, png: Path, mode: str, root: Path = ROOT,
+              start: str = "fresh") -> tuple[float, float, dict]:  # fmt: skip
     """(wall s, CPU s, the child's step times) of one plot in a fresh process, with the
-    checkout ``root`` first on the path."""
+    checkout ``root`` first on the path; ``start="command"``: the child first imports what
+    ``sweep --pareto`` has loaded before its plot (its command module), and the wall and
+    CPU are the plot's own (from its module's import to the PNG), as that command waits."""
     env = {**os.environ, "PYTHONPATH": f"{root}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"}
     cpu0, t0 = _child_cpu(), time.perf_counter()
     # run in ``root``: ``python -c`` puts the working folder first on the path, before
     # PYTHONPATH (from elsewhere, --against timed this checkout twice)
-    out = subprocess.run([sys.executable, "-c", CHILD, str(csv), str(png), mode], env=env,
-                         cwd=root, capture_output=True, text=True, check=True)  # fmt: skip
+    out = subprocess.run([sys.executable, "-c", CHILD, str(csv), str(png), mode, start],
+                         env=env, cwd=root, capture_output=True, text=True, check=True)  # fmt: skip
     wall = time.perf_counter() - t0
     got = json.loads(out.stdout.strip().splitlines()[-1])
+    if start == "command":
+        wall, cpu = got["total"], got["cpu"]
+        return wall, cpu, got
     if not Path(got["file"]).resolve().is_relative_to(Path(root).resolve()):
         raise SystemExit(f"timed {got['file']}, not the checkout {root}")
     return wall, _child_cpu() - cpu0, got
@@ -128,6 +139,14 @@ def main() -> None:
                   f"{'':24s} import {mid['import']:.2f} s; steps (s): {steps}")  # fmt: skip
         (w1, c1), (w2, c2) = result["shipped"], result["all"]
         print(f"everything drawn / as shipped: wall ratio {w2 / w1:.1f}, CPU ratio {c2 / c1:.1f}")
+        runs = [plot_once(csv, tmp / "command.png", "shipped", start="command")
+                for _ in range(args.rounds)]  # fmt: skip
+        wall = statistics.median(r[0] for r in runs)
+        cpu = statistics.median(r[1] for r in runs)
+        print(
+            f"{'in sweep --pareto':24s} wall {wall:6.2f} s  CPU {cpu:6.2f} s  (the plot "
+            f"alone, after the modules the sweep has loaded: what it waits after its bar)"
+        )
         if args.against is not None:
             _against(csv, tmp, args.against.resolve(), args.rounds)
     print(f"load average after: {os.getloadavg()[0]:.2f}")
