@@ -33,7 +33,8 @@ def plot_torque(curves: Sequence[Any], path: str | Path, title: str = "") -> Non
     ax.legend()
     if title:
         ax.set_title(title)
-    stack_axes(fig, 1, TORQUE_MARGINS, 0.0)
+    left, right, bottom, top = TORQUE_MARGINS
+    stack_axes(fig, 1, (left, right, bottom, top if title else 0.15), 0.0)
     save_png(fig, path, dpi=120, relayout="tight")
 
 
