@@ -32,6 +32,7 @@ from mrclutch import duty, hot_rows
 from mrclutch.at_hand import mr_at_hand
 from mrclutch.design import design_preset
 from mrclutch.fast_batch import evaluate_batch
+from mrclutch.hot_range import resolved_ranges
 
 
 def batch(rows: int, seed: int = 0):  # type: ignore[no-untyped-def]
@@ -56,7 +57,8 @@ def hot_corner(rows: int, rounds: int) -> dict[str, object]:
     from mrclutch.hand_box import hand_box_batch
 
     fields, base, r, _ = batch(rows)
-    unc = replace(base.ranges, fluid_temperature_from="duty")  # the base's hot end resolved
+    # the base's hot end resolved
+    unc = replace(resolved_ranges(base), fluid_temperature_from="duty")
     typed = replace(unc, fluid_temperature_from="range")
     small = {k: v[:4] for k, v in fields.items()}
     hand_box_batch(small, base, unc)

@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from mrclutch.design import design_preset
+from mrclutch.hot_range import resolved_ranges
 from mrclutch.pipeline import BatchEvaluator, evaluate
 from mrclutch.robust import ROBUST_COLUMNS, RobustBatchEvaluator, robust_verdicts
 
@@ -77,8 +78,9 @@ def against_search(n: int) -> None:
 
     d = design_preset("paper")
     f = fields(n)
+    ranges = resolved_ranges(d)
     boxes = {
-        f"{n} designs of the paper preset over its ranges": hand_box_batch(f, d, d.ranges),
+        f"{n} designs of the paper preset over its ranges": hand_box_batch(f, d, ranges),
         f"{n} random boxes (_random_boxes, seed 29)": _random_boxes(np.random.default_rng(29), n),
     }
     for name, box in boxes.items():

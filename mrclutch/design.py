@@ -92,9 +92,8 @@ from geometry.validation import ParameterError, check_range
 from magnetics.drag import Support
 from magnetics.dynamics import Amplifier, Laminations, supply_current
 from magnetics.materials import FLUIDS, load_fluid
-from mrclutch.duty import DUTY_KEYS, Duty
+from mrclutch.duty_spec import DUTY_KEYS, Duty
 from mrclutch.haptics.actuator import MR_170, Transmission
-from mrclutch.hot_range import resolved_ranges
 from mrclutch.inputs import read_toml
 from mrclutch.inputs import toml_value as _toml
 from mrclutch.operating import (
@@ -159,13 +158,6 @@ class ClutchDesign:
         """The clutch's r–z section with the design's materials (what the solvers read
         and the section drawing shows)."""
         return build_section(self.clutch, self.materials)
-
-    @property
-    def ranges(self) -> Uncertainty:
-        """The declared uncertainty, or the documented defaults for this design; a fluid
-        temperature range declared ``"duty"`` resolved from the thermal model
-        (``mrclutch.hot_range``)."""
-        return resolved_ranges(self)
 
     @property
     def current_limit(self) -> float:

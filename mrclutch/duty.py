@@ -32,7 +32,7 @@ import numpy as np
 from geometry import regions
 from geometry.params import INT_RANGES, valid
 from geometry.regions import Regions
-from geometry.validation import ParameterError, check_range
+from geometry.validation import ParameterError
 from magnetics import thermal
 from magnetics.drag import Support, drag_terms, totals
 from magnetics.dynamics import Amplifier, supply_current
@@ -41,44 +41,15 @@ from magnetics.life import fluid_volume, life_hours, mean_power
 from magnetics.materials import FLUIDS
 from mrclutch.batch import batch_fields
 from mrclutch.design_network import network_yield, section_network
+from mrclutch.duty_spec import Duty
 from mrclutch.haptics.actuator import TABLE2_MR, HapticParams
 from mrclutch.haptics.model import passivity_batch
-from mrclutch.uncertainty import range_from
+from mrclutch.uncertainty import Uncertainty, range_from
 
-#: The paper's duty rule for rated torque, 25 % [lebel] (docs/haptic.md): the default share
-#: of the fluid's life at the duty torque.
-ON_FRACTION = 0.25
-#: s the current limit is held for the hot peak figures.
-PEAK_TIME = 30.0
 #: Steps of the thermal march over a hold (the feedback lags one step).
 STEPS = 300
 #: Currents of the cold yield-torque grid (0 to the current limit).
 GRID = 17
-
-
-@dataclass(frozen=True)
-class Duty:
-    """How a design is used (SI): a torque held for a time, the peak hold, the life's duty."""
-
-    torque: float = 0.0  # N·m held slipping (yield + drag); 0: no duty torque
-    time: float = 60.0  # s the torque is held
-    peak_time: float = PEAK_TIME  # s the current limit is held (hot peak figures)
-    on_fraction: float = ON_FRACTION  # share of the life at the duty torque
-
-    def __post_init__(self) -> None:
-        check_range("torque", self.torque, 0.0, 1e3, " N·m")
-        check_range("time", self.time, 0.0, 1e7, " s", lo_open=True)
-        check_range("peak_time", self.peak_time, 0.0, 1e7, " s", lo_open=True)
-        check_range("on_fraction", self.on_fraction, 0.0, 1.0)
-
-
-#: design-file key → (field, factor to SI)
-DUTY_KEYS: dict[str, tuple[str, float]] = {
-    "torque_N_m": ("torque", 1.0),
-    "time_s": ("time", 1.0),
-    "peak_time_s": ("peak_time", 1.0),
-    "on_fraction": ("on_fraction", 1.0),
-}
 
 
 def parse_duty(text: str, base: Duty | None = None) -> Duty:
@@ -273,10 +244,11 @@ def design_context(design: Any, current_limit: float) -> Context:
                    limit, op.wire_temperature_limit, op.fluid_temperature)  # fmt: skip
 
 
-def evaluation_duty(ev: Any) -> dict[str, Any]:
+def evaluation_duty(ev: Any, ranges: Uncertainty) -> dict[str, Any]:
     """``duty_figures`` of an evaluation (``mrclutch.pipeline.Evaluation``: its design,
     clutch figures and MR pair, at its rendered K), as JSON (``duty_json``), with the
-    duty it was computed for."""
+    duty it was computed for; ``ranges``: the design's resolved ranges
+    (``mrclutch.hot_range.resolved_ranges``), for its hot corner."""
     design, fig, mr = ev.design, ev.clutch, ev.mr
     duty = design_duty(design)
     ctx = design_context(design, fig.max_current)
@@ -285,7 +257,7 @@ def evaluation_duty(ev: Any) -> dict[str, Any]:
                                  fig.max_torque))  # fmt: skip
     out["asked"] = {"torque_N_m": duty.torque, "time_s": duty.time,
                     "peak_time_s": duty.peak_time, "on_fraction": duty.on_fraction}  # fmt: skip
-    out["hot_corner"] = hot_corner(design, out["duty"])
+    out["hot_corner"] = hot_corner(design, out["duty"], ranges)
     r2 = 2 * design.transmission.reduction**2  # both clutches of the pair, Eq. 3
     terms = fig.drag.terms
     warm = None if out["duty"] is None else out["duty"]["b1_N_s_per_m"] - float(mr.b1)
@@ -298,13 +270,15 @@ def evaluation_duty(ev: Any) -> dict[str, Any]:
     return out
 
 
-def hot_corner(design: Any, at_duty: Mapping[str, Any] | None) -> dict[str, Any]:
-    """The ``[uncertainty]`` fluid-temperature range beside what the thermal model gives at
+def hot_corner(design: Any, at_duty: Mapping[str, Any] | None, ranges: Uncertainty
+               ) -> dict[str, Any]:  # fmt: skip
+    """The ``[uncertainty]`` fluid-temperature range (of ``ranges``, the design's resolved
+    ranges: ``mrclutch.hot_range.resolved_ranges``) beside what the thermal model gives at
     the end of the duty hold: ``covered`` False where the duty warms the fluid past the
     range's hot end (the range's verdicts then miss the duty's; widen it to the duty's
     temperature, or declare it ``"duty"``). None where no duty torque was asked.
     ``range_from``: "default", "typed" or "duty" (``mrclutch.uncertainty.range_from``)."""
-    lo, hi = design.ranges.fluid_temperature
+    lo, hi = ranges.fluid_temperature
     src = range_from(design)
     if at_duty is None:
         return {"range_C": [lo, hi], "range_from": src, "duty_fluid_temperature_C": None,

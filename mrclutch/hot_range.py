@@ -19,7 +19,7 @@ hold's end is its hottest point (a repeated duty that never cools between holds 
 type the range then). A sweep's or an optimiser's hand box (``mrclutch.hand_box``) takes
 each row's own hot end, the end of that design's duty hold (``mrclutch.hot_rows.
 duty_hot_ends``: every row marched at once, the same figure as ``duty_end_temperature`` of
-the row's design); the base design's resolved range is what ``design.ranges`` reports.
+the row's design); the base design's resolved range is what :func:`resolved_ranges` reports.
 """
 
 from __future__ import annotations

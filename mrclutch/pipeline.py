@@ -74,6 +74,7 @@ from mrclutch.haptics.model import (
 )
 from mrclutch.haptics.zwidth import ZWIDTH_KEYS
 from mrclutch.haptics.zwidth import zwidth as zwidth_of
+from mrclutch.hot_range import resolved_ranges
 from mrclutch.nulls import INF_MEANS, NAN_MEANS, null_notes
 
 #: The application's evaluation API: the single-design path defined here and, from the
@@ -145,7 +146,7 @@ class Evaluation:
     def duty(self) -> dict[str, Any]:
         """Issue 41: the hot peak and duty holds, the fluid's volume and life and the b1
         budget's new terms (``mrclutch.duty.evaluation_duty``), computed when first read."""
-        return evaluation_duty(self)
+        return evaluation_duty(self, resolved_ranges(self.design))
 
     def as_json(self) -> dict[str, Any]:
         mr_m, em_m = dict(self.haptic), dict(self.motor_metrics)

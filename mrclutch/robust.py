@@ -60,6 +60,7 @@ from mrclutch.haptics.model import (
     rendering_area,
 )
 from mrclutch.haptics.zwidth import zwidth as zwidth_of
+from mrclutch.hot_range import resolved_ranges
 from mrclutch.robust_columns import (
     CASES,
     ROBUST_COLUMNS,
@@ -205,9 +206,10 @@ class RobustBox:
 
 def robust_box(ev: Any, uncertainty: Uncertainty | None = None) -> RobustBox:
     """The :class:`RobustBox` of an ``Evaluation`` over ``uncertainty`` (None: the
-    design's ``ranges``). Quantities a bench measured and the model uses are not varied."""
+    design's resolved ranges, ``mrclutch.hot_range.resolved_ranges``). Quantities a bench
+    measured and the model uses are not varied."""
     design = ev.design
-    unc = uncertainty if uncertainty is not None else design.ranges
+    unc = uncertainty if uncertainty is not None else resolved_ranges(design)
     fields = {f: np.array([v]) for f, v in vars(design.clutch).items()}
     box = hand_box_batch(fields, design, unc)
     mr = ev.mr
@@ -225,7 +227,7 @@ def robust_box(ev: Any, uncertainty: Uncertainty | None = None) -> RobustBox:
 def robust_verdicts(ev: Any, uncertainty: Uncertainty | None = None,
                     prepared: RobustBox | None = None) -> dict[str, Any]:  # fmt: skip
     """The robust read-out of an ``Evaluation`` (docs/verdicts.md): per verdict nominal,
-    worst and best over ``uncertainty`` (None: the design's ``ranges``), whether each
+    worst and best over ``uncertainty`` (None: the design's resolved ranges), whether each
     verdict at K holds always / never / depending on the inputs, the thresholds of b1 and
     the delay that decide it (one at a time, the others nominal), the box and a one-
     sentence headline. ``prepared``: its ``robust_box`` if already made (same pair)."""

@@ -18,6 +18,7 @@ from mrclutch.haptics.model import (
     bandwidth,
     max_passive_stiffness,
 )
+from mrclutch.hot_range import resolved_ranges
 from mrclutch.robust_search import box_search, stable_stiffness_batch, stable_worst_box
 from mrclutch.uncertainty import Uncertainty
 
@@ -212,9 +213,9 @@ def robust_columns_batch(
     -> dict[str, np.ndarray]
 
     The worst case, over ``uncertainty`` (an :class:`mrclutch.uncertainty.Uncertainty`;
-    None: ``base.ranges``, its declared uncertainty or the defaults), of the largest stable K
-    and the largest passive K [N/m] and of the bandwidth at the rendered K_max [Hz], for S
-    designs at once.
+    None: ``resolved_ranges(base)``, its declared uncertainty or the defaults), of the
+    largest stable K and the largest passive K [N/m] and of the bandwidth at the rendered
+    K_max [Hz], for S designs at once.
     ``fields``: the DrumClutch field arrays ``fast_batch.evaluate_batch`` takes (missing
     fields from ``base.clutch``); ``base``: the ClutchDesign giving the operating point and
     transmission (None: ``ClutchDesign()``). Returns 1-D arrays of S under
@@ -224,7 +225,7 @@ def robust_columns_batch(
     ``nominal``: ``evaluate_batch(fields, base)``'s rows where already computed (saves one
     fast-path evaluation)."""
     base = base if base is not None else ClutchDesign()
-    unc = uncertainty if uncertainty is not None else base.ranges
+    unc = uncertainty if uncertainty is not None else resolved_ranges(base)
     lim = robust_limits(hand_box_batch(fields, base, unc, nominal), cases=("worst",))
     return {
         "max_stable_K_worst_N_per_m": lim["max_stable_K_worst"],
@@ -236,7 +237,7 @@ def robust_columns_batch(
 @dataclass(frozen=True)
 class RobustBatchEvaluator(BatchEvaluator):
     """``fast_batch.BatchEvaluator`` that also computes the robust columns (``ROBUST_COLUMNS``,
-    ``outputs.SWEEP_OPTIONAL``) over ``uncertainty`` (None: the base design's ``ranges``):
+    ``outputs.SWEEP_OPTIONAL``) over ``uncertainty`` (None: the base design's resolved ranges):
     what ``sweep --with max_stable_K_worst_N_per_m`` runs. Picklable."""
 
     uncertainty: Uncertainty | None = None

@@ -15,6 +15,7 @@ from numpy.typing import ArrayLike
 from mrclutch.design import ClutchDesign
 from mrclutch.haptics.actuator import HapticParams
 from mrclutch.haptics.model import bandwidth, max_passive_stiffness
+from mrclutch.hot_range import resolved_ranges
 from mrclutch.optimize.limits import ROBUST_COLUMNS
 from mrclutch.robust import hand_box_batch, robust_columns_batch
 from mrclutch.uncertainty import Uncertainty, default_uncertainty
@@ -27,7 +28,7 @@ def process_uncertainty(base: ClutchDesign) -> Uncertainty:
     manufacturing ranges of its ``[process]``: the runout as the drums' eccentricity and
     the tolerance as the gap's."""
     if base.uncertainty is not None:
-        return base.ranges  # the declared ranges ("duty" resolved: mrclutch.hot_range)
+        return resolved_ranges(base)  # the declared ranges, "duty" resolved
     pr = base.process
     return replace(default_uncertainty(base), runout=pr.runout, gap_tolerance=pr.tolerance)
 

@@ -155,3 +155,33 @@ def test_a_torque_curve_loads_no_report_module(fresh_python) -> None:
     assert "mrclutch.torque_curves" in loaded and "geometry.section" in loaded  # it ran
     assert "mrclutch.report_data" not in loaded and "geometry.export" not in loaded
     assert "mrclutch.clutch" not in loaded and "mrclutch.trust" not in loaded
+    assert "mrclutch.duty" not in loaded and "magnetics.hot" not in loaded  # no thermal march
+
+
+#: The duty's figures and the "duty" range's resolution: the thermal march, the network's
+#: yield torque and the haptic model behind them (mrclutch.duty, mrclutch.hot_range).
+DUTY_MODELS = ("mrclutch.duty", "mrclutch.hot_range", "magnetics.hot", "magnetics.life",
+               "magnetics.torque", "magnetics.network", "mrclutch.haptics.model")  # fmt: skip
+
+
+def test_a_design_loads_without_the_duty_model(fresh_python, tmp_path) -> None:
+    """A design file with a ``[duty]`` table and its fluid temperature range declared
+    ``"duty"`` is read, and weighed analytically, without loading the duty's thermal model
+    or the network (``mrclutch.duty_spec`` holds the table; the range is resolved only by
+    ``mrclutch.hot_range.resolved_ranges``, when a verdict asks for it). Issue 40 item 1."""
+    f = tmp_path / "hot.toml"
+    f.write_text('[clutch]\nbase = "paper"\n\n[duty]\ntorque_N_m = 0.2\ntime_s = 60\n\n'
+                 '[uncertainty]\nfluid_temperature_C = "duty"\n')  # fmt: skip
+    code = (
+        "import sys\nfrom mrclutch.cli.main import main\n"
+        f"assert main(['inertia', {str(f)!r}, '--method', 'analytic']) == 0\n"
+        "from mrclutch.design import load_design\n"
+        f"d = load_design({str(f)!r})\n"
+        "print(d.duty.torque, d.uncertainty.fluid_temperature_from)\n"
+        "print('\\n'.join(sys.modules), file=sys.stderr)"
+    )
+    p = fresh_python(code)
+    loaded = set(p.stderr.split())
+    assert p.stdout.splitlines()[-1] == "0.2 duty"  # the table and the range were read
+    assert "mrclutch.duty_spec" in loaded and "mrclutch.inertia" in loaded
+    assert not loaded & set(DUTY_MODELS), sorted(loaded & set(DUTY_MODELS))

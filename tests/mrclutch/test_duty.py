@@ -21,6 +21,7 @@ from magnetics.materials import FLUIDS
 from magnetics.torque import torque_curve
 from mrclutch import duty as D
 from mrclutch.design import design_from_mapping, design_preset, design_to_toml
+from mrclutch.hot_range import resolved_ranges
 from mrclutch.pipeline import evaluate
 
 PAPER = design_preset("paper")
@@ -202,9 +203,10 @@ def test_hot_corner_says_when_the_duty_leaves_the_uncertainty_range(ev) -> None:
     assert hc["duty_fluid_temperature_C"] == ev.duty["duty"]["fluid_temperature_C"] > 40.0
     assert hc["covered"] is False
     assert any("past the [uncertainty] range" in s for s in duty_lines(ev.duty))
-    wide = replace(ev.design.ranges, fluid_temperature=(20.0, 90.0))
-    assert D.hot_corner(replace(ev.design, uncertainty=wide), ev.duty["duty"])["covered"]
-    assert D.hot_corner(ev.design, None)["covered"] is None
+    wide = replace(resolved_ranges(ev.design), fluid_temperature=(20.0, 90.0))
+    widened = replace(ev.design, uncertainty=wide)
+    assert D.hot_corner(widened, ev.duty["duty"], resolved_ranges(widened))["covered"]
+    assert D.hot_corner(ev.design, None, resolved_ranges(ev.design))["covered"] is None
 
 
 def test_a_hold_moves_b1_from_the_operating_fluid_temperature() -> None:

@@ -47,7 +47,7 @@ def test_the_range_ends_where_the_duty_hold_ends(hot) -> None:
     as ``evaluate``'s duty figures (so the duty is covered, to the last bit), above the
     default's 40 °C; the cold end the operating 20 °C; the typed and the default ranges
     are left alone."""
-    u = hot.ranges
+    u = resolved_ranges(hot)
     ev = evaluate(hot)
     t_duty = ev.duty["duty"]["fluid_temperature_C"]
     assert u.fluid_temperature == (20.0, t_duty)
@@ -57,9 +57,11 @@ def test_the_range_ends_where_the_duty_hold_ends(hot) -> None:
     assert ev.duty["hot_corner"] == want
     assert robust_verdicts(ev)["uncertainty"]["fluid_temperature"] == (20.0, t_duty)
     typed = design_from_mapping({**TABLE, "uncertainty": {"fluid_temperature_C": [20, 45]}}, "t")
-    assert typed.ranges.fluid_temperature == (20.0, 45.0) and range_from(typed) == "typed"
+    assert resolved_ranges(typed).fluid_temperature == (20.0, 45.0)
+    assert range_from(typed) == "typed"
     plain = design_from_mapping({"clutch": {"base": "paper"}}, "p")
-    assert plain.ranges.fluid_temperature == (20.0, 40.0) and range_from(plain) == "default"
+    assert resolved_ranges(plain).fluid_temperature == (20.0, 40.0)
+    assert range_from(plain) == "default"
     text = "\n".join(duty_lines(ev.duty))
     assert f"20–{t_duty:.3g} °C, {RANGE_FROM['duty']}" in text
 
@@ -90,8 +92,9 @@ def test_the_verdicts_box_takes_the_derived_range(hot) -> None:
     over the default [20, 40] by the films' drag ratio η(55.5)/η(40) < 1 (the other terms
     alike): the derived range reaches the verdicts."""
     fields = {f: np.array([v]) for f, v in vars(hot.clutch).items()}
-    derived = hand_box_batch(fields, hot, hot.ranges)
-    typed = replace(hot.ranges, fluid_temperature=(20.0, 40.0), fluid_temperature_from="range")
+    derived = hand_box_batch(fields, hot, resolved_ranges(hot))
+    typed = replace(resolved_ranges(hot), fluid_temperature=(20.0, 40.0),
+                    fluid_temperature_from="range")  # fmt: skip
     default = hand_box_batch(fields, hot, typed)
     assert derived.b1[1][0] < default.b1[1][0]  # (nominal, low, high)
     assert derived.b1[2][0] == pytest.approx(default.b1[2][0], rel=1e-12)  # the top: 20 °C
@@ -102,9 +105,9 @@ def test_the_optimiser_and_the_sweep_take_the_derived_range(hot) -> None:
     ranges: with "duty", the derived one (never the unresolved None, which would judge
     every candidate at the operating temperature alone), its hot end then each row's own
     (``test_each_row_takes_its_own_duty_range``)."""
-    assert process_uncertainty(hot).fluid_temperature == hot.ranges.fluid_temperature
+    assert process_uncertainty(hot).fluid_temperature == resolved_ranges(hot).fluid_temperature
     assert process_uncertainty(hot).fluid_temperature_from == "duty"
-    assert hot.ranges.fluid_temperature[1] > 40.0
+    assert resolved_ranges(hot).fluid_temperature[1] > 40.0
 
 
 def _row(design, n_drums: int, gap: float, fluid: str = "mrf_132dg"):  # type: ignore[no-untyped-def]
@@ -130,12 +133,12 @@ def test_each_row_takes_its_own_duty_range(hot) -> None:
     assert np.isnan(ends[5])
     want = np.array([resolved_ranges(_row(hot, *r)).fluid_temperature[1] for r in rows[:5]])
     np.testing.assert_allclose(ends[:5], want, rtol=1e-9)
-    assert ends[0] == pytest.approx(hot.ranges.fluid_temperature[1], rel=1e-9)
+    assert ends[0] == pytest.approx(resolved_ranges(hot).fluid_temperature[1], rel=1e-9)
     assert np.all(np.abs(ends[1:3] - ends[0]) > 5.0)  # 1 drum: capped at 130 °C; 4 drums
-    box = hand_box_batch(fields, hot, hot.ranges)
+    box = hand_box_batch(fields, hot, resolved_ranges(hot))
     for i in range(5):
         one = {k: v[i : i + 1] for k, v in fields.items()}
-        typed = replace(hot.ranges, fluid_temperature=(20.0, float(want[i])),
+        typed = replace(resolved_ranges(hot), fluid_temperature=(20.0, float(want[i])),
                         fluid_temperature_from="range")  # fmt: skip
         assert box.b1[1][i] == pytest.approx(hand_box_batch(one, hot, typed).b1[1][0], rel=1e-9)
     peak = replace(hot, duty=D.Duty())

@@ -15,6 +15,7 @@ from mrclutch.cli.commands import optimize as optimize_cmd
 from mrclutch.cli.commands import optimize_pareto as pareto_cmd
 from mrclutch.cli.main import main
 from mrclutch.design import design_from_mapping, design_preset, design_to_toml, load_design
+from mrclutch.hot_range import resolved_ranges
 from mrclutch.render import Render
 from mrclutch.verdict import inside, judge, verdict_of
 
@@ -324,7 +325,7 @@ def test_the_paper_beside_a_member_says_which_rule_renders_its_K():
 
     base = design_preset("paper")
     plain = judge(base)
-    paper = judge(for_workshop(base, base.ranges)[0])
+    paper = judge(for_workshop(base, resolved_ranges(base))[0])
     k_max = plain["haptic"]["K_max_N_per_m"]
     assert paper["haptic"]["K_N_per_m"] < 0.5 * k_max == 0.5 * paper["haptic"]["K_max_N_per_m"]
     text = explain(plain, paper, "member #1")
