@@ -2,7 +2,11 @@
 its quantity and its error; then the accuracy-target acceptance — `evaluate(accuracy=0.01)`
 against the reference fidelity on the paper preset (time ratio, errors), all in one run.
 
-    python benchmarks/bench_fidelity.py [--accuracy 0.01] [--repeats 3]
+    python benchmarks/bench_fidelity.py [--accuracy 0.01] [--repeats 3] [--no-timing]
+
+``--no-timing``: the accuracy target's errors alone (one reference and one target
+evaluation, the same line without its times): what docs/figures.toml reads of it, without
+the table's timed methods and the timed rounds (≈ 3× the CPU).
 """
 
 from __future__ import annotations
@@ -25,12 +29,25 @@ def _median_time(fn, n):  # type: ignore[no-untyped-def]
     return statistics.median(ts), out
 
 
+def _errors(ev, ref) -> str:  # type: ignore[no-untyped-def]
+    """The target's relative errors against the reference evaluation, as printed."""
+    e_i = abs(ev.clutch.rotor_inertia / ref.clutch.rotor_inertia - 1)
+    e_t = abs(ev.clutch.max_torque / ref.clutch.max_torque - 1)
+    e_b = abs(ev.haptic["bandwidth_hz"] / ref.haptic["bandwidth_hz"] - 1)
+    return f"errors: inertia {e_i:.1e}, torque {e_t:.1e}, bandwidth {e_b:.1e}"
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--accuracy", type=float, default=0.01)
     ap.add_argument("--repeats", type=int, default=5)
+    ap.add_argument("--no-timing", action="store_true", help="the target's errors alone")
     a = ap.parse_args()
     d = design_preset("paper")
+    if a.no_timing:
+        ref, acc = evaluate(d, "reference"), evaluate(d, accuracy=a.accuracy)
+        print(f"  accuracy={a.accuracy:g}  {_errors(acc, ref)}")
+        return
     evaluate(d, "reference")  # warm the imports (build123d, skfem) out of the timings
 
     rows = measure(d, repeats=a.repeats)
@@ -57,12 +74,9 @@ def main() -> None:
           f"median of {inner} calls of each cheap path; ratio = median over rounds):")  # fmt: skip
     for name, ts, ev in (("fast", t_fast, fast), (f"accuracy={a.accuracy:g}", t_acc, acc)):
         ratios = [r / t for r, t in zip(t_ref, ts, strict=True)]
-        e_i = abs(ev.clutch.rotor_inertia / ref.clutch.rotor_inertia - 1)
-        e_t = abs(ev.clutch.max_torque / ref.clutch.max_torque - 1)
-        e_b = abs(ev.haptic["bandwidth_hz"] / ref.haptic["bandwidth_hz"] - 1)
         print(f"  {name:<16} {med(ts) * 1e3:8.2f} ms   {med(ratios):7.1f}× faster than "
               f"reference ({med(t_ref):.2f} s; rounds {min(ratios):.0f}–{max(ratios):.0f}×)   "
-              f"errors: inertia {e_i:.1e}, torque {e_t:.1e}, bandwidth {e_b:.1e}")  # fmt: skip
+              f"{_errors(ev, ref)}")  # fmt: skip
     for n in acc.clutch.notes:
         print(f"  note: {n}")
 
