@@ -113,16 +113,17 @@ def test_a_bad_file_is_still_one_line_naming_it(registry) -> None:
 def test_reading_the_cache_imports_no_hash_library(fresh_python, tmp_path) -> None:
     """The cache is found by a CRC-32 and checked by comparing bytes: hashlib (OpenSSL)
     would cost a good part of the parse it saves. A fresh process, its cache written by
-    the one before, loads the registry from it."""
+    the one before, loads the registry from it, without importing the TOML parser
+    (geometry.reading imports tomllib where it parses; the first process parsed)."""
     code = (
         f"import os, sys\nos.environ['XDG_CACHE_HOME'] = {str(tmp_path)!r}\n"
         "import geometry.reading\n"
         "if AGAIN:  # the second process: a parse would fail it\n"
         "    geometry.reading.parse_toml = None\n"
         "from geometry import materials\n"
-        "print('hashlib' in sys.modules, len(list(materials.CACHE.glob('*.marshal'))),\n"
-        "      len(materials.RECORDS))"
+        "print('hashlib' in sys.modules, 'tomllib' in sys.modules,\n"
+        "      len(list(materials.CACHE.glob('*.marshal'))), len(materials.RECORDS))"
     )
-    for again in ("False", "True"):
+    for again, parser in (("False", "True"), ("True", "False")):
         p = fresh_python(code.replace("AGAIN", again))
-        assert p.stdout.split() == ["False", "1", "12"], again
+        assert p.stdout.split() == ["False", parser, "1", "12"], again
