@@ -1,12 +1,15 @@
 """Cost and accuracy of the torque-delay sweep column (issue 14), printed as figures.
 
-    python benchmarks/bench_dynamics.py [N]
+    python benchmarks/bench_dynamics.py [N] [--no-timing]
 
 * throughput cost: ``evaluate_batch`` of N random designs (default 20 000), and the time
   its ``torque_delay_s`` column takes (``torque_response`` on the same region tables);
   the ratio is the column's extra cost over the rest of the row (target ≤ 20 %);
 * accuracy of the fast model's quadrature (3 + 3 Gauss nodes, as in the sweep) against
   64 + 64 nodes on the same designs: the largest relative error of τ_eq.
+
+``--no-timing``: the accuracy alone (each column computed once, nothing timed): what
+docs/figures.toml reads of it without the timed batches (≈ 4× the CPU).
 """
 
 from __future__ import annotations
@@ -38,11 +41,12 @@ def _best(fn, repeat: int = 3):  # type: ignore[no-untyped-def]
     return best, out
 
 
-def main(n: int) -> None:
+def main(n: int, timing: bool = True) -> None:
     base = design_preset("paper")
     fields = random_fields(n)
-    evaluate_batch(random_fields(100, seed=1), base)  # warm-up
-    t_total, out = _best(lambda: evaluate_batch(fields, base))
+    if timing:
+        evaluate_batch(random_fields(100, seed=1), base)  # warm-up
+        t_total, out = _best(lambda: evaluate_batch(fields, base))
     p = broadcast_fields(fields, base.clutch)
     ok = valid(p)
     cur = current_limit(base.operating, p["wire_diameter"])
@@ -70,17 +74,20 @@ def main(n: int) -> None:
 
         return fn
 
-    regions.per_topology(p, ok, delay(3))  # builds the paths (the sweep has them already)
+    fast = regions.per_topology(p, ok, delay(3))["d"]  # builds the paths (the sweep has them)
     times = []
-    for _ in range(3):
+    for _ in range(3 if timing else 0):
         spent[0] = 0.0
         fast = regions.per_topology(p, ok, delay(3))["d"]
         times.append(spent[0])
-    t_col = min(times)
     ref = regions.per_topology(p, ok, delay(64))["d"]
     fin = np.isfinite(ref)
     err = np.max(np.abs(fast[fin] / ref[fin] - 1))
     print(f"designs: {n} ({int(ok.sum())} valid)")
+    if not timing:
+        print(f"τ_eq, 3+3 nodes vs 64+64: max |rel. error| = {err:.2e}")
+        return
+    t_col = min(times)
     print(f"evaluate_batch with the column: {t_total:.3f} s ({n / t_total:,.0f} designs/s)")
     print(f"torque_delay_s column alone:    {t_col:.3f} s")
     print(f"extra cost of the column:       {t_col / (t_total - t_col) * 100:.1f} %")
@@ -93,4 +100,5 @@ def main(n: int) -> None:
 
 
 if __name__ == "__main__":
-    main(int(sys.argv[1]) if len(sys.argv) > 1 else 20_000)
+    args = [a for a in sys.argv[1:] if a != "--no-timing"]
+    main(int(args[0]) if args else 20_000, timing="--no-timing" not in sys.argv[1:])
