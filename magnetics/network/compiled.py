@@ -57,19 +57,41 @@ def uncompiled(budget: str, rows: int, limit: int) -> bool:
     return True
 
 
+#: LLVM's optimisation level of the kernels (numba's ``NUMBA_OPT``; numba's own default is 3),
+#: unless the user sets ``NUMBA_OPT``. At 2 a machine's first compile of the solver takes
+#: ≈ 0.9 s less CPU (this process's, the critical path: medians 10.6 -> 9.7 s) and the sweep's
+#: rows per CPU-second are no fewer (13.1e3 vs 11.0e3, 20 000 rows, interleaved), its rows
+#: bit-identical at 0-3 (no fastmath: LLVM reassociates nothing at any level); at 1 the same,
+#: at 0 the rows are 6x slower (f43's table in its commit message).
+_OPT = "2"
+
+
+def opt_level() -> str:
+    """The LLVM optimisation level the kernels compile at: ``NUMBA_OPT`` if set, else
+    ``_OPT``."""
+    return os.environ.get("NUMBA_OPT") or _OPT
+
+
 def cache_dir() -> Path:
     """numba's cache of the compiled kernels: ``NUMBA_CACHE_DIR`` if set, else the user's
     cache folder (``$XDG_CACHE_HOME``, ``~/.cache``; ``%LOCALAPPDATA%`` on Windows) under
-    ``mrclutch/numba``. Never inside the installed package: a cache left there outlives a
-    reinstall, and Python then takes its folder for the package (issue 39)."""
+    ``mrclutch/numba/opt<level>``. Never inside the installed package: a cache left there
+    outlives a reinstall, and Python then takes its folder for the package (issue 39). A
+    folder per optimisation level (``opt_level``): numba's cache index keys an entry by its
+    signature, the CPU and the bytecode, not the level, so a kernel compiled once at
+    ``NUMBA_OPT=0`` (6x slower rows) would be served to every later run; the same answers
+    either way. A ``NUMBA_CACHE_DIR`` the user sets is used as it is."""
     env = os.environ.get("NUMBA_CACHE_DIR")
-    return Path(env) if env else user_cache("numba")
+    return Path(env) if env else user_cache("numba") / f"opt{opt_level()}"
 
 
 def numba_module() -> Any:
-    """numba, imported with its cache in ``cache_dir()`` (the environment variable set before
-    the import, so numba's config, and any process this one starts, read it)."""
+    """numba, imported with its cache in ``cache_dir()`` and its optimisation level
+    ``opt_level()`` (the environment variables set before the import, so numba's config,
+    and any process this one starts, read them; numba's compiler rereads them before each
+    compile, so they hold if numba was imported before)."""
     os.environ["NUMBA_CACHE_DIR"] = str(cache_dir())
+    os.environ["NUMBA_OPT"] = opt_level()
     import numba
 
     numba.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]
