@@ -164,3 +164,28 @@ def test_the_other_report_figures_fit_their_fixed_margins(paper, tmp_path, monke
     for fig in figs:
         assert fig.get_layout_engine() is None
         _inside_and_apart(fig)
+
+
+def test_pngs_are_written_at_the_fast_compression_level(tmp_path):
+    """save_png's PNG_COMPRESS_LEVEL (3: zlib's 'fast' class in the stream header, 6 would
+    be 'default'); the pixels are savefig's (test_plots_text), PNG being lossless."""
+    import struct
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from mrclutch.cli.plots import PNG_COMPRESS_LEVEL, save_png
+
+    fig, ax = plt.subplots(figsize=(3, 2))
+    ax.plot([0, 1], [1, 0])
+    data = save_png(fig, tmp_path / "f.png", dpi=80).read_bytes()
+    pos = 8
+    while True:  # the first IDAT chunk: its zlib stream's header
+        n, kind = struct.unpack(">I4s", data[pos : pos + 8])
+        if kind == b"IDAT":
+            break
+        pos += 12 + n
+    flevel = data[pos + 9] >> 6  # RFC 1950: FLG's two top bits
+    assert PNG_COMPRESS_LEVEL == 3 and flevel == 1

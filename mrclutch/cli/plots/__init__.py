@@ -20,6 +20,9 @@ from geometry.atomic import atomic_path
 
 #: PNG text key of the smallest text's height (font size) in image pixels.
 MIN_TEXT_KEY = "mrclutch:min_text_px"
+#: zlib level of the PNGs written (Pillow's default: 6). The same pixels (PNG is lossless)
+#: in ~0.6x the encoding time and ~8 % more bytes on the report's six figures (issue 40).
+PNG_COMPRESS_LEVEL = 3
 
 
 def min_text_px(fig: Any, dpi: float) -> float:
@@ -112,7 +115,8 @@ def save_png(fig: Any, path: str | os.PathLike[str], dpi: float = 110,
         px = drawn_min_text_px(fig, dpi)
         with atomic_path(path) as tmp:
             imsave(tmp, fig.canvas.buffer_rgba(), format="png", origin="upper", dpi=dpi,
-                   metadata={MIN_TEXT_KEY: f"{px:.2f}"})  # fmt: skip
+                   metadata={MIN_TEXT_KEY: f"{px:.2f}"},
+                   pil_kwargs={"compress_level": PNG_COMPRESS_LEVEL})  # fmt: skip
     finally:
         plt.close(fig)
     return Path(path)
