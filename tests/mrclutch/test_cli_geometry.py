@@ -3,8 +3,10 @@
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
+from test_help_files import CASES, _check_named
 
 from mrclutch.cli.main import main
 
@@ -152,15 +154,22 @@ def test_part_density_errors(exported, tmp_path, capsys):
 
 
 def test_view_screenshot_subprocess(tmp_path):
-    png = tmp_path / "v.png"
+    """``view --screenshot`` in a process of its own (VTK's offscreen window), from a
+    scratch folder: a real picture, the one file it leaves, named in ``view --help`` and
+    the README (test_help_files.py's check of every command's files, whose case for view
+    is this run: one VTK process, not two)."""
+    args, user, _ = CASES["view"]
     r = subprocess.run(
-        [sys.executable, "-m", "mrclutch", "view", "--preset", "paper", "--screenshot", str(png)],
+        [sys.executable, "-m", "mrclutch", "view", "--preset", "paper", *args],
         capture_output=True,
         text=True,
         timeout=120,
+        cwd=tmp_path,
     )
     assert r.returncode == 0, r.stderr
-    assert png.stat().st_size > 10_000
+    written = sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*") if p.is_file())
+    assert written == [Path("v.png")] and (tmp_path / "v.png").stat().st_size > 10_000
+    _check_named("view", written, user)
 
 
 def test_stl_without_density_names_the_materials_file_beside_it(exported, tmp_path, capsys):

@@ -41,7 +41,7 @@ CASES: dict[str, tuple[list[str], dict[str, str], bool]] = {
     "compare": (["--plot", "cmp.png"], {"cmp.png": "FILE.png"}, False),
     "export": (["--out", "cad"], {}, True),
     "inertia": ([], {}, False),
-    "view": (["--screenshot", "v.png"], {"v.png": "FILE.png"}, True),
+    "view": (["--screenshot", "v.png"], {"v.png": "FILE.png"}, True),  # test_cli_geometry.py
     "torque": (["--current", "0:7:3.5", "--plot", "t.png"], {"t.png": "FILE.png"}, False),
     "field": (["--current", "4", "--size-mm", "1", "--plot", "f.png"], {"f.png": "FILE.png"},
               False),
@@ -104,9 +104,15 @@ def test_every_command_is_in_the_readme_tour_and_has_a_case():
     assert set(CASES) == set(COMMANDS), "a new command needs its case here"
 
 
+#: Cases checked elsewhere, on a run those tests make anyway: the report's files
+#: (test_report.py), fidelity's (below, on two methods) and view's (its screenshot process
+#: in test_cli_geometry.py::test_view_screenshot_subprocess calls ``_check_named``).
+ELSEWHERE = ("report", "fidelity", "view")
+
+
 def _params():
     return [pytest.param(c, marks=[pytest.mark.slow] if CASES[c][2] else [], id=c)
-            for c in CASES if c not in ("report", "fidelity")]  # fmt: skip
+            for c in CASES if c not in ELSEWHERE]  # fmt: skip
 
 
 def _check_named(command: str, written: list[Path], user: dict[str, str]) -> None:
