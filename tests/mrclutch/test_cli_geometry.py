@@ -21,9 +21,14 @@ def exported(tmp_path_factory):
 
 
 def test_export_writes_step_and_stls(exported):
+    """The STEP and a part's STLs, no temporary left, and every file named in ``export
+    --help`` and the README (test_help_files.py's check of every command's files, whose
+    case for export is this export: one CAD run, not two)."""
     names = {p.name for p in exported.iterdir()}
     assert {"clutch.step", "rotor.stl", "shaft.stl", "housing.stl"} <= names
     assert not [n for n in names if n.startswith(".")]  # no temp files left
+    written = sorted(p.relative_to(exported) for p in exported.rglob("*") if p.is_file())
+    _check_named("export", written, CASES["export"][1])
 
 
 def test_inertia_json_three_methods(capsys):

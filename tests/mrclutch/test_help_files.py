@@ -2,21 +2,18 @@
 tour, and every file a command writes is named in its ``--help`` and in the README.
 
 Each command runs once here in a scratch folder (small inputs; in this process, as ``main``
-from that folder, except the CAD's and the 3D view's, which load build123d and VTK: a
-process of their own); the files it leaves are the files it writes. A file in an output
-folder is named by its own name (per-part STLs as ``<part>.stl``); a file written beside a
-results file the user names (``r.csv`` → ``r.csv.meta.json``) by the same suffix on the
-help's metavar (``RESULTS.csv.meta.json``).
+from that folder); the files it leaves are the files it writes. The CAD's export and the 3D
+view are checked on the runs test_cli_geometry.py makes of them (build123d, VTK). A file in
+an output folder is named by its own name (per-part STLs as ``<part>.stl``); a file written
+beside a results file the user names (``r.csv`` → ``r.csv.meta.json``) by the same suffix on
+the help's metavar (``RESULTS.csv.meta.json``).
 The report's own files are checked against the module's report in test_report.py's fixture.
 """
 
 from __future__ import annotations
 
 import io
-import os
 import re
-import subprocess
-import sys
 from contextlib import redirect_stdout
 from pathlib import Path
 
@@ -39,7 +36,7 @@ gap_mm = {min = 0.5, max = 0.7, count = 2}
 CASES: dict[str, tuple[list[str], dict[str, str], bool]] = {
     "haptic": ([], {}, False),  # no output option: it writes nothing
     "compare": (["--plot", "cmp.png"], {"cmp.png": "FILE.png"}, False),
-    "export": (["--out", "cad"], {}, True),
+    "export": (["--out", "cad"], {}, True),  # test_cli_geometry.py
     "inertia": ([], {}, False),
     "view": (["--screenshot", "v.png"], {"v.png": "FILE.png"}, True),  # test_cli_geometry.py
     "torque": (["--current", "0:7:3.5", "--plot", "t.png"], {"t.png": "FILE.png"}, False),
@@ -62,10 +59,6 @@ CASES: dict[str, tuple[list[str], dict[str, str], bool]] = {
 #: the files it writes do not depend on how long it searched, and the default search
 #: (100 × 100) took a minute here.
 SMALL_SEARCH = {"pop_size": 16, "generations": 4, "members": 2}
-
-#: The commands run in a process of their own (``python -m mrclutch``): the CAD kernel
-#: (build123d) and the 3D view (VTK) are not loaded into the test process.
-OWN_PROCESS = ("export", "view")
 
 
 def _help(command: str) -> str:
@@ -105,9 +98,10 @@ def test_every_command_is_in_the_readme_tour_and_has_a_case():
 
 
 #: Cases checked elsewhere, on a run those tests make anyway: the report's files
-#: (test_report.py), fidelity's (below, on two methods) and view's (its screenshot process
-#: in test_cli_geometry.py::test_view_screenshot_subprocess calls ``_check_named``).
-ELSEWHERE = ("report", "fidelity", "view")
+#: (test_report.py), fidelity's (below, on two methods), view's and export's
+#: (test_cli_geometry.py: its screenshot process and its module's export call
+#: ``_check_named``).
+ELSEWHERE = ("report", "fidelity", "view", "export")
 
 
 def _params():
@@ -125,12 +119,6 @@ def _check_named(command: str, written: list[Path], user: dict[str, str]) -> Non
 def _run(command: str, args: list[str], folder: Path, monkeypatch, capsys) -> None:
     """``mrclutch COMMAND ARGS`` from ``folder``, without progress bars: exit 0 (or 3, a
     verdict that fails)."""
-    if command in OWN_PROCESS:
-        env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "MRCLUTCH_NO_PROGRESS": "1"}
-        proc = subprocess.run([sys.executable, "-m", "mrclutch", command, *args], cwd=folder,
-                              env=env, capture_output=True, text=True, timeout=300)  # fmt: skip
-        assert proc.returncode in (0, 3), proc.stderr[-1000:]
-        return
     import mrclutch.cli.commands.optimize_pareto as op
 
     real = op.pareto
@@ -152,7 +140,7 @@ def test_every_written_file_is_named_in_help_and_readme(command, tmp_path, monke
     _run(command, args, tmp_path, monkeypatch, capsys)
     written = sorted(p.relative_to(tmp_path) for p in set(tmp_path.rglob("*")) - before
                      if p.is_file())  # fmt: skip
-    if user or command in ("export", "fidelity"):
+    if user:
         assert written, f"{command} wrote nothing"
     _check_named(command, written, user)
 
