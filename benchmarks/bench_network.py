@@ -18,8 +18,9 @@ stands if its solve cost nothing).
 fresh process with an empty numba cache, ``--rounds`` times: each kernel's compile (CPU s
 since the kernel before it ended, the first's with the imports and numba's start; "beside":
 loaded from the second process's cache), this
-process's CPU (the critical path when the second process keeps pace), the second process's
-and the wall time.
+process's CPU (the critical path when the second process keeps pace), the second process's,
+the wall time and the LLVM level it compiled at (``compiled.opt_level``: ``NUMBA_OPT`` if
+set, else the project's).
 """
 
 from __future__ import annotations
@@ -97,8 +98,9 @@ def breakdown(n: int = 5000, rounds: int = 3) -> None:
 COMPILE = """
 import resource, time
 c0, w0 = time.process_time(), time.perf_counter()
-from numba.core.event import Listener, install_listener
 from magnetics.network import compiled
+compiled.numba_module()  # numba imported as the project imports it: its cache and LLVM level
+from numba.core.event import Listener, install_listener
 ends = []
 class Ends(Listener):
     def on_start(self, ev): pass
@@ -116,7 +118,8 @@ for name, t in ends:
 parts += [f"{n} beside" for n in compiled._BESIDE if n not in dict(ends)]
 print("  ".join(parts))
 print(f"this process {time.process_time() - c0:.2f} s CPU, the second "
-      f"{child.ru_utime + child.ru_stime:.2f} s CPU, wall {time.perf_counter() - w0:.2f} s")
+      f"{child.ru_utime + child.ru_stime:.2f} s CPU, wall {time.perf_counter() - w0:.2f} s "
+      f"(LLVM level {compiled.opt_level()})")
 """
 
 
