@@ -7,8 +7,8 @@ estimate first; the rows in CSV; in Parquet; a nominal ``--with`` column; a wors
 ``--with`` column; ``--verify-top`` by the FEM; ``--pareto``; a process pool; Dask workers)
 = 45 cases, each row checked against its design's single ``evaluate``. Then, once: the
 optimiser with and without ``--nominal`` (2 cases), and the acceptance sweep in small on a
-spec holding four kinds, through the CLI (a three-fluid axis on ``--workers 2`` and
-``--dask-local 2``, ``--verify-top``)."""
+spec holding four kinds, through the CLI (a three-fluid axis; its file written again by
+the module's process pool and Dask workers; ``--verify-top``)."""
 
 import multiprocessing
 import subprocess
@@ -312,11 +312,6 @@ def _cli(spec, out, *extra, timeout=240):
                           timeout=timeout)  # fmt: skip
 
 
-def _dask_or_skip(r):
-    if r.returncode != 0 and "LocalCluster" in r.stderr and "OSError" in r.stderr:
-        pytest.skip(f"distributed cannot start a cluster here: {r.stderr[-300:]}")
-
-
 @pytest.fixture(scope="module")
 def three_fluids(tmp_path_factory):
     """The spec with four kinds (a three-fluid axis) and its in-process CSV."""
@@ -327,20 +322,24 @@ def three_fluids(tmp_path_factory):
     return spec, tmp / "one.csv"
 
 
-def test_three_fluid_rows_on_a_pool_and_dask_equal_single_evaluations(three_fluids, tmp_path):
-    """The acceptance sweep in small (30 designs, four kinds, three fluids) through the CLI:
-    a process pool (--workers 2) and a Dask cluster (--dask-local 2) write the in-process
-    file byte for byte, and a row of each fluid equals its design's single ``evaluate``."""
+def test_three_fluid_rows_on_a_pool_and_dask_equal_single_evaluations(three_fluids, tmp_path,
+                                                                      executors):  # fmt: skip
+    """The acceptance sweep in small (30 designs, four kinds, three fluids): the CLI's file
+    (``three_fluids``), written byte for byte by a process pool of 2 and a Dask cluster of 2
+    workers (the module's ``executors``, what --workers 2 and --dask-local 2 start: the
+    options' wiring is test_verify's and test_sweep_scaleout's, run through the CLI there;
+    a CLI process here started a second pool and cluster), and a row of each fluid equals
+    its design's single ``evaluate``."""
     spec, one = three_fluids
-    r = _cli(spec, tmp_path / "pool.csv", "--workers", "2")
-    assert r.returncode == 0, r.stderr
-    assert (tmp_path / "pool.csv").read_bytes() == one.read_bytes()
-    r = _cli(spec, tmp_path / "dask.csv", "--dask-local", "2")
-    _dask_or_skip(r)
-    assert r.returncode == 0, r.stderr
-    assert (tmp_path / "dask.csv").read_bytes() == one.read_bytes()
-    res = read_results(one)
     s, base = base_of(spec)
+    ev = BatchEvaluator(base)  # the CLI's, without --with
+    for name in ("pool", "dask"):
+        out = tmp_path / f"{name}.csv"
+        res = run_sweep(s, out, ev, ev.columns, executor=executors(name), workers=2,
+                        progress=False)  # fmt: skip
+        assert res.complete and res.rows == 30
+        assert out.read_bytes() == one.read_bytes(), name
+    res = read_results(one)
     for fluid in ("mrf_122eg", "mrf_132dg", "mrf_140cg"):
         i = int(np.flatnonzero(res["fluid"] == fluid)[0])
         d = design_of(s, base, int(res["design_id"][i]))
