@@ -135,3 +135,62 @@ def test_fluid_volume_sums_the_fluid_regions_and_batches() -> None:
     vols = fluid_volume(regions_of(p, preset("paper").n_drums))
     assert vols[0] == pytest.approx(total, rel=1e-12)
     assert vols[1] > vols[0]
+
+
+def _march_per_step(net, load, duration, steps):  # type: ignore[no-untyped-def]
+    """The oracle: ``march``'s step with G' and e^{−Mh} rebuilt at every step (the loop as
+    it was before the reuse of a held current's matrices)."""
+    from magnetics.hot import _expm_sym
+    from magnetics.thermal import ALPHA_CU
+
+    cap = np.asarray(net.capacity, dtype=float).reshape(3)
+    g0 = np.asarray(net.conductance, dtype=float).reshape(3, 3)
+    r20 = float(np.asarray(net.r20).reshape(()))
+    to_air = float(np.asarray(net.to_air).reshape(()))
+    a, c = r20 * ALPHA_CU, r20 * (1 - 20 * ALPHA_CU)
+    h = duration / steps
+    s = np.sqrt(cap)
+    t = np.full(3, float(net.ambient))
+    temps, cur, pw = [t.copy()], [], []
+    for _ in range(steps):
+        ld = load(t)
+        x = ld.current**2
+        g = g0.copy()
+        g[0, 0] -= x * a
+        q = np.array([x * c, ld.slip_power, to_air * net.ambient])
+        t_star = np.linalg.solve(g, q)
+        t = t_star + (1 / s) * (_expm_sym(g, s, h) @ (s * (t - t_star)))
+        temps.append(t.copy())
+        cur.append(ld.current)
+        pw.append(ld.slip_power)
+    return np.array(temps), np.array(cur), np.array(pw)
+
+
+def test_march_reusing_a_held_currents_matrices_is_bit_identical() -> None:
+    """``march`` reuses G' and e^{−Mh} while the current is bit-equal to the last step's
+    (a peak hold's first steps): the temperatures, currents and powers are the same bits
+    as the per-step oracle's, on the paper preset and on random designs and loads — a held
+    current, one that then rises with the core temperature, and one that alternates
+    between two values (a reuse keyed on anything but the last step's current fails it)."""
+    rng = np.random.default_rng(44)
+    base = preset("paper")
+    designs = [base] + [
+        replace(base, gap=base.gap * rng.uniform(0.8, 1.2),
+                zone_length=base.zone_length * rng.uniform(0.8, 1.2))
+        for _ in range(3)
+    ]  # fmt: skip
+    for k, d in enumerate(designs):
+        net = thermal.network(build_section(d).table, 20.0, 130.0)
+        i0, p = (7.0, 23.0) if k == 0 else (rng.uniform(1, 8), rng.uniform(0, 30))
+        knee = 20.0 + rng.uniform(5, 40)
+        loads = (
+            lambda t, i0=i0, p=p, knee=knee: Load(
+                i0 if t[1] < knee else min(i0 * (1 + 0.01 * (t[1] - knee)), 1.5 * i0), p),
+            lambda t, i0=i0, p=p: Load(i0 if int(t[0] * 10) % 2 else 0.5 * i0, p + t[1] / 10),
+        )  # fmt: skip
+        for load in loads:
+            m = march(net, load, 120.0, 300)
+            temps, cur, pw = _march_per_step(net, load, 120.0, 300)
+            assert len(set(cur.tolist())) > 1 and len(set(cur.tolist())) < len(cur)
+            assert np.array_equal(m.temperatures, temps)
+            assert np.array_equal(m.currents, cur) and np.array_equal(m.slip_powers, pw)
