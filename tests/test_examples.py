@@ -1,12 +1,11 @@
 """The examples a user starts from run, on tiny grids, and say something true."""
 
 import runpy
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 
+from mrclutch.cli.main import main
 from mrclutch.sweep import load_spec
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
@@ -42,16 +41,14 @@ def test_random_sweep_spec_is_valid_and_runs_as_cli(tmp_path):
     small = tmp_path / "small.toml"
     small.write_text((EXAMPLES / "random_sweep.toml").read_text().replace("100000", "300"))
     out = tmp_path / "r.csv"
-    subprocess.run(
-        [sys.executable, "-m", "mrclutch", "sweep", str(small), "--out", str(out),
-         "--pareto", str(tmp_path / "p.png"), "--no-progress"],
-        check=True, capture_output=True,
-    )  # fmt: skip
+    argv = ["sweep", str(small), "--out", str(out), "--pareto", str(tmp_path / "p.png"),
+            "--no-progress"]  # fmt: skip
+    assert main(argv) == 0  # the CLI's entry, in this process (a process start saved)
     assert len(out.read_text().splitlines()) == 301
     assert (tmp_path / "p.png").stat().st_size > 1000
 
 
-def test_readme_design_file_is_the_example_and_its_cap_is_noted():
+def test_readme_design_file_is_the_example_and_its_cap_is_noted(capsys):
     """README's design-file block is examples/thin_drums.toml, and evaluating it says that
     the current-density limit, not the typed 7 A, sets the current (issue 34)."""
     import json
@@ -60,10 +57,8 @@ def test_readme_design_file_is_the_example_and_its_cap_is_noted():
     readme = (EXAMPLES.parent / "README.md").read_text()
     block = re.search(r'```toml\n(name = "thin-drums".*?)```', readme, re.S).group(1)
     assert block == (EXAMPLES / "thin_drums.toml").read_text()
-    ev = subprocess.run([sys.executable, "-m", "mrclutch", "evaluate",
-                         str(EXAMPLES / "thin_drums.toml"), "--json"],
-                        capture_output=True, text=True, check=True)  # fmt: skip
-    c = json.loads(ev.stdout)["clutch"]
+    assert main(["evaluate", str(EXAMPLES / "thin_drums.toml"), "--json"]) == 0
+    c = json.loads(capsys.readouterr().out)["clutch"]
     cap = 60e6 * np.pi * 0.321e-3**2 / 4  # 60 A/mm² in the 28 AWG wire (0.321 mm)
     assert abs(c["max_current_A"] / cap - 1) < 1e-9
     assert [n for n in c["notes"] if "current-density limit caps the current" in n]
