@@ -1,6 +1,4 @@
 import json
-import subprocess
-import sys
 
 import pytest
 
@@ -36,11 +34,13 @@ def test_torque_plot_and_field_plot(tmp_path, capsys):
         ["field", "--current", "inf", "--plot", "x.png"],
     ],
 )
-def test_bad_input_one_line_exit_2(args, tmp_path):
-    p = subprocess.run([sys.executable, "-m", "mrclutch", *args], capture_output=True,
-                       text=True, cwd=tmp_path)  # fmt: skip
-    assert p.returncode == 2
-    assert len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
+def test_bad_input_one_line_exit_2(args, tmp_path, monkeypatch, capsys):
+    """Through main() from a scratch folder, in this process (a fresh process's bad input:
+    test_cli_haptic's test_subprocess_bad_input_no_traceback)."""
+    monkeypatch.chdir(tmp_path)
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
     assert not list(tmp_path.iterdir())
 
 
