@@ -333,18 +333,13 @@ def test_a_disk_full_at_the_second_file_keeps_the_first_whole(
 
 def test_each_handoff_is_in_its_help_and_the_readme_tour() -> None:
     """Every hand-off file and option is named in the command's --help and in the README's
-    tour (test_help_files checks the commands' default outputs; these are --format's)."""
-    import subprocess
-    import sys
+    tour (test_help_files checks the commands' default outputs; these are --format's), the
+    help read in this process (test_help_files' ``_help``: 80 columns, a terminal's default)."""
+    from test_help_files import _help as helptext
 
     root = Path(__file__).resolve().parents[2]
     tour = (root / "README.md").read_text().split("## A tour of the command line", 1)[1]
     tour = tour.split("\n## ", 1)[0]
-
-    def helptext(cmd: str) -> str:
-        out = subprocess.run([sys.executable, "-m", "mrclutch", cmd, "--help"],
-                             capture_output=True, text=True, check=True).stdout  # fmt: skip
-        return " ".join(out.split())
 
     export = helptext("export")
     for fmt, names in {"femm": ("NAME.fem", "NAME.lua"), "onelab": ("NAME.geo", "NAME.pro"),
