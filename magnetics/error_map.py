@@ -156,13 +156,14 @@ def map_bound(p: Mapping[str, Any], model: str = "circuit") -> tuple[Any, Any, t
 
 def circuit_error(
     clutch: Any, model: str = "circuit", current: float | None = None,
-    material_set: str = DEFAULT_MATERIALS,
+    material_set: str = DEFAULT_MATERIALS, features: Mapping[str, Any] | None = None,
 ) -> CircuitError:  # fmt: skip
     """The map's estimate and bound of ``model``'s torque error on ``clutch`` (the
     saturating circuit by default; "network": the reluctance network's bound over every
-    dimension at ``current`` [A] and ``material_set``, magnetics.network_bound)."""
+    dimension at ``current`` [A] and ``material_set``, magnetics.network_bound, with the
+    network's ``features`` at that current if the caller solved it, as in ``error_bound``)."""
     if model == "network":
-        return _network_error(clutch, current, material_set)
+        return _network_error(clutch, current, material_set, features)
     m = load(model)
     label = LABELS[model]
     est, bound, off = error_bound({f.name: getattr(clutch, f.name) for f in fields(clutch)},
@@ -195,13 +196,16 @@ def circuit_error(
     return CircuitError(est, bound, notes)
 
 
-def _network_error(clutch: Any, current: float | None, material_set: str) -> CircuitError:
+def _network_error(
+    clutch: Any, current: float | None, material_set: str,
+    features: Mapping[str, Any] | None = None,
+) -> CircuitError:  # fmt: skip
     """The network's error estimate and bound on ``clutch`` at ``current`` (notes say why
     it is unknown: inputs outside the measured ranges, or a material set never measured)."""
     if current is None:
         raise ValueError("circuit_error(model='network') needs the current (A)")
     p = {f.name: getattr(clutch, f.name) for f in fields(clutch)}
-    est, bound, why = network_bound(p, current, material_set)
+    est, bound, why = network_bound(p, current, material_set, features)
     label = LABELS["network"]
     if why == ("unmeasured",):
         note = (f"{label}: unmeasured — its error was never measured with the materials "

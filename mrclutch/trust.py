@@ -14,20 +14,24 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
 
 from geometry.mass import analytic_mass, thinnest_feature
 from geometry.materials import DEFAULT_CHOICE, LABEL, STEEL, MaterialChoice
+from geometry.params import DrumClutch
 from geometry.section import build_section
 from geometry.validation import ParameterError
 from magnetics.circuit import solve
 from magnetics.error_map import LABELS, circuit_error, load
 from magnetics.materials import MATERIALS, MU0
-from magnetics.network_bound import material_key
+from magnetics.network import solve_network
+from magnetics.network_bound import DEFAULT_MATERIALS, material_key, solution_features
+from magnetics.network_bound import load as load_bound
 from mrclutch.design import ClutchDesign
+from mrclutch.design_network import section_network
 from mrclutch.haptics.actuator import HapticParams
 from mrclutch.haptics.delay import pade_phase_error
 from mrclutch.haptics.model import crossing_frequency
@@ -90,7 +94,11 @@ def circuit_trust(
     every dimension, magnetics.network_bound), or the design lies outside what was
     measured (error unknown; the network's for a material set never measured, ``materials``:
     ``material_set``)."""
-    e = circuit_error(clutch, model, current, material_set(materials))
+    key = material_set(materials)
+    features = None
+    if model == "network" and current is not None:
+        features = _shared_features(clutch, current, materials, key)
+    e = circuit_error(clutch, model, current, key, features)
     if not math.isfinite(e.bound):
         return e.notes
     if e.bound > CIRCUIT_TORQUE_TRUST:
@@ -101,6 +109,29 @@ def circuit_trust(
             f"use the FEM",
         )
     return ()
+
+
+def _shared_features(
+    clutch: Any, current: float, materials: MaterialChoice, key: str
+) -> Mapping[str, np.ndarray] | None:
+    """The network bound's solution features of ``clutch`` at ``current`` [A] solved on the
+    process's shared network (``section_network``, which evaluate has built already)
+    rather than on one ``network_bound`` would build again (issue 40). None (the bound
+    does what it did) unless every material is the default one (the set the bound builds
+    its network with) and the design lies inside the bound's ranges (the only designs it
+    solves). The same bits: tests/mrclutch/test_trust_materials.py."""
+    if key != DEFAULT_MATERIALS or materials != DEFAULT_CHOICE:
+        return None
+    bound = load_bound(key)
+    if bound is None or not bound.features or not isinstance(clutch, DrumClutch):
+        return None
+    p = {f.name: getattr(clutch, f.name) for f in fields(clutch)}
+    ni = np.asarray(float(clutch.coil_turns) * float(current))  # N·I as network_bound forms it
+    if not bound.scaled(p, ni)[1].all():
+        return None
+    _, net = section_network(clutch, materials)
+    x = solve_network(net, ni.reshape(1, 1))
+    return {k: v[:, 0] for k, v in solution_features(net, x).items()}
 
 
 def material_set(materials: MaterialChoice) -> str:
