@@ -294,13 +294,11 @@ class _Clock:
     def notice(self) -> None:
         """The notice, once, when enough kernels are compiled (the estimate's scale)."""
         with self.lock:
-            # once a quarter of the bytecode after the first kernel is compiled: the small
-            # kernels that open a compile also bear the first use of each numba feature
-            # (rated alone, 1.6-2.8x over on a 25-36 s compile)
+            # once 15 % of the bytecode after the first kernel is compiled (_NOTICE_SHARE)
             if (
                 self.said
                 or self.warm is None
-                or self.done - self.warm[1] < 0.25 * (self.total - self.warm[1])
+                or self.done - self.warm[1] < _NOTICE_SHARE * (self.total - self.warm[1])
             ):
                 return
             self.said = True
@@ -370,16 +368,28 @@ def compile_alone(names: list[str]) -> None:
             _one(ns[k], _SIGNATURES[k])
 
 
+#: The share of the bytecode after the first kernel that is compiled before the notice
+#: gives its estimate: at 15 % the solver's six small kernels (~1 s into a first run), with
+#: ``_weight``'s fit at level 2 ~0.8-0.9x the compile's time in three fresh caches; at 25 %
+#: (the share before that fit) not before the residual, ~4-5 s in, at 0.9-1.2x. The small
+#: kernels also bear the first use of each numba feature (rated alone: 1.6-2.8x over at
+#: level 3, before ``_weight`` was fitted).
+_NOTICE_SHARE = 0.15
+
+
 def _weight(kernel: Any) -> int:
-    """A kernel's share of a compile, in bytes of bytecode: its own, a fifth of the kernels'
-    it calls (LLVM optimises their code again, linked into its module) and 135 for a
-    compile's fixed cost: a least-squares fit of the solver kernels' compile times (CPU, 19
-    compiles in two fresh caches) to 0.086 s + 6.4e-4 s/byte own + 1.4e-4 s/byte called,
-    within 0.1 s each for the small ones and 25 % for the large."""
+    """A kernel's share of a compile, in bytes of bytecode: its own, nine tenths of the
+    kernels' it calls (numba links their code into its module and LLVM optimises it again)
+    and 167 for a compile's fixed cost: a least-squares fit of the solver kernels' compile
+    times at LLVM level 2 (``_OPT``; CPU, 4 fresh caches, ``python benchmarks/bench_network.py
+    --compile``, the first kernel left out: it bears numba's start-up) to 0.060 s +
+    3.6e-4 s/byte own + 3.2e-4 s/byte called: the two large kernels within 1 %, the six
+    small ones within 0.1 s each and 1 % together. The fit at level 3 (0.086 s + 6.4e-4 own
+    + 1.4e-4 called) put the notice's estimate at 0.5-0.7x the compile at level 2."""
     name = kernel.py_func.__name__
     called = _calls(name) if name in _SIGNATURES else ()
     size = sum(len(vars(kernels)[k].__code__.co_code) for k in called)
-    return len(kernel.py_func.__code__.co_code) + size // 5 + 135
+    return len(kernel.py_func.__code__.co_code) + 9 * size // 10 + 167
 
 
 def _entry(name: str, rows: int) -> Any:

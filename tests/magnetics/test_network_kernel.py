@@ -175,6 +175,34 @@ def test_a_later_process_compiles_nothing(tmp_path):
     assert first["in_package"] == [False, False]
 
 
+def _notices(monkeypatch, capsys, weights, ends, entry_weight, entry_end):
+    """What ``compiled._Clock`` prints for an entry of ``entry_weight`` whose callees have
+    ``weights`` (bytecode) and compile events ending at ``ends`` seconds (a callee not in
+    ``ends`` loads from the cache), the entry's own compile ending at ``entry_end``; and
+    the clock."""
+    now = [0.0]
+    monkeypatch.setattr(compiled, "time", types.SimpleNamespace(perf_counter=lambda: now[0]))
+    monkeypatch.setattr(compiled, "_weight", lambda d: d.w)
+    callees = [types.SimpleNamespace(w=w) for w in weights]
+    entry = types.SimpleNamespace(w=entry_weight)
+    end = {id(d): t for d, t in zip(callees, ends, strict=False) if t is not None}
+    clock = compiled._Clock(entry, "the test's kernel",
+                            tuple((d, f"s{i}") for i, d in enumerate(callees)))  # fmt: skip
+
+    def one(d, sig):  # a compile event for those in ``end``; the others load from the cache
+        if id(d) in end:
+            clock.on_start(types.SimpleNamespace(data={"dispatcher": d}))
+            now[0] = end[id(d)]
+            clock.on_end(types.SimpleNamespace(data={"dispatcher": d}))
+
+    monkeypatch.setattr(compiled, "_one", one)
+    clock.on_start(types.SimpleNamespace(data={"dispatcher": entry}))
+    now[0] = entry_end
+    clock.on_end(types.SimpleNamespace(data={"dispatcher": entry}))
+    clock.finish()
+    return capsys.readouterr().err.splitlines(), clock
+
+
 def test_the_compile_notice_estimates_the_time_left(monkeypatch, capsys):
     """``compiled._Clock``: the entry's compile compiles what it calls first; past
     ``_COMPILE_NOTICE_S`` the notice says the time since the first kernel's end times the
@@ -183,29 +211,21 @@ def test_the_compile_notice_estimates_the_time_left(monkeypatch, capsys):
     took after. Kernels of bytecode 100 (0.5 s), 300 (loaded), 200 (done at 2 s), the entry
     400 (done at 4 s); the rate from the first kernel's end (its time holds the process's
     first-compile start): (2 − 0.5) s · (700 − 300)/(300 − 100) = 3 s left of 5 s."""
-    now = [0.0]
-    monkeypatch.setattr(compiled, "time", types.SimpleNamespace(perf_counter=lambda: now[0]))
-    monkeypatch.setattr(compiled, "_weight", lambda d: d.w)
-    a, b, c, entry = (types.SimpleNamespace(w=w) for w in (100, 300, 200, 400))
-    ends = {id(a): 0.5, id(c): 2.0}
-    clock = compiled._Clock(entry, "the test's kernel", ((a, "sa"), (b, "sb"), (c, "sc")))
-
-    def one(d, sig):  # a compile event for a and c; b loads from the cache
-        if id(d) in ends:
-            clock.on_start(types.SimpleNamespace(data={"dispatcher": d}))
-            now[0] = ends[id(d)]
-            clock.on_end(types.SimpleNamespace(data={"dispatcher": d}))
-
-    monkeypatch.setattr(compiled, "_one", one)
-    clock.on_start(types.SimpleNamespace(data={"dispatcher": entry}))
-    now[0] = 4.0
-    clock.on_end(types.SimpleNamespace(data={"dispatcher": entry}))
-    clock.finish()
-    err = capsys.readouterr().err.splitlines()
+    err, clock = _notices(monkeypatch, capsys, (100, 300, 200), (0.5, None, 2.0), 400, 4.0)
     assert err[0] == ("mrclutch: compiling the test's kernel (numba, once on this machine): "
                       "~3 s left of ~5 s …")  # fmt: skip
     assert err[1].startswith("mrclutch: compiled in 4.0 s (cached in ") and len(err) == 2
     assert clock.total == 700 and clock.done == 700
+
+
+def test_the_compile_notice_waits_for_its_share_of_the_bytecode(monkeypatch, capsys):
+    """The estimate waits until ``_NOTICE_SHARE`` (15 %) of the bytecode after the first
+    kernel is compiled: after the first (100, 0.5 s), 80 of the 600 left (13 %, 1.5 s) is
+    not enough, 100 (17 %, 2.1 s) is: (2.1 − 0.5) s · (700 − 200)/100 = 8 s left of 10 s."""
+    err, _ = _notices(monkeypatch, capsys, (100, 80, 20), (0.5, 1.5, 2.1), 500, 9.0)
+    assert err[0] == ("mrclutch: compiling the test's kernel (numba, once on this machine): "
+                      "~8 s left of ~10 s …")  # fmt: skip
+    assert len(err) == 2
 
 
 def test_each_kernel_runs_uncompiled_within_its_own_budget(monkeypatch):
