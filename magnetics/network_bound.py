@@ -116,11 +116,16 @@ def network_features(p: Mapping[str, Any], ampere_turns: Any) -> dict[str, np.nd
     ni = np.broadcast_to(np.asarray(ampere_turns, dtype=float), q["n_drums"].shape)
 
     def one(rg, rows):  # type: ignore[no-untyped-def]
-        net = network_from_regions(rg)
-        x = solve_network(net, ni[rows][:, None])
-        return {k: v[:, 0] for k, v in solution_features(net, x).items()}
+        return solved_features(network_from_regions(rg), ni[rows])
 
     return per_topology(q, valid(q), one)
+
+
+def solved_features(net: Network, ampere_turns: np.ndarray) -> dict[str, np.ndarray]:
+    """``solution_features`` (each (S,)) of the network ``net`` of S designs solved at N·I
+    ``ampere_turns`` (S,), one current a design."""
+    x = solve_network(net, np.asarray(ampere_turns, dtype=float)[:, None])
+    return {k: v[:, 0] for k, v in solution_features(net, x).items()}
 
 
 def material_key(steel: str = STEEL, fluid: str = MRF) -> str:

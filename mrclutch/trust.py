@@ -27,8 +27,7 @@ from geometry.validation import ParameterError
 from magnetics.circuit import solve
 from magnetics.error_map import LABELS, circuit_error, load
 from magnetics.materials import MATERIALS, MU0
-from magnetics.network import solve_network
-from magnetics.network_bound import DEFAULT_MATERIALS, material_key, solution_features
+from magnetics.network_bound import DEFAULT_MATERIALS, material_key, solved_features
 from magnetics.network_bound import load as load_bound
 from mrclutch.design import ClutchDesign
 from mrclutch.design_network import section_network
@@ -130,8 +129,7 @@ def _shared_features(
     if not bound.scaled(p, ni)[1].all():
         return None
     _, net = section_network(clutch, materials)
-    x = solve_network(net, ni.reshape(1, 1))
-    return {k: v[:, 0] for k, v in solution_features(net, x).items()}
+    return solved_features(net, ni.reshape(1))
 
 
 def material_set(materials: MaterialChoice) -> str:
