@@ -220,8 +220,8 @@ def _listener() -> type:
 class _Clock:
     """A listener of numba's compile events while ``load`` runs. On the kernel's own compile
     (a cache miss) it compiles ``before`` first; past ``_COMPILE_NOTICE_S`` it says so on
-    stderr with an estimate of the time left (once a quarter of the bytecode after the
-    first kernel is compiled): the time since the first kernel compiled scaled by the
+    stderr with an estimate of the time left (once ``_NOTICE_SHARE`` of the bytecode after
+    the first kernel is compiled): the time since the first kernel compiled scaled by the
     bytecode still to compile over the bytecode compiled since (each kernel's
     share of the compile taken as its share of the kernels' bytecode; those loaded from the
     cache leave the count; the first kernel's time holds the process's first-compile start,
@@ -294,10 +294,14 @@ class _Clock:
     def notice(self) -> None:
         """The notice, once, when enough kernels are compiled (the estimate's scale)."""
         with self.lock:
-            # once 15 % of the bytecode after the first kernel is compiled (_NOTICE_SHARE)
+            # once 15 % of the bytecode after the first kernel is compiled (_NOTICE_SHARE),
+            # with some compiled since it (a rate) and some left (the timer's call may come
+            # after the last kernel, e.g. when all but the entry loaded from the cache)
             if (
                 self.said
                 or self.warm is None
+                or self.done <= self.warm[1]
+                or self.done >= self.total
                 or self.done - self.warm[1] < _NOTICE_SHARE * (self.total - self.warm[1])
             ):
                 return

@@ -228,6 +228,20 @@ def test_the_compile_notice_waits_for_its_share_of_the_bytecode(monkeypatch, cap
     assert len(err) == 2
 
 
+def test_the_compile_notice_has_no_estimate_when_nothing_is_left(monkeypatch, capsys):
+    """The callees all load from the cache and the entry alone compiles (4 s): the timer's
+    call after its end (it may fire before ``finish`` cancels it) says that it compiles and
+    gives no estimate: no rate (nothing compiled since the first kernel) and nothing left.
+    Before, the estimate divided by the zero bytecode compiled since (a CI failure)."""
+    err, clock = _notices(monkeypatch, capsys, (100, 200), (None, None), 400, 4.0)
+    assert clock.total == clock.done == 400 and clock.warm == (4.0, 400)
+    clock.opening()  # the timer's late call
+    err += capsys.readouterr().err.splitlines()
+    assert err[0].startswith("mrclutch: compiled in 4.0 s")
+    assert err[1:] == ["mrclutch: compiling the test's kernel (numba, once on this machine) …"]
+    assert not clock.said
+
+
 def test_each_kernel_runs_uncompiled_within_its_own_budget(monkeypatch):
     """``compiled.uncompiled``: a kernel's batches run as plain Python while their rows stay
     within its budget and its compiled entry is not loaded; the solver's being loaded
