@@ -36,7 +36,7 @@ HEAVY_FIRST = (
     "tests/mrclutch/test_json_walk.py",
     "figures:mrclutch optimize --no-verify --json",
     "tests/mrclutch/test_sweep_scaleout.py",
-    "figures:mrclutch fidelity --preset paper --out {tmp}/fidelity",
+    "figures:mrclutch fidelity --preset paper --out {tmp}/fidelity_errors --repeats 1",
     "tests/mrclutch/test_sweep_categorical.py",
     "tests/mrclutch/test_optimize_pareto.py",
     "tests/mrclutch/test_sweep_interrupts.py",
