@@ -43,15 +43,16 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from geometry.regions import Regions
 from geometry.validation import ParameterError, check_nonnegative, check_range
+from magnetics.amplifier import Amplifier, supply_current  # noqa: F401  (importable here)
 from magnetics.circuit import MagneticPath, _kernels, _mmf, path_from_regions, solve_flux
-from magnetics.eddy_lag import EddyPart, Laminations, eddy_parts
+from magnetics.eddy_lag import EddyPart, eddy_parts
+from magnetics.laminations import Laminations
 from magnetics.materials import MATERIALS, Magnetic
 from magnetics.thermal import coil_resistance
 
@@ -63,34 +64,11 @@ FLUID_RESPONSE_TIME = 0.25e-3
 #: The bias at which the eddy lag is taken, as a fraction of the peak gap flux: about the
 #: middle of the torque range a rendered spring sweeps (the incremental μ depends on it).
 BIAS = 0.5
-# ---- design inputs -----------------------------------------------------------------------
-
 
 #: Gauss nodes per interval of the current rise: 3 + 3 is within 2 % of 64 + 64 (largest
 #: 1.3 % over 20 000 random designs, benchmarks/bench_dynamics.py); one value for the
 #: sweeps and for one design, so a sweep row equals ``evaluate``.
 RISE_NODES = 3
-
-
-@dataclass(frozen=True)
-class Amplifier:
-    """The coil's current amplifier (SI). Defaults: a typical 24 V linear/PWM current
-    amplifier for small actuators, its current loop closed at 2 kHz; its current limit is
-    the design's ``Operating.max_current``."""
-
-    supply_voltage: float = 24.0  # V
-    current_bandwidth_hz: float = 2000.0  # Hz, −3 dB of the current loop (first order)
-
-    def __post_init__(self) -> None:
-        check_range("supply_voltage", self.supply_voltage, 0.0, 1e4, " V", lo_open=True)
-        # a current loop slower than 10 Hz is no haptic amplifier (its lag alone would be
-        # 16 ms); 10 MHz stands for an ideal (instant) loop
-        check_range("current_bandwidth_hz", self.current_bandwidth_hz, 10.0, 1e7, " Hz")
-
-    @property
-    def time_constant(self) -> float:
-        """s: τ_a = 1/(2π f_c), the small-signal current loop."""
-        return 1.0 / (2 * math.pi * self.current_bandwidth_hz)
 
 
 # ---- electrical -----------------------------------------------------------------------------
@@ -197,21 +175,6 @@ def current_rise(
     # where f·R·I < V; the voltage-limited tail then ends at V/R, below the target
     return CurrentRise(np.where(v <= 0.1 * res * cur, np.inf, t10),
                        np.where(v <= 0.9 * res * cur, np.inf, t90))  # fmt: skip
-
-
-def supply_current(
-    fields: Mapping[str, Any],
-    stations: Mapping[str, Any],
-    amplifier: Amplifier,
-    coil_temperature: ArrayLike = 20.0,
-) -> FloatArray:
-    """A: the largest current the amplifier holds through the coil, V/R (Ohm's law; R at
-    ``coil_temperature`` °C, ``thermal.coil_resistance``) from the design's fields and
-    stations (``geometry.regions.stations``; floats or arrays). Above it the voltage-limited
-    current tends to V/R and never reaches the command: a design's current limit is capped
-    here (``mrclutch.design.current_limit``)."""
-    res = coil_resistance(fields, stations["coil_in"], stations["coil_out"], coil_temperature)
-    return np.asarray(amplifier.supply_voltage / np.asarray(res, float))
 
 
 #: Fractions of the step's current where the rise solves the circuit (10 %, 90 %, 100 %).

@@ -44,8 +44,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from geometry.materials import STEEL, conductivity
-from geometry.validation import check_choice, check_nonnegative, check_range
+from geometry.validation import check_choice, check_nonnegative
 from magnetics.circuit import MagneticPath, _kernels, _mmf, solve_flux
+from magnetics.laminations import Laminations
 from magnetics.materials import MATERIALS, Magnetic, magnetic
 
 FloatArray = NDArray[np.float64]
@@ -115,19 +116,6 @@ def diffusion_response(shape: str, tau1: ArrayLike, s: ArrayLike, n: int = _MODE
     c, r = diffusion_modes(shape, n)
     st = np.asarray(s)[..., None] * np.asarray(tau1, float)[..., None] * r
     return np.sum(c / (1.0 + st), axis=-1) + (1.0 - c.sum())
-
-
-@dataclass(frozen=True)
-class Laminations:
-    """Laminated or slotted steel parts: the thickness [m] the eddy currents are confined
-    to (0: solid). ``shell``: poles and back iron; ``core``: the core."""
-
-    core: float = 0.0
-    shell: float = 0.0
-
-    def __post_init__(self) -> None:
-        for name in ("core", "shell"):
-            check_range(name, getattr(self, name), 0.0, 0.1, " m")
 
 
 @dataclass(frozen=True)

@@ -27,7 +27,7 @@ the key name too::
     grease_viscosity_mm2_per_s = 110
     seal_torque_mN_m = 0
 
-    [amplifier]              # optional, defaults in `magnetics.dynamics.Amplifier`
+    [amplifier]              # optional, defaults in `magnetics.amplifier.Amplifier`
     supply_voltage_V = 24
     current_bandwidth_Hz = 2000
 
@@ -89,8 +89,9 @@ from geometry.materials import MaterialChoice
 from geometry.params import DrumClutch, preset
 from geometry.section import Section, build_section
 from geometry.validation import ParameterError, check_range
+from magnetics.amplifier import Amplifier, supply_current
 from magnetics.drag import Support
-from magnetics.dynamics import Amplifier, Laminations, supply_current
+from magnetics.laminations import Laminations
 from magnetics.materials import FLUIDS, load_fluid
 from mrclutch.duty_spec import DUTY_KEYS, Duty
 from mrclutch.haptics.actuator import MR_170, Transmission

@@ -127,15 +127,19 @@ def test_the_interactive_commands_build_no_table_and_skip_numpy_ma(fresh_python)
 def test_the_analytic_inertia_loads_no_hand_off_nor_the_viewer(fresh_python) -> None:
     """``inertia`` has its own command module: ``inertia --method analytic`` imports neither
     ``export``'s hand-offs (mrclutch.handoff, and with them the pipeline and the FEM
-    hand-off writers) nor ``view``'s renderer, and still answers."""
+    hand-off writers) nor ``view``'s renderer, and still answers. Nor the CAD export and a
+    CAD file's weighing (geometry.export, mrclutch.weigh, mrclutch.solids), nor the circuit
+    and the torque response: a design's amplifier and laminations are their own modules
+    (magnetics.amplifier, magnetics.laminations; issue 40 item 1)."""
     code = (
         "import sys, io, contextlib\nfrom mrclutch.cli.main import main\n"
         "with contextlib.redirect_stdout(io.StringIO()) as out:\n"
         "    assert main(['inertia', '--preset', 'paper', '--method', 'analytic']) == 0\n"
         "assert 'rotor inertia' in out.getvalue()\n"
         "print(sorted(m for m in ('mrclutch.handoff', 'mrclutch.cli.view', 'mrclutch.pipeline',"
-        " 'mrclutch.cli.commands.handoff', 'magnetics.export', 'mrclutch.inertia')"
-        " if m in sys.modules))"
+        " 'mrclutch.cli.commands.handoff', 'magnetics.export', 'mrclutch.inertia',"
+        " 'geometry.export', 'mrclutch.weigh', 'mrclutch.solids', 'magnetics.circuit',"
+        " 'magnetics.dynamics', 'magnetics.eddy_lag') if m in sys.modules))"
     )
     p = fresh_python(code)
     assert p.stdout.strip() == "['mrclutch.inertia']"

@@ -15,17 +15,7 @@ from geometry.validation import ParameterError, check_range
 from mrclutch.cli.commands._common import add_design_args, load_design_args, print_json
 from mrclutch.cli.errors import CLIError
 from mrclutch.cli.progress import bar
-from mrclutch.inertia import (
-    DENSITY_RANGE,
-    design_inertia,
-    load_stl,
-    output_rotor,
-    read_step,
-    stl_hint,
-    weigh_step,
-    weigh_stl,
-)
-from mrclutch.solids import chord_height_mm
+from mrclutch.inertia import design_inertia
 
 CAD_SUFFIXES = (".step", ".stp", ".stl")
 DEFAULT_TOLERANCE_MM = 0.01
@@ -72,6 +62,8 @@ def add_tolerance(p: argparse.ArgumentParser) -> None:
 
 def tolerance(args: argparse.Namespace, clutch: DrumClutch) -> float:
     """``--tolerance-mm`` in metres, bounded below relative to the clutch (memory)."""
+    from mrclutch.solids import chord_height_mm  # the CAD export's module: a mesh's alone
+
     return chord_height_mm("--tolerance-mm", args.tolerance_mm, clutch)
 
 
@@ -131,6 +123,8 @@ def _densities(
     """Density of each part named on the command line (``--part-density``, else
     ``--density``); with ``optional`` (a sidecar has the rest) a part without one is left
     out instead of refused."""
+    from mrclutch.weigh import DENSITY_RANGE  # a CAD file's, as _weigh_file's
+
     per: dict[str, float] = {}
     for item in args.part_density:
         name, sep, val = item.partition("=")
@@ -163,6 +157,9 @@ def _densities(
 
 
 def _weigh_file(args: argparse.Namespace) -> int:
+    # a CAD file's weighing (the STEP reader, the sidecar): not a design's imports
+    from mrclutch.weigh import load_stl, output_rotor, read_step, stl_hint, weigh_step, weigh_stl
+
     path = Path(args.design)
     if args.preset is not None:
         raise CLIError("give either a CAD file or --preset, not both")
