@@ -9,7 +9,9 @@ Prints the median time of each and the ratio current/base (< 1: faster now). Alt
 rounds keep the ratio honest on a shared, noisy machine. Each run of the sweep's evaluator
 also hashes every column of every row it computed (SHA-256, after its timing): the line
 ``rows: ... bit-identical to base`` compares the two trees' rows, and a tree whose rounds
-disagree with each other is named.
+disagree with each other is named; where they differ, each column's largest relative
+difference is printed, alone and over the row's ``torque_error_bound``. ``--base`` may
+also be a folder where a tree is already checked out (used as it is).
 
 ``--robust-designs N`` (default 300; 0: skip) also times, in each tree, the sweep's robust
 columns (``RobustBatchEvaluator`` with the three worst-case columns, what ``sweep --with
@@ -29,6 +31,8 @@ import sys
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+
+import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -56,6 +60,8 @@ for out in outs:
         h.update(k.encode())
         h.update(np.ascontiguousarray(v, dtype=float).tobytes())
 print(f"rows {S} columns {len(outs[0])} sha256 {h.hexdigest()}")
+if len(sys.argv) > 2:  # the rows themselves, for the per-column comparison
+    np.savez(sys.argv[2], **{k: np.concatenate([o[k] for o in outs]) for k in outs[0]})
 print(t, c)
 """
 
@@ -104,7 +110,11 @@ def _time(tree: Path, code: str, *args: str, rows: list[str] | None = None) -> l
 
 @contextlib.contextmanager
 def base_tree(rev: str) -> Iterator[Path]:
-    """The revision ``rev`` checked out in a temporary git worktree (removed afterwards)."""
+    """The revision ``rev`` checked out in a temporary git worktree (removed afterwards), or
+    ``rev`` itself where it names a folder (a tree already checked out, used as it is)."""
+    if Path(rev).is_dir():
+        yield Path(rev).resolve()
+        return
     with tempfile.TemporaryDirectory() as tmp:
         base = Path(tmp) / "base"
         subprocess.run(["git", "worktree", "add", "--detach", str(base), rev], cwd=ROOT,
@@ -126,24 +136,50 @@ def _rows_line(digests: dict[str, list[str]]) -> str:
     return f"rows: {now} — {verdict}"
 
 
+def compare_rows(now: Path, base: Path) -> None:
+    """Where the two trees' rows differ: per column, the largest relative difference
+    |now/base − 1| over the rows, and the largest of it over the row's own
+    ``torque_error_bound`` (the network's error bound, the scale a row may move within)."""
+    a, b = np.load(now), np.load(base)
+    bound = b["torque_error_bound"]
+    print("rows differ; per column: max |now/base - 1|, max of it / the row's torque_error_bound")
+    for k in b.files:
+        x, y = a[k], b[k]
+        same = (x == y) | (np.isnan(x) & np.isnan(y))
+        if same.all():
+            continue
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rel = np.where(same, 0.0, np.abs(x / y - 1))
+        print(
+            f"  {k:<28} {np.nanmax(rel):.2e} ({int((~same).sum())} rows)   "
+            f"{np.nanmax(rel / bound):.2e} of the bound"
+        )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--base", required=True, help="git revision to compare with")
+    ap.add_argument(
+        "--base", required=True, help="git revision (or a tree's folder) to compare with"
+    )
     ap.add_argument("--designs", type=int, default=100_000)
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--robust-designs", type=int, default=300)
     a = ap.parse_args()
-    with base_tree(a.base) as base:
+    with base_tree(a.base) as base, tempfile.TemporaryDirectory() as tmp:
         for name, code, args in (
             (f"fast sweep path, {a.designs} designs", SWEEP, (str(a.designs),)),
             ("mrclutch --help", HELP, ()),
         ):
             now, then = [], []
             digests: dict[str, list[str]] = {"now": [], "base": []}
-            for _ in range(a.rounds):
+            keep = {t: Path(tmp) / f"{t}.npz" for t in ("now", "base")}
+            for r in range(a.rounds):
                 sweep = code is SWEEP
-                then.append(_time(base, code, *args, rows=digests["base"] if sweep else None))
-                now.append(_time(ROOT, code, *args, rows=digests["now"] if sweep else None))
+                save = {t: (str(keep[t]),) if sweep and r == 0 else () for t in keep}
+                then.append(_time(base, code, *args, *save["base"],
+                                  rows=digests["base"] if sweep else None))  # fmt: skip
+                now.append(_time(ROOT, code, *args, *save["now"],
+                                 rows=digests["now"] if sweep else None))  # fmt: skip
             mn, mb = (statistics.median(t[0] for t in x) for x in (now, then))
             print(f"{name:<38} now {mn:8.3f} s   base {mb:8.3f} s   ratio {mn / mb:5.2f}")
             if code is SWEEP:  # one core's rate: rows per second of the sweep's evaluator
@@ -153,6 +189,8 @@ def main() -> None:
                     f"per CPU second now {a.designs / cn:.0f}, base {a.designs / cb:.0f}"
                 )
                 print(_rows_line(digests))
+                if digests["now"][0] != digests["base"][0]:
+                    compare_rows(keep["now"], keep["base"])
         if a.robust_designs > 0:  # the robust columns against the default, in each tree
             ratio = {}
             for tree, label in ((ROOT, "now"), (base, "base")):

@@ -36,12 +36,12 @@ from bench_chords import fields  # bench_against.py's random designs
 
 #: (stage, [(file suffix, function), ...]): cumulative times summed; the network's calls
 #: (``YieldAt.__call__``) are split by caller: the peak (``fast_batch``'s ``clutch``) and
-#: the continuous torque's chords (``continuous_torque``)
+#: the continuous rating's solves (``slope_rating``: two a row, a third on moved rows)
 STAGES = (
     ("network build (network_from_regions, packing)",
      [("network/build.py", "network_from_regions"), ("network/torque.py", "network_yield_at")]),
     ("network peak solve + torque reading", [("peak", "__call__")]),
-    ("network continuous-torque chords (3 solves + readings)", [("chords", "__call__")]),
+    ("network continuous-rating solves (2 + moved rows', readings)", [("chords", "__call__")]),
     ("continuous torque's fixed points (thermal closed form)", [("torque.py", "fixed_point")]),
     ("thermal network", [("magnetics/thermal.py", "network")]),
     ("magnetic circuit (path, peak flux: the network's start)",
@@ -71,7 +71,7 @@ def shares(stats: pstats.Stats) -> tuple[float, dict[str, float]]:
                 if where in ("peak", "chords"):
                     if not path.endswith("network/torque.py"):
                         continue
-                    want = "continuous_torque" if where == "chords" else "clutch"
+                    want = "slope_rating" if where == "chords" else "clutch"
                     t += sum(v[3] for c, v in callers.items() if c[2] == want)
                 elif path.endswith(where):
                     t += ct

@@ -44,6 +44,7 @@ from magnetics.network.torque import (  # noqa: F401  (the network's torque, imp
     network_torque_and_flux,
     network_torque_batch,
     network_yield_at,
+    slope_rating,
 )
 from magnetics.thermal import Network as ThermalNetwork
 from magnetics.thermal import coil_resistance, continuous_current_sq
@@ -54,10 +55,6 @@ FloatArray = NDArray[np.float64]
 #: measured designs, docs/magnetics.md); "circuit": the single saturating loop (tuned at
 #: the paper preset, far off elsewhere); "fem": the axisymmetric FEM reference.
 METHODS = ("network", "circuit", "fem")
-#: The solve's tolerance at the continuous torque's intermediate chords (``torque_at``'s
-#: ``rtol``): each only places the next chord, its fixed point found to 1e-4 of I; the last
-#: chord, the answer's, is solved to the network's default 1e-10.
-_CHORD_RTOL = 1e-6
 
 
 def rpm_to_rad_s(rpm: float) -> float:
@@ -417,13 +414,12 @@ def continuous_torque(
     the last answer I_k (one circuit solve), and I_{k+1} = I_cont(ω·(T_off + T_k/I_k·I))
     is found on the closed form of ``continuous_current``; ``passes`` chords. ``hint``:
     (current (S,), flux (S, 1)) of a solve already done (the peak), the first solve's
-    warm start. ``torque_at``: a yield torque of the S designs at currents (S,) to take
-    the chords through in place of the circuit's (the reluctance network's, the default
-    torque model: ``network_yield_at``; the intermediate chords ask it with
-    ``rtol=_CHORD_RTOL``); ``path`` then only sizes the batch.
-    Against the exact fixed point on 40 random designs of the sweep's ranges: 1 pass (the
-    chord through I_a alone) is off by up to 43 % in current, 2 passes 5.7 %, 3 passes
-    0.75 % (torque 0.33 %) (tests/magnetics/test_thermal.py)."""
+    warm start. Against the exact fixed point on 40 random designs of the sweep's ranges:
+    1 pass (the chord through I_a alone) is off by up to 43 % in current, 2 passes 5.7 %,
+    3 passes 0.75 % (torque 0.33 %) (tests/magnetics/test_thermal.py). ``torque_at``: the
+    reluctance network's curve (the default torque model, ``network_yield_at``) in place
+    of the circuit's chords: the fixed point by a secant on its slope T/I
+    (``magnetics.network.torque.slope_rating``); ``path`` then only sizes the batch."""
     mats = MATERIALS if materials is None else materials
     w = np.abs(np.asarray(slip_speed, dtype=float))
     off = np.asarray(off_torque, dtype=float)
@@ -431,19 +427,24 @@ def continuous_torque(
     i_a = np.sqrt(np.maximum(i_max_sq(off * w), 0.0))
     i_a = np.broadcast_to(i_a, path.turns.shape).copy()  # (S,), also for one design
 
-    def fixed_point(c1: FloatArray, rtol: float) -> FloatArray:
-        """The root of h(I) = I² − I_cont²(ω·(T_off + c1·I)) on [0, I_a] (h increasing:
-        I² grows, the closed form falls with the slip power), to ``rtol`` of I_a."""
+    def fixed_point(model: Any, rtol: float, rows: Any = None) -> FloatArray:
+        """The root of h(I) = I² − I_cont²(ω·(T_off + T(I))) on [0, I_a], T = ``model``(I)
+        (S,) clipped at 0 (so h(I_a) ≥ 0), to ``rtol`` of I_a; of the rows of the mask
+        ``rows`` only (None: all; the others 0)."""
         x_all = i_a.copy()
 
         def h(act: np.ndarray, x: FloatArray) -> FloatArray:
             x_all[act] = x
-            return (x_all * x_all - i_max_sq((off + c1 * x_all) * w))[act]
+            return (x_all * x_all - i_max_sq((off + np.maximum(model(x_all), 0.0)) * w))[act]
 
-        rows, lo = np.arange(i_a.size), np.zeros_like(i_a)
-        h_hi = h(rows, i_a.copy())  # ≥ 0: I_a bounds the answer
-        return illinois(h, lo, i_a, h(rows, lo), h_hi, rtol)
+        hi = i_a if rows is None else np.where(rows, i_a, 0.0)
+        every, lo = np.arange(i_a.size), np.zeros_like(i_a)
+        h_hi = h(every, hi.copy())  # ≥ 0: I_a bounds the answer
+        return illinois(h, lo, hi, h(every, lo), h_hi, rtol)
 
+    if torque_at is not None:  # the network's curve: a secant on its slope T/I
+        i, t = slope_rating(torque_at, i_a, fixed_point)
+        return i, np.where(i_a > 0, off + t, 0.0)
     # T(0) = 0 and T is concave past the knee: the fixed point on the chord through the
     # curve at I_k lies at or above the true one, and the next chord goes through it; each
     # solve starts from the last flux scaled to the new current (the flux is near linear)
@@ -451,25 +452,21 @@ def continuous_torque(
     # linear circuit's flux both lie above the root: Newton from their minimum converges
     # monotonically ([numerical-recipes] §9.4).
     i_old = phi = dfdphi = None
-    if torque_at is None:  # the circuit's chords: its warm starts (the network keeps its own)
-        kern = _kernels(path)
-        turns = path.turns[:, None]
-        lin = turns / _mmf(path, mats, np.zeros((turns.shape[0], 1)), kern)["dtotal"]  # Φ/I
-        if hint is not None:
-            i_old = np.asarray(hint[0], dtype=float)[:, None]
-            phi = np.asarray(hint[1], dtype=float)
-            dfdphi = _mmf(path, mats, np.abs(phi), kern)["dtotal"]
+    kern = _kernels(path)  # the circuit's chords: its warm starts
+    turns = path.turns[:, None]
+    lin = turns / _mmf(path, mats, np.zeros((turns.shape[0], 1)), kern)["dtotal"]  # Φ/I
+    if hint is not None:
+        i_old = np.asarray(hint[0], dtype=float)[:, None]
+        phi = np.asarray(hint[1], dtype=float)
+        dfdphi = _mmf(path, mats, np.abs(phi), kern)["dtotal"]
     i, c1 = i_a, np.zeros_like(i_a)
     for k in range(passes):
-        if torque_at is not None:
-            t = torque_at(i) if k == passes - 1 else torque_at(i, rtol=_CHORD_RTOL)
-        else:
-            start = None
-            if phi is not None:
-                tangent = np.abs(phi) + turns * (i[:, None] - i_old) / dfdphi
-                start = np.maximum(np.minimum(tangent, lin * i[:, None]), 1e-30)
-            t, phi, dfdphi = _solved_point(path, i, mats, fluid, 1e-3, start, convention)
-            i_old = i[:, None]
+        start = None
+        if phi is not None:
+            tangent = np.abs(phi) + turns * (i[:, None] - i_old) / dfdphi
+            start = np.maximum(np.minimum(tangent, lin * i[:, None]), 1e-30)
+        t, phi, dfdphi = _solved_point(path, i, mats, fluid, 1e-3, start, convention)
+        i_old = i[:, None]
         c1 = np.where(i > 0, t / np.where(i > 0, i, 1.0), 0.0)
-        i = fixed_point(c1, 1e-9 if k == passes - 1 else 1e-4)  # intermediate: a chord's point
+        i = fixed_point(lambda x, c1=c1: c1 * x, 1e-9 if k == passes - 1 else 1e-4)
     return i, np.where(i_a > 0, off + c1 * i, 0.0)

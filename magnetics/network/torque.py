@@ -8,6 +8,7 @@ thickness is the convention (``CONVENTIONS``, docs/magnetics.md).
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from collections.abc import Callable, Mapping
@@ -54,7 +55,7 @@ class YieldAt:
 
     def __init__(self, net: Network, mats: Mapping[str, Magnetic], fluid: MRFluid | None,
                  convention: str, seed: tuple[FloatArray, FloatArray] | None) -> None:  # fmt: skip
-        self._net, self._mats = net, mats
+        self._net, self._mats, self._fluid, self._convention = net, mats, fluid, convention
         self._state = {} if seed is None else {"i": np.asarray(seed[0], dtype=float)[:, None],
                                                "x": np.asarray(seed[1], dtype=float)}  # fmt: skip
         self._packed = prepare(net, mats) if net.turns.size else None
@@ -66,7 +67,19 @@ class YieldAt:
         return self._state["x"]
 
     def __call__(self, current: ArrayLike, rtol: float = 1e-10,
-                 gain: ArrayLike | None = None) -> FloatArray:  # fmt: skip
+                 gain: ArrayLike | None = None, rows: NDArray[np.bool_] | None = None
+                 ) -> FloatArray:  # fmt: skip
+        """The yield torque (S,) at ``current`` (S,); ``rows`` (a mask of the S designs):
+        only those designs solved, ``current`` and the answer theirs (R,), each row's
+        Newton and reading the same as in a call on all S."""
+        if rows is not None:  # a network of those rows alone, started from their last state
+            seed = (self._state["i"][rows, 0], self.flux[rows])
+            sub = YieldAt(_network_rows(self._net, rows), self._mats, self._fluid,
+                          self._convention, seed)  # fmt: skip
+            t = sub(current, rtol, gain)
+            self._state = {"i": self._state["i"].copy(), "x": self.flux.copy()}
+            self._state["i"][rows], self._state["x"][rows] = sub._state["i"], sub.flux
+            return t
         net, state = self._net, self._state
         cur = np.asarray(current, dtype=float)[:, None]
         start = None
@@ -77,6 +90,62 @@ class YieldAt:
                           start=start, gain=gain)  # fmt: skip
         state.update(i=cur, x=x)
         return self._reading(x).sum(-1)[:, 0]
+
+
+#: The continuous rating on the network's curve (``slope_rating``): its solves' tolerance
+#: (the rating is a model's to ~1e-3, not the solve's), the current of its slope at I → 0
+#: (× I_a: B there lies in the B–H tables' first, linear segment, and τy = τmax·tanh(k·H)
+#: is linear to (k·H)²/3), and how far (× I₁) the model's fixed point may lie from its
+#: solved point before that row is solved again there (benchmarks/bench_chords.py).
+_SLOPE_RTOL, _SLOPE_TINY, _SLOPE_MOVED = 1e-6, 1e-6, 1e-2
+
+
+def slope_rating(
+    torque_at: Callable[..., FloatArray], i_a: FloatArray, fixed_point: Callable[..., FloatArray]
+) -> tuple[FloatArray, FloatArray]:
+    """(current (S,), yield torque (S,) there) at the fixed point of the continuous rating
+    (``magnetics.torque.continuous_torque``) on the network's curve T = ``torque_at``
+    (``network_yield_at``'s; ``rows=`` solves a subset), ``fixed_point(T, rtol, rows)`` the
+    rating's root on [0, I_a] of a model T(I) (S,) of the curve.
+
+    The model is the slope s(I) = T(I)/I, a line in I through two solved points
+    (secant on the slope, [numerical-recipes] §9.2): s₀ at I → 0 (the linear network's,
+    ``_SLOPE_TINY``) and s₁ at the fixed point I₁ of the chord s₀·I; the model's fixed
+    point I₂, where the model's torque is the answer; a row whose I₂ lies more than
+    ``_SLOPE_MOVED``·I₁ from I₁ is solved at I₂ and its line taken through s₁ and s₂
+    instead (the weak-coupled rows of 3–4 drums rarely are). Two solves of every row and a
+    third of the moved ones, where three chords solved three; against the exact fixed point
+    on 2000 random designs: benchmarks/bench_chords.py."""
+
+    def slope(t: FloatArray, i: FloatArray) -> FloatArray:
+        return np.where(i > 0, t / np.where(i > 0, i, 1.0), 0.0)
+
+    def line(a: FloatArray, b: FloatArray, node: FloatArray) -> Callable[..., FloatArray]:
+        return lambda x: x * (a + b * (x - node))  # T = I·s(I), s a line through (node, a)
+
+    tiny = _SLOPE_TINY * i_a
+    s0 = slope(torque_at(tiny, rtol=_SLOPE_RTOL), tiny)
+    i1 = fixed_point(line(s0, np.zeros_like(s0), 0.0), 1e-4)
+    s1 = slope(torque_at(i1, rtol=_SLOPE_RTOL), i1)
+    model = line(s0, slope(s1 - s0, i1), 0.0)
+    i2 = fixed_point(model, 1e-9)
+    t = model(i2)
+    moved = np.abs(i2 - i1) > _SLOPE_MOVED * i1
+    if moved.any():
+        s2 = s1.copy()
+        s2[moved] = slope(torque_at(i2[moved], rtol=_SLOPE_RTOL, rows=moved), i2[moved])
+        step = np.where(moved, i2 - i1, 1.0)
+        model = line(s2, np.where(moved, (s2 - s1) / step, 0.0), np.where(moved, i2, i1))
+        i3 = fixed_point(model, 1e-9, moved)
+        i2, t = np.where(moved, i3, i2), np.where(moved, model(i3), t)
+    return i2, np.maximum(t, 0.0)
+
+
+def _network_rows(net: Network, rows: NDArray[np.bool_]) -> Network:
+    """The network of the designs ``rows`` (a mask of its S) alone."""
+    arrays = {f.name: getattr(net, f.name)[rows] for f in dataclasses.fields(net)
+              if isinstance(getattr(net, f.name), np.ndarray)}  # fmt: skip
+    return dataclasses.replace(net, **arrays)
 
 
 def network_gap_torque(

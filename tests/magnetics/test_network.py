@@ -687,6 +687,34 @@ def test_yield_at_solves_the_peak_afresh_with_a_gain_and_hands_its_flux_over():
     np.testing.assert_array_equal(at.flux, x2)
 
 
+@pytest.mark.parametrize("convention", ["mid-line", "weakest-layer"])
+def test_yield_at_rows_solves_those_designs_as_a_call_on_all(convention):
+    """``at(current, rows=mask)`` (the continuous rating's third solve, on the rows whose
+    model moved) solves only the masked designs, on a network of those rows, each started
+    from its own last loop fluxes: the torques and fluxes of a call on all designs at
+    those rows, bit for bit; the other rows keep their last state."""
+    f = {k: np.full(5, float(v)) for k, v in vars(replace(PAPER, n_drums=3)).items()}
+    f["gap"] = np.linspace(0.2e-3, 0.8e-3, 5)
+    net = network_from_regions(evaluate(broadcast_fields(f), 3))
+    rows = np.array([True, False, True, True, False])
+    part, whole = (
+        network_yield_at(net, convention=convention),
+        network_yield_at(net, convention=convention),
+    )
+    for at in (part, whole):
+        at(np.full(5, 7.0))
+        at(np.linspace(1.0, 3.0, 5))
+    cur = np.linspace(2.0, 4.0, 5)
+    got = part(cur[rows], rows=rows)
+    assert got.shape == (3,) and np.all(got > 0)
+    np.testing.assert_array_equal(got, whole(cur)[rows])
+    np.testing.assert_array_equal(part.flux[rows], whole.flux[rows])
+    kept = network_yield_at(net, convention=convention)
+    kept(np.full(5, 7.0))
+    kept(np.linspace(1.0, 3.0, 5))
+    np.testing.assert_array_equal(part.flux[~rows], kept.flux[~rows])
+
+
 # ---- against the stored FEM reference (measured, not tuned) ------------------------------
 
 

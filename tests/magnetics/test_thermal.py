@@ -187,10 +187,10 @@ def test_network_inverse_is_the_matrix_inverse():
 
 def test_continuous_torque_chords_through_the_network():
     """The rating the fast path uses since the network became the default torque model:
-    the same chords through the network's curve (``torque_at``) against bisection with a
-    network solve at every step, on the preset and on random designs of the sweep's
-    ranges. Measured: up to 1.02 % in current and 0.49 % in torque (the circuit's chords:
-    0.75 % and 0.33 %)."""
+    the secant on the network's slope T/I (``torque_at``, ``slope_rating``) against
+    bisection with a network solve at every step, on the preset and on random designs of
+    the sweep's ranges. Measured: up to 2.3e-4 in current and 1.1e-4 in torque (three
+    chords through the network, before: 1.02 % and 0.49 %; the circuit's: 0.75 %, 0.33 %)."""
     from dataclasses import replace
 
     from magnetics.network import network_from_regions
@@ -215,34 +215,48 @@ def test_continuous_torque_chords_through_the_network():
         t_exact = float(at(np.array([lo]))[0]) + off
         out.append((float(i_fast[0]) / lo - 1, float(t_fast[0]) / t_exact - 1))
     err = np.abs(out)
-    assert err[:, 0].max() < 0.015 and err[:, 1].max() < 0.01, err.max(0)
+    assert err[:, 0].max() < 5e-4 and err[:, 1].max() < 2.5e-4, err.max(0)
 
 
-def test_only_the_last_network_chord_is_solved_to_the_full_tolerance():
-    """The intermediate chords only place the next one (their fixed point is found to 1e-4
-    of I): ``continuous_torque`` asks ``torque_at`` for them at ``_CHORD_RTOL`` (1e-6) and
-    for the last, the answer's, at the network's default. On the preset and 4 random
-    designs the rating equals the one with every chord at 1e-10 to 1e-6 (measured over the
-    sweep's 20 000 random designs: 4.9e-8)."""
+def test_network_rating_solves_each_row_twice_and_a_moved_row_once_more():
+    """``slope_rating``'s solves, on the paper preset at 2 drums and 7 random 2-drum designs
+    as one batch: the first at ``_SLOPE_TINY``·I_a (the slope at I → 0), the second at the
+    fixed point of that slope's chord, a third (``rows=``) only on the rows whose model's fixed point lies
+    more than ``_SLOPE_MOVED``·I₁ from I₁ (here some, not all); each at ``_SLOPE_RTOL``
+    (1e-6): the rating equals the one with every solve at 1e-10 to 1e-6 (the answer is the
+    model's, to ~1e-3 on bench_chords' 2000 designs, not the solve's)."""
     from dataclasses import replace
 
+    from magnetics.circuit import path_from_regions
+    from magnetics.drag import drag_terms, totals
     from magnetics.network import network_from_regions
-    from magnetics.torque import _CHORD_RTOL, network_yield_at
+    from magnetics.network.torque import _SLOPE_MOVED, _SLOPE_RTOL, _SLOPE_TINY
+    from magnetics.thermal import continuous_current_sq
+    from magnetics.torque import network_yield_at
 
-    for change in [{}, *_random_designs(4, 5)]:
-        s = build_section(replace(PAPER, **change))
-        rg, path = s.table, path_from_section(s)
-        off = clutch_drag(rg, W).torque
-        asked, got = [], {}
-        for how in ("asked", "full"):
-            at = network_yield_at(network_from_regions(rg))
+    designs = [vars(replace(PAPER, n_drums=2)), *(vars(replace(PAPER, **c)) for c in
+               _random_designs(40, 11) if c["n_drums"] == 2)][:8]  # fmt: skip
+    p = broadcast_fields({k: np.array([d[k] for d in designs], float) for k in designs[0]})
+    rg = regions_of(p, 2)
+    path, tnet = path_from_regions(rg), network(rg)
+    off = totals(drag_terms(rg, W))[0]
+    i_a = np.sqrt(continuous_current_sq(tnet, 155.0, 130.0)(off * W))
+    got, calls = {}, []
+    for how in ("asked", "full"):
+        at = network_yield_at(network_from_regions(rg))
 
-            def traced(cur, rtol=1e-10, at=at, how=how, asked=asked):  # type: ignore[no-untyped-def]
-                if how == "asked":
-                    asked.append(rtol)
-                return at(cur, rtol=rtol if how == "asked" else 1e-10)
+        def traced(cur, rtol=1e-10, rows=None, at=at, how=how):  # type: ignore[no-untyped-def]
+            if how == "asked":
+                calls.append((np.array(cur), rtol, rows))
+            return at(cur, rtol=rtol if how == "asked" else 1e-10, rows=rows)
 
-            got[how] = continuous_torque(network(rg), path, W, off, 155.0, 130.0,
-                                         torque_at=traced)[1]  # fmt: skip
-        assert asked == [_CHORD_RTOL, _CHORD_RTOL, 1e-10] and _CHORD_RTOL == 1e-6
-        assert got["asked"] == pytest.approx(got["full"], rel=1e-6)
+        got[how] = continuous_torque(tnet, path, W, off, 155.0, 130.0, torque_at=traced)
+    assert [c[1] for c in calls] == [_SLOPE_RTOL] * 3 and _SLOPE_RTOL == 1e-6
+    np.testing.assert_array_equal(calls[0][0], _SLOPE_TINY * i_a)
+    assert calls[0][2] is None and calls[1][2] is None
+    moved = calls[2][2]
+    i1, i2 = calls[1][0], got["asked"][0]
+    assert 0 < moved.sum() < moved.size and calls[2][0].shape == (moved.sum(),)
+    # the unmoved rows' answer lies within _SLOPE_MOVED of their solved point
+    assert np.all(np.abs(i2[~moved] - i1[~moved]) <= _SLOPE_MOVED * i1[~moved])
+    np.testing.assert_allclose(got["asked"][1], got["full"][1], rtol=1e-6)
