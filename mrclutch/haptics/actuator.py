@@ -324,8 +324,9 @@ class HapticParams:
         return cls(**{f: np.array([float(getattr(p, f)) for p in ps]) for f in _FIELDS})
 
     def item(self, i: int) -> HapticParams:
-        """Design ``i`` of a 1-D vectorised set, as scalars."""
-        return HapticParams(
+        """Design ``i`` of a 1-D vectorised set, as scalars (its fields' values, checked when
+        the set was made: as floats, what ``__post_init__`` leaves a scalar field)."""
+        return HapticParams._of_checked(
             **{f: float(np.broadcast_to(getattr(self, f), self.shape)[i]) for f in _FIELDS}
         )
 
