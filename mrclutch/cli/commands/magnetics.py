@@ -16,8 +16,6 @@ from mrclutch.cli.commands._common import (
     print_json,
 )
 from mrclutch.cli.errors import CLIError
-from mrclutch.cli.longjobs import announce
-from mrclutch.cli.plots.magnetics import plot_field, plot_torque
 from mrclutch.design import current_notes
 from mrclutch.torque_curves import (
     FEM_SIZE,
@@ -136,6 +134,8 @@ def _torque(args: argparse.Namespace) -> int:
     clutch = design.section()
     methods = ("network", "fem") if args.method == "both" else (args.method,)
     if "fem" in methods and currents.size > 1:  # long FEM work says how long first
+        from mrclutch.cli.longjobs import announce  # the FEM's alone
+
         seconds = fem_seconds(clutch, int(currents.size))
         announce("torque", f"{currents.size} FEM solves at {FEM_SIZE * 1e3:g} mm", seconds,
                  "the FEM's measured rate per grid node, magnetics.fem.grid.SECONDS_PER_NODE",
@@ -144,6 +144,8 @@ def _torque(args: argparse.Namespace) -> int:
                            temperature=args.fluid_temperature_C,
                            support=design.support)  # fmt: skip
     if args.plot:
+        from mrclutch.cli.plots.magnetics import plot_torque  # a plot's alone
+
         plot_torque(curves, args.plot)  # through the output layer
     err = largest_difference(*curves) if len(curves) == 2 else None
     model = "circuit" if args.method == "circuit" else "network"
@@ -236,6 +238,8 @@ def _field(args: argparse.Namespace) -> int:
         size = check_range("--size-mm", args.size_mm, 0.02, 5.0, " mm") * 1e-3
     design = load_design_args(args)
     section, sol = field_map(design, args.current, size)
+    from mrclutch.cli.plots.magnetics import plot_field  # the torque curve's: not its plots
+
     plot_field(section, sol, args.plot)  # through the output layer
     print(f"wrote {args.plot}: |B| max {b_max(sol):.3g} T, {sol.iterations} Newton iterations")
     note = overload_note(design, args.current)
