@@ -254,13 +254,19 @@ def _random_boxes(rng, n):
 
 
 DENSE = 1000  # samples of each design's ranges
+#: Of them, those the largest passive K is checked on: its worst is a corner's (monotone in
+#: m1, b1 and τ: test_passive_limit_monotone_in_m1_b1_delay), and over all 1000 samples the
+#: least was the 16 corners' on each of the 200 designs, to the bit, for ~70 % of this
+#: test's time; the corners and 84 random samples keep it a sampled check.
+PASSIVE = 100
 
 
 @pytest.mark.slow
 def test_worst_case_never_optimistic_against_dense_sampling():
     """200 random designs with random ranges: the reported worst largest stable K, passive
     K and bandwidth are ≤ the smallest over 1000 random samples of the ranges (corners
-    included) and within 2 % of it. The samples are evaluated all at once (vectorised)."""
+    included; the passive K over the first ``PASSIVE`` of them) and within 2 % of it. The
+    samples are evaluated all at once (vectorised)."""
     rng = np.random.default_rng(29)
     n = 200
     box = _random_boxes(rng, n)
@@ -277,8 +283,9 @@ def test_worst_case_never_optimistic_against_dense_sampling():
                          delay=tau[sl])  # fmt: skip
         dense["max_stable_K"][sl] = np.min(stable_stiffness_batch(p), axis=1)
         dense["bandwidth"][sl] = np.nanmin(bandwidth(p, K[sl]), axis=1)
-    for i in range(n):  # one design a pass: its 1000 × 361-point grids stay in cache (~1.6x)
-        p = HapticParams(m1[i], b1[i], box.k[i], box.b[i], box.m2[i], delay=tau[i])
+    for i in range(n):  # one design a pass: its samples' 361-point grids stay in cache
+        s = slice(PASSIVE)
+        p = HapticParams(m1[i, s], b1[i, s], box.k[i], box.b[i], box.m2[i], delay=tau[i, s])
         dense["max_passive_K"][i] = np.min(max_passive_stiffness(p))
     for q, d in dense.items():
         worst = lim[f"{q}_worst"]
