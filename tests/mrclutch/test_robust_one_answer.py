@@ -208,3 +208,23 @@ def test_thresholds_side_by_side_are_each_searched_alone():
             assert got == want, (p, f)
             seen.update(g is None for g in got)
     assert seen == {True, False}
+
+
+def test_the_box_nominal_zwidth_is_the_evaluations_own_where_the_pair_is_the_same():
+    """robust_verdicts' nominal Z-width area is read from the evaluation (its MR pair's,
+    computed beside the motor) where the box's nominal pair is that pair field for field:
+    on the paper preset it is the area the box's nominal gives alone, to the bit; a pair
+    that differs (b1 doubled, a sample-and-hold) gets its own area computed."""
+    from mrclutch.design import design_preset
+    from mrclutch.haptics.zwidth import zwidth
+    from mrclutch.pipeline import evaluate
+
+    def alone(q):
+        return float(np.ravel(zwidth(q)["zwidth_area_N2_s_per_m2"])[0])
+
+    ev = evaluate(design_preset("paper"))
+    nom = robust.robust_box(ev).box.nominal
+    own = ev.zwidth["mr"]["zwidth_area_N2_s_per_m2"]
+    assert robust._nominal_zwidth_area(ev, nom) == alone(nom) == own
+    for other in (replace(nom, b1=nom.b1 * 2), replace(nom, sample_period=1e-3)):
+        assert robust._nominal_zwidth_area(ev, other) == alone(other) != own
