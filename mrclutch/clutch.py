@@ -18,7 +18,7 @@ from geometry.mass import MassReport, analytic_mass, brep_mass
 from geometry.materials import MRF, MaterialChoice
 from geometry.validation import check_choice
 from magnetics import thermal
-from magnetics.circuit import path_from_section
+from magnetics.circuit import MagneticPath, path_from_section
 from magnetics.drag import Drag, coupled_fluid_inertia
 from magnetics.materials import FLUIDS
 from magnetics.network import Network, network_from_regions
@@ -110,13 +110,17 @@ class ClutchFigures:
 
 
 def clutch_figures(
-    design: ClutchDesign, fidelity: str = "fast", accuracy: float | None = None
+    design: ClutchDesign,
+    fidelity: str = "fast",
+    accuracy: float | None = None,
+    path: MagneticPath | None = None,
 ) -> ClutchFigures:
     """Inertia, mass, torque at the current limit and drag of one design.
 
     With ``accuracy`` (relative, e.g. 0.01) the methods are the cheapest that meet it
     (mrclutch.trust.choose) and ``fidelity`` is ignored; the choice's notes (e.g. which
-    quantity needs an FEM) are added to the figures' notes."""
+    quantity needs an FEM) are added to the figures' notes. ``path``: the design's circuit
+    (``path_from_section``) where the caller built it already (the thermal rating's)."""
     check_choice("fidelity", fidelity, FIDELITIES)
     c, op = design.clutch, design.operating
     section, net = section_network(c, design.materials)  # shared with the feel and the duty
@@ -146,8 +150,9 @@ def clutch_figures(
         )  # fmt: skip
     drag = curve.drag
     coil = coil_properties(c, i_max, op.coil_temperature)
-    thermal = thermal_figures(design, section.table, path_from_section(section), drag.torque,
-                              float(curve.torque[0]), net)  # fmt: skip
+    path = path_from_section(section) if path is None else path
+    thermal = thermal_figures(design, section.table, path, drag.torque, float(curve.torque[0]),
+                              net)  # fmt: skip
     # the mass last: a B-rep mass may come from another process (geometry.mass.brep_mass_from:
     # the report's CAD process), and the torque's FEM above runs here meanwhile (issue 40)
     if inertia_method == "analytic":

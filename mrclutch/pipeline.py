@@ -30,7 +30,6 @@ from typing import Any
 
 import numpy as np
 
-from geometry.section import build_section
 from geometry.validation import ParameterError
 from magnetics.circuit import path_from_section
 from magnetics.dynamics import torque_response
@@ -58,6 +57,7 @@ from mrclutch.clutch import (
     fluid_limit,
 )
 from mrclutch.design import ClutchDesign
+from mrclutch.design_network import section_network
 from mrclutch.duty import evaluation_duty
 from mrclutch.fast_batch import BatchEvaluator, evaluate_batch
 from mrclutch.feel import feel_figures
@@ -198,11 +198,12 @@ def evaluate(
     (relative): pick per quantity the cheapest method that meets it (mrclutch.trust.choose);
     the Evaluation's fidelity then reads "accuracy=…". The design's own ``[render]`` rule
     is applied by ``mrclutch.verdict.judge``, which calls this."""  # fmt: skip
-    fig = clutch_figures(design, fidelity, accuracy)
+    # one section and one circuit: the thermal rating's, the torque response's and the feel's
+    section, _ = section_network(design.clutch, design.materials)
+    path = path_from_section(section)
+    fig = clutch_figures(design, fidelity, accuracy, path=path)
     if accuracy is not None:
         fidelity = f"accuracy={accuracy:g}"
-    section = build_section(design.clutch, design.materials)
-    path = path_from_section(section)  # one circuit: the torque response's and the feel's
     resp = torque_response(
         section.table,
         fig.max_current,
