@@ -118,6 +118,7 @@ def march(
     h = duration / steps
     s = np.sqrt(cap)  # C^½: C⁻¹G' is similar to the symmetric C^-½ G' C^-½
     s_inv = 1 / s
+    ss = np.outer(s, s)  # every step's C^½ C^½ᵀ (``_expm_sym``)
     t = np.full(3, float(net.ambient))
     temps, cur, pw = [t.copy()], [], []
     x_last = g = e = None
@@ -130,7 +131,7 @@ def march(
         if not (x_last is not None and x == x_last):
             g = g0.copy()
             g[0, 0] -= x * a  # the coil's R(T): its Joule heat rises with its temperature
-            e = _expm_sym(g, s, h)
+            e = _expm_sym(g, s, h, ss)
             x_last = x
         q = np.array([x * c, ld.slip_power, to_air * net.ambient])
         t_star = np.linalg.solve(g, q)
@@ -184,8 +185,9 @@ def march_batch(
                  np.array(pw))  # fmt: skip
 
 
-def _expm_sym(g: np.ndarray, s: np.ndarray, h: float) -> np.ndarray:
+def _expm_sym(g: np.ndarray, s: np.ndarray, h: float, ss: np.ndarray | None = None) -> np.ndarray:
     """e^{−M h} of M = C^-½ G C^-½ (symmetric, ``s`` = C^½) by its eigenvectors, so that
-    e^{−C⁻¹G h} = C^-½ e^{−M h} C^½."""
-    lam, v = np.linalg.eigh(g / np.outer(s, s))
+    e^{−C⁻¹G h} = C^-½ e^{−M h} C^½. ``ss``: ``np.outer(s, s)`` if already formed (a
+    march's steps share it)."""
+    lam, v = np.linalg.eigh(g / (np.outer(s, s) if ss is None else ss))
     return (v * np.exp(-lam * h)) @ v.T
