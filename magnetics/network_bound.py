@@ -121,10 +121,12 @@ def network_features(p: Mapping[str, Any], ampere_turns: Any) -> dict[str, np.nd
     return per_topology(q, valid(q), one)
 
 
-def solved_features(net: Network, ampere_turns: np.ndarray) -> dict[str, np.ndarray]:
+def solved_features(net: Network, ampere_turns: np.ndarray, flux: np.ndarray | None = None
+                    ) -> dict[str, np.ndarray]:  # fmt: skip
     """``solution_features`` (each (S,)) of the network ``net`` of S designs solved at N·I
-    ``ampere_turns`` (S,), one current a design."""
-    x = solve_network(net, np.asarray(ampere_turns, dtype=float)[:, None])
+    ``ampere_turns`` (S,), one current a design; ``flux``: its loop fluxes (S, 1, ·) at
+    that N·I if already solved (``solve_network``), else solved here."""
+    x = solve_network(net, np.asarray(ampere_turns, dtype=float)[:, None]) if flux is None else flux
     return {k: v[:, 0] for k, v in solution_features(net, x).items()}
 
 

@@ -127,12 +127,14 @@ def torque_curve(
     fem_mesh: str = "uniform",
     convention: str = DEFAULT_CONVENTION,
     network: Network | None = None,
+    flux: FloatArray | None = None,
 ) -> TorqueCurve:
     """Torque of ``clutch`` (or its already built section) at ``currents`` (A) by the
     circuit, the network or the FEM (``METHODS``), the drag at ``speed_rpm`` and fluid
     ``temperature`` (°C) added. ``network``: the section's reluctance network already
     built with ``materials`` (``network_from_regions``; mrclutch.design_network keeps one
-    per design), solved in place of building it again.
+    per design), solved in place of building it again; ``flux``: its loop fluxes (1, C, ·)
+    at ``currents`` if already solved there (``solve_network``), read instead of solving.
     ``fem_mesh``: the FEM's "uniform" grid (the error map's reference) or its "graded" one
     (as accurate at the same ``fem_size`` on the paper preset with ~3× fewer unknowns,
     magnetics.fem.grid; benchmarks/bench_fem_speed.py). ``convention``: how each gap's
@@ -156,7 +158,11 @@ def torque_curve(
         if section.table is None:
             raise ParameterError("section: built by hand, without a region table; no network")
         net = network if network is not None else network_from_regions(section.table, materials)
-        per = network_gap_torque(net, cur[None, :], materials, fluid, convention)[0]
+        if flux is None:
+            per = network_gap_torque(net, cur[None, :], materials, fluid, convention)[0]
+        else:
+            mats = MATERIALS if materials is None else materials
+            per = network_film_torque(net, flux, mats, fluid, convention)[0]
         labels = tuple(f"{f}_{z}" for z in ("A", "B") for f in net.film_name)
     else:
         # One grid (its forms' current-independent parts and the Newton preconditioner kept

@@ -29,7 +29,7 @@ from magnetics.torque import (
     torque_curve,
 )
 from mrclutch.design import ClutchDesign, current_notes
-from mrclutch.design_network import network_curve, section_network
+from mrclutch.design_network import network_curve, section_network, solved_at
 from mrclutch.trust import choose, circuit_trust
 
 FIDELITIES: tuple[str, ...] = ("fast", "reference")
@@ -137,12 +137,15 @@ def clutch_figures(
     else:
         inertia_method = "analytic" if fidelity == "fast" else "brep"
         torque_method = "network" if fidelity == "fast" else "fem"
-        if torque_method == "network":  # never a silent wrong number (issue 6)
-            extra = circuit_trust(c, "network", design.current_limit, design.materials)
     i_max = design.current_limit
+    # one network solve at N·I_max: the trust check's features and the torque read it
+    flux = solved_at(net, i_max) if torque_method == "network" else None
+    if accuracy is None and torque_method == "network":  # never a silent wrong number (#6)
+        extra = circuit_trust(c, "network", i_max, design.materials, flux)
     temp = op.fluid_temperature
     if torque_method == "network":  # torque_curve's network branch on the shared network
-        curve = network_curve(section, net, [i_max], op.input_speed_rpm, temp, design.support)
+        curve = network_curve(section, net, [i_max], op.input_speed_rpm, temp, design.support,
+                              flux)  # fmt: skip
     else:
         curve = torque_curve(
             section, [i_max], method=torque_method, speed_rpm=op.input_speed_rpm,

@@ -19,7 +19,7 @@ from geometry.materials import DEFAULT_CHOICE, MaterialChoice
 from geometry.params import DrumClutch
 from geometry.section import Section, build_section
 from magnetics.drag import ROOM_TEMPERATURE, Support
-from magnetics.network import Network, network_from_regions
+from magnetics.network import Network, network_from_regions, solve_network
 from magnetics.torque import TorqueCurve, network_gap_torque, section_fluid, torque_curve
 
 #: Designs whose network a process keeps (an evaluation reads one; a few for a script
@@ -52,8 +52,17 @@ def network_curve(
     speed_rpm: float = 530.0,
     temperature: float = ROOM_TEMPERATURE,
     support: Support | None = None,
+    flux: np.ndarray | None = None,
 ) -> TorqueCurve:
     """``torque_curve(section, currents, "network", speed_rpm, temperature=…, support=…)``
-    on ``net``, the section's network already built (``section_network``)."""
+    on ``net``, the section's network already built (``section_network``); ``flux``: its
+    loop fluxes (1, C, ·) at the currents if already solved (``solved_at``)."""
     return torque_curve(section, currents, "network", speed_rpm, temperature=temperature,
-                        support=support, network=net)  # fmt: skip
+                        support=support, network=net, flux=flux)  # fmt: skip
+
+
+def solved_at(net: Network, current: float) -> np.ndarray:
+    """The loop fluxes (1, 1, ·) of the one-design network ``net`` at ``current`` (A), solved
+    as ``torque_curve`` solves them (``solve_network`` at N·I, the default materials, from
+    the linear start): the torque's and the trust check's one solve (issue 40)."""
+    return solve_network(net, net.turns[:, None] * np.array([[float(current)]]))

@@ -85,18 +85,20 @@ def linear_circuit_trust(clutch: Any, current: float) -> tuple[str, ...]:
 
 def circuit_trust(
     clutch: Any, model: str = "circuit", current: float | None = None,
-    materials: MaterialChoice = DEFAULT_CHOICE,
+    materials: MaterialChoice = DEFAULT_CHOICE, flux: np.ndarray | None = None,
 ) -> tuple[str, ...]:  # fmt: skip
     """Messages if the saturating circuit's torque (``model`` "network": the reluctance
     network's at ``current`` [A]) may be more than CIRCUIT_TORQUE_TRUST off the FEM on
     ``clutch``: the measured error map's bound (magnetics.error_map; the network's covers
     every dimension, magnetics.network_bound), or the design lies outside what was
     measured (error unknown; the network's for a material set never measured, ``materials``:
-    ``material_set``)."""
+    ``material_set``). ``flux``: the network's loop fluxes (1, 1, ·) at ``current`` on the
+    process's shared network (``section_network``) if already solved (the torque's solve,
+    ``mrclutch.clutch``), read instead of solving it again."""
     key = material_set(materials)
     features = None
     if model == "network" and current is not None:
-        features = _shared_features(clutch, current, materials, key)
+        features = _shared_features(clutch, current, materials, key, flux)
     e = circuit_error(clutch, model, current, key, features)
     if not math.isfinite(e.bound):
         return e.notes
@@ -111,8 +113,9 @@ def circuit_trust(
 
 
 def _shared_features(
-    clutch: Any, current: float, materials: MaterialChoice, key: str
-) -> Mapping[str, np.ndarray] | None:
+    clutch: Any, current: float, materials: MaterialChoice, key: str,
+    flux: np.ndarray | None = None,
+) -> Mapping[str, np.ndarray] | None:  # fmt: skip
     """The network bound's solution features of ``clutch`` at ``current`` [A] solved on the
     process's shared network (``section_network``, which evaluate has built already)
     rather than on one ``network_bound`` would build again (issue 40). None (the bound
@@ -129,7 +132,7 @@ def _shared_features(
     if not bound.scaled(p, ni)[1].all():
         return None
     _, net = section_network(clutch, materials)
-    return solved_features(net, ni.reshape(1))
+    return solved_features(net, ni.reshape(1), flux)
 
 
 def material_set(materials: MaterialChoice) -> str:

@@ -20,8 +20,10 @@ from mrclutch.design_network import (
     network_yield,
     section_fluid,
     section_network,
+    solved_at,
 )
 from mrclutch.duty import GRID, design_context
+from mrclutch.trust import _shared_features, circuit_trust, material_set
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -49,6 +51,35 @@ def test_network_curve_is_torque_curves_network_branch_to_the_last_digit(k: int)
     assert (got.speed_rpm, got.off_state_torque, got.damping) == (
         ref.speed_rpm, ref.off_state_torque, ref.damping)  # fmt: skip
     assert np.array_equal(network_yield(section, net, cur), ref.yield_torque)
+
+
+@pytest.mark.parametrize("k", range(3))
+def test_one_solve_at_the_limit_serves_the_torque_and_the_trust_check(k: int) -> None:
+    """clutch_figures solves the network once at N·I_max (``solved_at``) and hands the loop
+    fluxes to the torque curve and to the trust check: the curve read from them is
+    torque_curve's own solve, every field to the bit, and the trust check's notes are
+    those it gives solving on its own (the paper preset, thin drums, a 2-drum variant)."""
+    d = _designs()[k]
+    section, net = section_network(d.clutch, d.materials)
+    i = d.current_limit
+    flux = solved_at(net, i)
+    ref = torque_curve(build_section(d.clutch, d.materials), [i], method="network",
+                       speed_rpm=300.0, temperature=35.0)  # fmt: skip
+    got = network_curve(section, net, [i], 300.0, 35.0, None, flux)
+    for name in ("torque", "yield_torque", "gap_torque"):
+        assert np.array_equal(getattr(got, name), getattr(ref, name)), name
+    assert circuit_trust(d.clutch, "network", i, d.materials, flux) == circuit_trust(
+        d.clutch, "network", i, d.materials)  # fmt: skip
+    key = material_set(d.materials)
+    own = _shared_features(d.clutch, i, d.materials, key)
+    read = _shared_features(d.clutch, i, d.materials, key, flux)
+    assert (own is None) == (read is None) and (k != 0 or own is not None)  # paper: solved
+    if own is not None:
+        assert own.keys() == read.keys()
+        assert all(np.array_equal(own[f], read[f]) for f in own)
+    other = solved_at(net, 0.5 * i)  # fluxes of another current: another torque
+    assert not np.array_equal(network_curve(section, net, [i], 300.0, 35.0, None,
+                                            other).torque, ref.torque)  # fmt: skip
 
 
 def test_one_network_per_design_built_once_and_equal_to_a_fresh_build() -> None:
