@@ -13,8 +13,14 @@ included: what ``sweep --pareto`` adds after its rows), ``pareto_plot`` on those
   the valid designs, what a plot without samples draws).
 
 Prints the median wall and CPU time (user + system of the child, what a loaded machine
-inflates least) of ``--rounds`` runs, each step's share (read, fronts, drawing, PNG) and
-the ratio of the two, with the machine and its load average: times are this machine's.
+inflates least) of ``--rounds`` runs, the CPU of the plot's own thread (its critical path:
+the rows are read and their fronts found on a second thread beside matplotlib's import),
+each step's share (the module's import; matplotlib's import with the rows read and their
+fronts found beside it; drawing; PNG) and the ratio of the two, with the machine and its
+load average: times are this machine's. Bytecode is cached in a temporary
+``PYTHONPYCACHEPREFIX`` (``PYTHONDONTWRITEBYTECODE`` dropped; an untimed first run of each
+checkout writes it), as an installed package has its ``.pyc`` files: without it every
+round compiles the project's modules again (~0.3 s of CPU here).
 Then the shipped plot as ``sweep --pareto`` waits for it after its bar: in a process that
 has first loaded what that command has (its module, and through it the plot's), the plot's
 own wall and CPU, from the plot module's import to the PNG.
@@ -44,16 +50,17 @@ CHILD = r"""
 import json, sys, time
 if sys.argv[4] == "command":  # what sweep --pareto has loaded when its rows are written
     import mrclutch.cli.commands.sweep
-t0, c0 = time.perf_counter(), time.process_time()
+t0, c0, m0 = time.perf_counter(), time.process_time(), time.thread_time()
 import mrclutch.cli.plots.design as d
 if sys.argv[3] == "all":
     d.MAX_POINTS = d.MAX_LINES = d.MAX_REST_LINES = 10**9
 marks = [time.perf_counter()]
 d.pareto_plot(sys.argv[1], sys.argv[2], progress=lambda n: marks.append(time.perf_counter()))
 print(json.dumps({"import": marks[0] - t0, "steps": [b - a for a, b in zip(marks, marks[1:])],
-                  "total": marks[-1] - t0, "cpu": time.process_time() - c0, "file": d.__file__}))
+                  "total": marks[-1] - t0, "cpu": time.process_time() - c0,
+                  "main_cpu": time.thread_time() - m0, "file": d.__file__}))
 """
-STEPS = ("read", "fronts", "drawing", "PNG")
+STEPS = ("matplotlib's import and the rows' data", "", "drawing", "PNG")
 
 
 def _child_cpu() -> float:
@@ -61,13 +68,17 @@ def _child_cpu() -> float:
     return r.ru_utime + r.ru_stime
 
 
-def plot_once(csv: Path, png: Path, mode: str, root: Path = ROOT,
-              start: str = "fresh") -> tuple[float, float, dict]:  # fmt: skip
+def plot_once(csv: Path, png: Path, mode: str, root: Path = ROOT, start: str = "fresh",
+              pyc: Path | None = None) -> tuple[float, float, dict]:  # fmt: skip
     """(wall s, CPU s, the child's step times) of one plot in a fresh process, with the
     checkout ``root`` first on the path; ``start="command"``: the child first imports what
     ``sweep --pareto`` has loaded before its plot (its command module), and the wall and
-    CPU are the plot's own (from its module's import to the PNG), as that command waits."""
-    env = {**os.environ, "PYTHONPATH": f"{root}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"}
+    CPU are the plot's own (from its module's import to the PNG), as that command waits;
+    ``pyc``: the folder of the bytecode cache (``PYTHONPYCACHEPREFIX``)."""
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    env["PYTHONPATH"] = f"{root}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"
+    if pyc is not None:
+        env["PYTHONPYCACHEPREFIX"] = str(pyc)
     cpu0, t0 = _child_cpu(), time.perf_counter()
     # run in ``root``: ``python -c`` puts the working folder first on the path, before
     # PYTHONPATH (from elsewhere, --against timed this checkout twice)
@@ -93,18 +104,27 @@ def sweep_rows(tmp: Path) -> Path:
     return csv
 
 
+def _median(runs: list[tuple[float, float, dict]]) -> tuple[float, float, float]:
+    """Median wall, CPU and the plot thread's own CPU of ``plot_once`` runs."""
+    return (statistics.median(r[0] for r in runs), statistics.median(r[1] for r in runs),
+            statistics.median(r[2]["main_cpu"] for r in runs))  # fmt: skip
+
+
 def _against(csv: Path, tmp: Path, other: Path, rounds: int) -> None:
     """The shipped plot here and in ``other``, the rounds alternating (both on one load):
-    median wall and CPU of each and their ratio."""
+    median wall and CPU of each and their ratio (each checkout's bytecode written first,
+    untimed)."""
     runs: dict[Path, list[tuple[float, float, dict]]] = {ROOT: [], other: []}
+    for root in runs:
+        plot_once(csv, tmp / "ab.png", "shipped", root, pyc=tmp / "pyc")
     for _ in range(rounds):
         for root in runs:
-            runs[root].append(plot_once(csv, tmp / "ab.png", "shipped", root))
-    med = {root: (statistics.median(r[0] for r in rs), statistics.median(r[1] for r in rs))
-           for root, rs in runs.items()}  # fmt: skip
-    for root, (wall, cpu) in med.items():
-        print(f"as shipped, {str(root)[-28:]:>28s}: wall {wall:6.2f} s  CPU {cpu:6.2f} s")
-    (w1, c1), (w0, c0) = med[ROOT], med[other]
+            runs[root].append(plot_once(csv, tmp / "ab.png", "shipped", root, pyc=tmp / "pyc"))
+    med = {root: _median(rs) for root, rs in runs.items()}
+    for root, (wall, cpu, main_cpu) in med.items():
+        print(f"as shipped, {str(root)[-28:]:>28s}: wall {wall:6.2f} s  CPU {cpu:6.2f} s "
+              f"(the plot's thread {main_cpu:.2f} s)")  # fmt: skip
+    (w1, c1, _), (w0, c0, _) = med[ROOT], med[other]
     print(f"this checkout / {other.name}: wall ratio {w1 / w0:.2f}, CPU ratio {c1 / c0:.2f}")
 
 
@@ -126,23 +146,27 @@ def main() -> None:
         csv = args.csv if args.csv is not None else sweep_rows(tmp)
         rows = sum(1 for _ in csv.open()) - 1
         print(f"rows: {rows} ({csv})")
+        pyc = tmp / "pyc"
+        plot_once(csv, tmp / "warm.png", "shipped", pyc=pyc)  # the bytecode written, untimed
         result = {}
         for mode, what in (("shipped", "as shipped (binned)"), ("all", "everything drawn")):
-            runs = [plot_once(csv, tmp / f"{mode}.png", mode) for _ in range(args.rounds)]
-            wall = statistics.median(r[0] for r in runs)
-            cpu = statistics.median(r[1] for r in runs)
+            runs = [plot_once(csv, tmp / f"{mode}.png", mode, pyc=pyc)
+                    for _ in range(args.rounds)]  # fmt: skip
+            wall, cpu, main_cpu = _median(runs)
             mid = sorted(runs, key=lambda r: r[0])[len(runs) // 2][2]
-            steps = ", ".join(f"{n} {s:.2f}" for n, s in zip(STEPS, mid["steps"], strict=False))
+            steps = "; ".join(f"{n} {s:.2f}" for n, s in zip(STEPS, mid["steps"], strict=False)
+                              if n)  # fmt: skip
             result[mode] = (wall, cpu)
             goal = f"  (goal <= {GOAL_S:g} s)" if mode == "shipped" else ""
-            print(f"{what:24s} wall {wall:6.2f} s  CPU {cpu:6.2f} s{goal}\n"
-                  f"{'':24s} import {mid['import']:.2f} s; steps (s): {steps}")  # fmt: skip
+            print(f"{what:24s} wall {wall:6.2f} s  CPU {cpu:6.2f} s, the plot's thread "
+                  f"{main_cpu:.2f} s{goal}\n"
+                  f"{'':24s} steps (wall, s): the module's import {mid['import']:.2f}; "
+                  f"{steps}")  # fmt: skip
         (w1, c1), (w2, c2) = result["shipped"], result["all"]
         print(f"everything drawn / as shipped: wall ratio {w2 / w1:.1f}, CPU ratio {c2 / c1:.1f}")
-        runs = [plot_once(csv, tmp / "command.png", "shipped", start="command")
+        runs = [plot_once(csv, tmp / "command.png", "shipped", start="command", pyc=pyc)
                 for _ in range(args.rounds)]  # fmt: skip
-        wall = statistics.median(r[0] for r in runs)
-        cpu = statistics.median(r[1] for r in runs)
+        wall, cpu, _ = _median(runs)
         print(
             f"{'in sweep --pareto':24s} wall {wall:6.2f} s  CPU {cpu:6.2f} s  (the plot "
             f"alone, after the modules the sweep has loaded: what it waits after its bar)"

@@ -263,3 +263,65 @@ def test_the_fixed_layout_keeps_every_text_inside_and_apart(tmp_path, monkeypatc
     title = fig._suptitle.get_window_extent(renderer)
     assert fig._suptitle.get_text().count("\n") == (2 if n > 10_000 else 1)
     assert page.y1 >= title.y1 and not any(_boxes_overlap(title, b) for b in boxes)
+
+
+def test_the_rows_are_read_beside_matplotlibs_import_and_their_errors_come_back(
+    tmp_path, monkeypatch
+):
+    """``pareto_plot`` reads the rows and finds their fronts on a second thread while it
+    imports matplotlib (issue 40): the reader runs off the calling thread, and a file the
+    reader refuses (no ``clutch_mass_kg`` column) raises its error in the caller, with no
+    PNG written."""
+    import threading
+
+    import mrclutch.cli.plots.design as design_plots
+
+    seen, real = [], design_plots.plot_columns
+
+    def spy(results):
+        seen.append(threading.current_thread())
+        return real(results)
+
+    monkeypatch.setattr(design_plots, "plot_columns", spy)
+    n = 50
+    cols = {"valid": np.ones(n), "bandwidth_hz": np.linspace(10, 60, n),
+            "max_torque_N_m": np.linspace(2, 0.5, n), "drag_damping_N_m_s": np.full(n, 1e-4),
+            "clutch_mass_kg": np.full(n, 0.1)}  # fmt: skip
+    pareto_plot(_results_csv(tmp_path / "r.csv", cols), tmp_path / "p.png")
+    assert len(seen) == 1 and seen[0] is not threading.main_thread()
+    del cols["clutch_mass_kg"]
+    with pytest.raises(Exception, match="clutch_mass_kg"):
+        pareto_plot(_results_csv(tmp_path / "bad.csv", cols), tmp_path / "bad.png")
+    assert not (tmp_path / "bad.png").exists()
+
+
+def test_the_sweep_plot_loads_neither_pyplot_nor_the_solids(tmp_path):
+    """In a process of its own, the sweep plot draws on an Agg canvas without pyplot (its
+    import ~0.06 s) and without mrclutch.solids (the section figure's materials, ~0.08 s):
+    ``save_png`` closes a pyplot figure only where pyplot is loaded (issue 40)."""
+    n = 30
+    cols = {"valid": np.ones(n), "bandwidth_hz": np.linspace(10, 60, n),
+            "max_torque_N_m": np.linspace(2, 0.5, n), "drag_damping_N_m_s": np.full(n, 1e-4),
+            "clutch_mass_kg": np.full(n, 0.1)}  # fmt: skip
+    csv = _results_csv(tmp_path / "r.csv", cols)
+    code = ("import sys\nfrom mrclutch.cli.plots.design import pareto_plot\n"
+            f"pareto_plot({str(csv)!r}, {str(tmp_path / 'p.png')!r})\n"
+            "print(sorted(m for m in ('matplotlib.pyplot', 'mrclutch.solids') "
+            "if m in sys.modules))")  # fmt: skip
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                       timeout=300)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "p.png").stat().st_size > 1000
+    assert r.stdout.strip() == "[]"
+
+
+def test_the_parallel_coordinates_lines_are_the_scaled_rows():
+    """Each line of the parallel-coordinates panel runs through the axes 0, 1, 2 at its
+    row's scaled values."""
+    from mrclutch.cli.plots.design import _lines
+
+    scaled = np.array([[0.0, 0.5, 1.0], [1.0, 0.25, 0.0]])
+    lines = _lines(scaled)
+    assert lines.shape == (2, 3, 2)
+    for j in range(2):
+        np.testing.assert_array_equal(lines[j], np.column_stack([np.arange(3.0), scaled[j]]))

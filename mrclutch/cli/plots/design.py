@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from mrclutch.cli.plots import save_png, stack_axes
-from mrclutch.solids import material_colour, material_label
 from mrclutch.sweep import is_parquet, pareto_front, read_results
 
 __all__ = ["pareto_plot", "pareto_set_plot", "read_results"]
@@ -62,7 +63,10 @@ def plot_columns(results: str | Path, names: tuple[str, ...] = PLOT_COLUMNS) -> 
 
     conv = csv.ConvertOptions(include_columns=list(names),
                               column_types={k: pa.float64() for k in names})  # fmt: skip
-    table = csv.read_csv(results, convert_options=conv)
+    # one thread: the plot reads beside matplotlib's import (``pareto_plot``), and pyarrow's
+    # pool would take the core that import runs on (10⁵ rows: ~0.2 s of CPU either way)
+    table = csv.read_csv(results, read_options=csv.ReadOptions(use_threads=False),
+                         convert_options=conv)  # fmt: skip
     return {k: table[k].to_numpy(zero_copy_only=False).astype(float) for k in names}
 
 
@@ -128,6 +132,90 @@ def _span(values: np.ndarray, unit: str) -> str:
     return f"{values[0]:.3g} – {values[1]:.3g} {unit}"
 
 
+@dataclass(frozen=True)
+class PlotData:
+    """What ``pareto_plot`` draws of a sweep's rows, found before matplotlib is needed: the
+    valid designs' bandwidth (Hz), max torque (N·m), damping (µN·m·s) and mass (g); the
+    mask of the three-objective front; each top panel's two-objective front (indices in
+    the panel's x order) and, past ``MAX_POINTS`` designs, its cells (``binned_mean``);
+    the parallel-coordinates panel's lines (n × 3 × 2: axis, 0 worst … 1 best) of the
+    front's sample and of the grey sample of the others, with the count of those others
+    and each axis' range worst to best (None without a valid design)."""
+
+    rows: int
+    bw: np.ndarray
+    tq: np.ndarray
+    damp: np.ndarray
+    mass: np.ndarray
+    front: np.ndarray
+    fronts: tuple[np.ndarray, np.ndarray]
+    cells: tuple[Any, Any]
+    shown: np.ndarray
+    grey: np.ndarray
+    rest: int
+    ranges: list[tuple[float, float]] | None
+
+
+def plot_data(results: str | Path) -> PlotData:
+    """``PlotData`` of a sweep's results (its five ``PLOT_COLUMNS``)."""
+    r = plot_columns(results)
+    ok = r["valid"] == 1
+    bw, tq = r["bandwidth_hz"][ok], r["max_torque_N_m"][ok]
+    damp, mass = r["drag_damping_N_m_s"][ok] * 1e6, r["clutch_mass_kg"][ok] * 1e3
+    front = pareto_front(np.column_stack([bw, tq, damp]), [True, True, False])
+    binned = bw.size > MAX_POINTS
+    fronts, cells = [], []
+    for x, big in ((tq, True), (damp, False)):
+        k = np.flatnonzero(pareto_front(np.column_stack([bw, x]), [True, big]))
+        fronts.append(k[np.argsort(x[k])])
+        cells.append(binned_mean(x, bw, mass) if binned else None)
+    lines = np.empty((0, 3, 2))
+    shown, grey, rest, ranges = lines, lines, 0, None
+    if ok.any():
+        cols = [bw, tq, -damp]  # larger is better on every axis
+        lo = [float(np.nanmin(c)) for c in cols]
+        hi = [float(np.nanmax(c)) for c in cols]
+        scaled = np.column_stack([(c - a) / (b - a) if b > a else np.ones_like(c)
+                                  for c, a, b in zip(cols, lo, hi, strict=True)])  # fmt: skip
+        ranges = [(lo[0], hi[0]), (lo[1], hi[1]), (-lo[2], -hi[2])]  # worst to best
+        k = np.flatnonzero(front)
+        others = np.flatnonzero(~front & np.all(np.isfinite(scaled), axis=1))
+        rest = int(others.size)
+        grey = _lines(scaled[others[sample_rows(others.size, MAX_REST_LINES, seed=1)]])
+        shown = _lines(scaled[sample_lines(k[np.argsort(bw[k], kind="stable")], MAX_LINES)])
+    return PlotData(int(ok.size), bw, tq, damp, mass, front, (fronts[0], fronts[1]),
+                    (cells[0], cells[1]), shown, grey, rest, ranges)  # fmt: skip
+
+
+def _lines(scaled: np.ndarray) -> np.ndarray:
+    """Parallel-coordinates lines (n × 3 × 2) of scaled rows (n × 3): x the axis 0, 1, 2."""
+    x3 = np.broadcast_to(np.arange(3.0), scaled.shape)
+    return np.stack([x3, scaled], axis=2)
+
+
+def _in_background(fn: Callable[..., Any], *args: Any) -> Callable[[], Any]:
+    """``fn(*args)`` started on a thread of its own; returns a wait that gives its result
+    or raises its exception here."""
+    box: dict[str, Any] = {}
+
+    def run() -> None:
+        try:
+            box["value"] = fn(*args)
+        except BaseException as e:  # raised again in the waiting thread
+            box["error"] = e
+
+    thread = threading.Thread(target=run, name="mrclutch-plot-data", daemon=True)
+    thread.start()
+
+    def wait() -> Any:
+        thread.join()
+        if "error" in box:
+            raise box["error"]
+        return box["value"]
+
+    return wait
+
+
 def pareto_plot(results: str | Path, out: str | Path,
                 progress: Callable[[int], None] | None = None) -> Path:  # fmt: skip
     """The Pareto front of three objectives: rendering bandwidth (max), max torque (max) and
@@ -140,7 +228,12 @@ def pareto_plot(results: str | Path, out: str | Path,
     design; at most ``MAX_LINES`` lines, evenly spaced along the front, ``sample_lines``)
     over a random sample of at most ``MAX_REST_LINES`` of the other valid designs in grey.
     Every sample is said on the figure. ``progress(n)``: called with the steps done of
-    ``PLOT_STEPS`` (read, fronts, drawn, written)."""
+    ``PLOT_STEPS`` (read, fronts, drawn, written).
+
+    The rows are read and their fronts found (``plot_data``) on a second thread while this
+    one imports matplotlib (issue 40: ~0.7 s of CPU in a fresh process; pyarrow's parser
+    and numpy's sorts run without the GIL)."""
+    data = _in_background(plot_data, results)
     import matplotlib
 
     matplotlib.use("Agg")  # whatever imports pyplot after: never a window
@@ -149,34 +242,29 @@ def pareto_plot(results: str | Path, out: str | Path,
     from matplotlib.figure import Figure
 
     step = progress if progress is not None else (lambda _n: None)
-    r = plot_columns(results)
-    step(1)
-    ok = r["valid"] == 1
-    bw, tq = r["bandwidth_hz"][ok], r["max_torque_N_m"][ok]
-    damp, mass = r["drag_damping_N_m_s"][ok] * 1e6, r["clutch_mass_kg"][ok] * 1e3
-    front = pareto_front(np.column_stack([bw, tq, damp]), [True, True, False])
-    step(2)
+    d = data()
+    step(1)  # the rows read and
+    step(2)  # their fronts found, beside matplotlib's import
+    bw, tq, damp, front = d.bw, d.tq, d.damp, d.front
     fig = Figure(figsize=FIGSIZE)  # no pyplot: nothing to manage
     FigureCanvasAgg(fig)
     axes = [fig.add_axes(rect) for rect in _panel_rects()]  # a fixed layout (issue 40)
-    binned = bw.size > MAX_POINTS
-    span = {"vmin": np.nanmin(mass), "vmax": np.nanmax(mass)} if mass.size else {}  # all rows'
-    for ax, x, label, big in ((axes[0], tq, "max torque (N·m; more is better)", True),
-                              (axes[1], damp, "viscous damping (µN·m·s; less is better)",
-                               False)):  # fmt: skip
-        if binned:  # every design, in cells: one image, not 10⁵ markers
-            mean, xe, ye = binned_mean(x, bw, mass)
+    span = {"vmin": np.nanmin(d.mass), "vmax": np.nanmax(d.mass)} if d.mass.size else {}
+    for ax, x, two, cells, label, big in (
+        (axes[0], tq, d.fronts[0], d.cells[0], "max torque (N·m; more is better)", True),
+        (axes[1], damp, d.fronts[1], d.cells[1], "viscous damping (µN·m·s; less is better)",
+         False),
+    ):  # fmt: skip
+        if cells is not None:  # every design, in cells: one image, not 10⁵ markers
+            mean, xe, ye = cells
             sc = ax.imshow(mean, origin="lower", extent=(xe[0], xe[-1], ye[0], ye[-1]),
                            aspect="auto", interpolation="nearest", cmap="viridis",
                            **span)  # fmt: skip
         else:
-            sc = ax.scatter(x, bw, c=mass, s=6, cmap="viridis", alpha=0.6, linewidths=0,
+            sc = ax.scatter(x, bw, c=d.mass, s=6, cmap="viridis", alpha=0.6, linewidths=0,
                             **span)  # fmt: skip
-        two = pareto_front(np.column_stack([bw, x]), [True, big])
-        k = np.flatnonzero(two)
-        k = k[np.argsort(x[k])]
-        ax.step(x[k], bw[k], where="post" if big else "pre", color="k", lw=1,
-                label=f"front of these two axes ({two.sum()})")  # fmt: skip
+        ax.step(x[two], bw[two], where="post" if big else "pre", color="k", lw=1,
+                label=f"front of these two axes ({two.size})")  # fmt: skip
         ax.scatter(x[front], bw[front], s=22, facecolors="none", edgecolors="crimson",
                    linewidths=0.8, label=f"front of all three ({front.sum()})")  # fmt: skip
         ax.set_xlabel(label)
@@ -187,32 +275,20 @@ def pareto_plot(results: str | Path, out: str | Path,
     ax = axes[2]
     title = "the three-objective front (crimson) on its own axes"
     names = ["bandwidth (Hz)\n(max)", "max torque (N·m)\n(max)", "damping (µN·m·s)\n(min)"]
-    if ok.any():
-        cols = [bw, tq, -damp]  # larger is better on every axis
-        lo = [float(np.nanmin(c)) for c in cols]
-        hi = [float(np.nanmax(c)) for c in cols]
-        scaled = np.column_stack([(c - a) / (b - a) if b > a else np.ones_like(c)
-                                  for c, a, b in zip(cols, lo, hi, strict=True)])  # fmt: skip
-        ranges = [(lo[0], hi[0]), (lo[1], hi[1]), (-lo[2], -hi[2])]  # worst to best
+    if d.ranges is not None:
         names = [f"{n}\n{_span(v, u)}" for n, v, u in
-                 zip(names, ranges, ("Hz", "N·m", "µN·m·s"), strict=True)]  # fmt: skip
-        k = np.flatnonzero(front)
-        rest = np.flatnonzero(~front & np.all(np.isfinite(scaled), axis=1))
-        grey = rest[sample_rows(rest.size, MAX_REST_LINES, seed=1)]
-        shown = sample_lines(k[np.argsort(bw[k], kind="stable")])
-        x3 = np.arange(3.0)
-        ax.add_collection(LineCollection([np.column_stack([x3, scaled[j]]) for j in grey],
-                                         colors="0.45", alpha=0.25, linewidths=0.6,
+                 zip(names, d.ranges, ("Hz", "N·m", "µN·m·s"), strict=True)]  # fmt: skip
+        ax.add_collection(LineCollection(d.grey, colors="0.45", alpha=0.25, linewidths=0.6,
                                          zorder=1))  # fmt: skip
-        ax.add_collection(LineCollection([np.column_stack([x3, scaled[j]]) for j in shown],
-                                         colors="crimson", alpha=0.45, linewidths=0.7,
-                                         zorder=2))  # fmt: skip
-        if shown.size < k.size:
-            title += f"\n({shown.size} of its {k.size} designs, evenly spaced in bandwidth)"
-        if grey.size < rest.size:
-            title += f"\ngrey: a random sample of {grey.size} of the other {rest.size} designs"
-        elif rest.size:
-            title += f"\ngrey: the other {rest.size} designs"
+        ax.add_collection(LineCollection(d.shown, colors="crimson", alpha=0.45,
+                                         linewidths=0.7, zorder=2))  # fmt: skip
+        n_front, n_rest = int(front.sum()), d.rest
+        if len(d.shown) < n_front:
+            title += f"\n({len(d.shown)} of its {n_front} designs, evenly spaced in bandwidth)"
+        if len(d.grey) < n_rest:
+            title += f"\ngrey: a random sample of {len(d.grey)} of the other {n_rest} designs"
+        elif n_rest:
+            title += f"\ngrey: the other {n_rest} designs"
     ax.set_xticks(range(3), names, fontsize=9)
     ax.set_yticks([0, 1], ["worst", "best"])
     ax.set_xlim(-0.1, 2.1)
@@ -220,9 +296,9 @@ def pareto_plot(results: str | Path, out: str | Path,
     ax.set_title(title, fontsize=10)
     ax.grid(alpha=0.3)
     how = (f";\nbinned in {BINS[0]} × {BINS[1]} cells, each the mean mass of its designs"
-           if binned else "")  # fmt: skip
+           if d.cells[0] is not None else "")  # fmt: skip
     fig.suptitle(f"Pareto front: max bandwidth, max torque, min damping\n"
-                 f"({ok.sum()} valid designs of {ok.size}{how})", fontsize=11,
+                 f"({bw.size} valid designs of {d.rows}{how})", fontsize=11,
                  y=1 - TITLE_PAD / FIGSIZE[1])  # fmt: skip
     step(3)
     save_png(fig, out, dpi=110)
@@ -256,6 +332,8 @@ def section_figure(section: object, out: str | Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.patches import Patch, Rectangle
+
+    from mrclutch.solids import material_colour, material_label  # not the sweep plot's
 
     fig, ax = plt.subplots(figsize=(6, 6))
     stack_axes(fig, 1, SECTION_MARGINS, 0.0)  # a fixed layout (issue 40)
