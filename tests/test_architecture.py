@@ -39,6 +39,11 @@ LAZY_OK = {
     "ezdxf": "≈ 0.5 s; only when a DXF of the section is written",
     "tomllib": "stdlib, pure Python: ~18M instructions, 4 % of a preset's analytic inertia; "
     "only where a TOML text is parsed (a preset's materials come from their cache)",
+    "subprocess": "stdlib, ~6 ms CPU (with selectors, signal) of every evaluate and torque, "
+    "which load the network's compiled kernels but start no process; only where the kernels "
+    "are compiled beside (magnetics.network.compiled)",
+    "html": "stdlib, ~2 ms CPU (html.entities' table) of evaluate; only where HTML is written "
+    "(the report's duty and feel sections: duty_format.duty_html, feel_format.feel_html)",
 }
 
 

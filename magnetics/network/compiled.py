@@ -14,16 +14,18 @@ from __future__ import annotations
 
 import functools
 import os
-import subprocess
 import sys
 import threading
 import time
 import types
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from geometry.atomic import user_cache
 from magnetics.network import kernels
+
+if TYPE_CHECKING:
+    import subprocess
 
 _COMPILE_NOTICE_S = 1.0  # a first compile longer than this says so on stderr
 
@@ -340,6 +342,8 @@ def _compile_beside(names: tuple[str, ...]) -> subprocess.Popen[bytes] | None:
         cores = os.cpu_count() or 1
     if cores < 2:
         return None
+    import subprocess  # only where a process is started: not a one-design command's import
+
     root = str(Path(kernels.__file__).resolve().parents[2])
     path = os.pathsep.join(filter(None, (root, os.environ.get("PYTHONPATH"))))
     code = "import sys\nfrom magnetics.network.compiled import compile_alone\n" \
@@ -356,6 +360,8 @@ def _compile_beside(names: tuple[str, ...]) -> subprocess.Popen[bytes] | None:
 def _wait(child: subprocess.Popen[bytes]) -> None:
     """The second process's end (ended after ``_BESIDE_WAIT_S``: what it has not cached
     compiles here)."""
+    import subprocess
+
     try:
         child.wait(timeout=_BESIDE_WAIT_S)
     except subprocess.TimeoutExpired:

@@ -4,7 +4,6 @@ b1 budget's new terms (``Evaluation.as_json()["duty"]``, mrclutch/duty.py)."""
 from __future__ import annotations
 
 from collections.abc import Mapping
-from html import escape
 from typing import Any
 
 from mrclutch.uncertainty import RANGE_FROM
@@ -65,6 +64,8 @@ def duty_lines(d: Mapping[str, Any]) -> list[str]:
 
 def duty_html(d: Mapping[str, Any]) -> str:
     """The report's section for issue 41: ``duty_lines`` as a list (HTML-escaped)."""
+    from html import escape  # the report's alone: evaluate prints duty_lines as text
+
     lines = [s.strip() for s in duty_lines(d) if s.strip()]
     items = "".join(f"<li>{escape(s)}</li>" for s in lines[1:])
     return (f"<h2>After a duty, and the fluid's life</h2><p class=small>{escape(lines[0])}; "

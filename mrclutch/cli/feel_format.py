@@ -4,7 +4,6 @@ ripple (``Evaluation.as_json()["feel"]``, mrclutch/feel.py; docs/hysteresis.md).
 
 from __future__ import annotations
 
-import html
 from collections.abc import Mapping
 from typing import Any
 
@@ -36,6 +35,8 @@ def feel_lines(f: Mapping[str, Any]) -> list[str]:
 
 def feel_html(f: Mapping[str, Any]) -> str:
     """The report's section of the same lines."""
+    import html  # the report's alone: evaluate prints feel_lines as text
+
     lines = feel_lines(f)
     if not lines:
         return ""
