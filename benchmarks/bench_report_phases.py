@@ -10,7 +10,11 @@ of the report for a CAD result with how long it lasted. The report's process is 
 critical path when it never waits; the CAD process when the waits are long. The CAD
 process runs as the report starts it, with its deferred imports (``defer_imports``), from
 a small wrapper that adds its timestamps. Times are this machine's under its load (the
-load average is printed); compare the CPU columns. ``PYTHONPATH=DIR`` with the working
+load average is printed); compare the CPU columns. Each line also gives the megabytes the
+process has read from the disk so far (``read_bytes`` of ``/proc/self/io``: 0 when the
+libraries are in the page cache; a cold cache, after a reboot or
+``echo 3 > /proc/sys/vm/drop_caches``, reads OpenCascade's and VTK's libraries from the
+disk). ``PYTHONPATH=DIR`` with the working
 folder DIR times another checkout (one without the deferral runs its CAD process without).
 """
 
@@ -30,9 +34,16 @@ ROOT = Path(__file__).resolve().parents[1]
 CHILD = r"""
 import os, sys, time
 t0 = float(os.environ["BENCH_REPORT_T0"])
+def disk():
+    try:
+        with open("/proc/self/io") as f:
+            io = dict(line.split(": ") for line in f.read().splitlines())
+        return f"{int(io['read_bytes']) / 1e6:6.0f} MB"
+    except (OSError, KeyError, ValueError):
+        return "     ? MB"
 def log(what):
-    print(f"cad    {time.time() - t0:7.2f} s  cpu {time.process_time():6.2f} s  {what}",
-          file=sys.stderr, flush=True)
+    print(f"cad    {time.time() - t0:7.2f} s  cpu {time.process_time():6.2f} s  disk {disk()}  "
+          f"{what}", file=sys.stderr, flush=True)
 log("started")
 import mrclutch.cli.report_cad as rc
 log("its modules imported")
@@ -55,6 +66,16 @@ rc._serve(Connection(int(sys.argv[1]), writable=False),
 """
 
 
+def _disk() -> str:
+    """Megabytes this process has read from the disk (``/proc/self/io``), or ``?``."""
+    try:
+        with open("/proc/self/io") as f:
+            io = dict(line.split(": ") for line in f.read().splitlines())
+        return f"{int(io['read_bytes']) / 1e6:6.0f} MB"
+    except (OSError, KeyError, ValueError):
+        return "     ? MB"
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--preset", default="paper")
@@ -64,8 +85,8 @@ def main() -> None:
     os.environ["BENCH_REPORT_T0"] = repr(t0)
 
     def log(what: str) -> None:
-        print(f"report {time.time() - t0:7.2f} s  cpu {time.process_time():6.2f} s  {what}",
-              file=sys.stderr, flush=True)  # fmt: skip
+        print(f"report {time.time() - t0:7.2f} s  cpu {time.process_time():6.2f} s  "
+              f"disk {_disk()}  {what}", file=sys.stderr, flush=True)  # fmt: skip
 
     print(f"load average before: {os.getloadavg()[0]:.2f}", file=sys.stderr)
     log("started")
