@@ -17,33 +17,40 @@ import pytest
 from mrclutch import docs_figures
 
 #: The heaviest work units of the last full run with durations (``CI=1 python -m pytest
-#: --durations=30``, 552 s on 2 workers, loaded machine: each unit's sum of its tests in the
-#: slowest 30, a lower bound for a unit with more tests: the install test 109 s,
-#: test_one_answer 63 s, the GetDP comparisons 54 s, test_report 38 s, the dense robust
-#: sampling 32 s, the kernel's compile tests 28 s, ...), heaviest first. xdist hands the
-#: units out in collection order (``--no-loadscope-reorder``; its default, most tests
-#: first, sent these few-test files last, where one of them ran alone on one worker at the
-#: end); a unit not named here follows, those holding more ``slow`` tests first. Only the
-#: order changes.
+#: --durations=80`` at c4490a3, 597 s on 2 workers, idle: each unit's sum of its tests in
+#: the slowest 80, a lower bound for a unit with more tests: the install test 100 s, the
+#: GetDP comparisons 55 s, test_one_answer 51 s, test_report 39 s, the Dask and Parquet
+#: scale-out 38 s, the Pareto CLI 37 s, test_optimize 35 s, the kernel's compile tests 32
+#: s, the killed sweeps 31 s, ...; the fidelity figures' unit 26 s and the dense robust
+#: sampling 29 s before 9846749 and 27bb597 cut them to ~21 and ~15 s), heaviest first,
+#: down to 10 s. xdist hands the units out in collection order (``--no-loadscope-reorder``;
+#: its default, most tests first, sent these few-test files last, where one of them ran
+#: alone on one worker at the end); a unit not named here follows, those holding more
+#: ``slow`` tests first (test_optimize.py and test_sweep_cli.py hold none: unnamed, they
+#: were handed out 103rd and 119th of 163 units). Only the order changes.
 HEAVY_FIRST = (
     "tests/test_install.py",
-    "tests/mrclutch/test_one_answer.py",
     "tests/magnetics/test_onelab.py",
+    "tests/mrclutch/test_one_answer.py",
     "tests/mrclutch/test_report.py",
-    "tests/mrclutch/test_robust.py",
+    "tests/mrclutch/test_sweep_scaleout.py",
+    "tests/mrclutch/test_optimize_pareto.py",
+    "tests/mrclutch/test_optimize.py",
     "tests/magnetics/test_network_kernel.py",
+    "tests/mrclutch/test_sweep_cli.py",
+    "tests/mrclutch/test_sweep_categorical.py",
+    "figures:mrclutch fidelity --preset paper --out {tmp}/fidelity_errors --repeats 1",
+    "figures:python benchmarks/measure_torque_convention.py",
+    "figures:mrclutch optimize --no-verify --json",
     "tests/mrclutch/test_output_faults.py",
     "tests/mrclutch/test_json_walk.py",
-    "figures:mrclutch optimize --no-verify --json",
-    "tests/mrclutch/test_sweep_scaleout.py",
-    "figures:mrclutch fidelity --preset paper --out {tmp}/fidelity_errors --repeats 1",
-    "tests/mrclutch/test_sweep_categorical.py",
-    "tests/mrclutch/test_optimize_pareto.py",
+    "tests/mrclutch/test_robust.py",
     "tests/mrclutch/test_sweep_interrupts.py",
+    "figures:python benchmarks/figures/circuit_vs_fem_paper.py",
     "figures:python benchmarks/measure_fem_ripple.py",
     "tests/mrclutch/test_cli_geometry.py",
-    "tests/mrclutch/test_help_files.py",
-    "tests/mrclutch/test_robust_inputs.py",
+    "tests/mrclutch/test_optimize_json_walk.py",
+    "figures:python benchmarks/bench_eddy.py",
 )
 
 
