@@ -125,16 +125,16 @@ def evaluate_batch(
     opt-in columns after them: ``max_passive_K_N_per_m`` (``passivity``, about ×1.7 the
     cost), ``max_stable_K_N_per_m`` (``stability``: ``robust_search.stable_stiffness_batch``),
     ``zwidth_area_N2_s_per_m2`` (``zwidth``, about ×7) (``outputs.SWEEP_OPTIONAL``).
-    ``continuous`` False: ``continuous_torque_N_m`` NaN, its thermal network and chords not
+    ``continuous`` False: ``continuous_torque_N_m`` NaN, its thermal network and solves not
     computed (the hand box reads none of it; every other column is unchanged, bit for bit).
 
     The same physics as ``evaluate(design, "fast")``, on arrays: per drum count, the region
     table gives the analytic mass (``region_mass``), the max torque by the reluctance
     network (``network_from_regions``), the circuit (``path_from_regions``: the flux the
     torque response starts from), the drag terms (``drag_terms``), the carried fluid
-    (``coupled_fluid_inertia``) and the continuous rating (``continuous_torque``, its chords
-    through the network's curve from the peak's loop fluxes, ``network_yield_at``); the
-    pair at the hand is ``mr_at_hand``.
+    (``coupled_fluid_inertia``) and the continuous rating (``continuous_torque``, a secant on
+    the network's slope T/I, its solves started from the peak's loop fluxes,
+    ``network_yield_at``); the pair at the hand is ``mr_at_hand``.
     Designs that fail DrumClutch's validation get ``valid = 0`` and NaN outputs; no invalid
     number reaches a solver."""
     base = base if base is not None else ClutchDesign()
@@ -164,8 +164,8 @@ def evaluate_batch(
         with np.errstate(divide="ignore", invalid="ignore"):
             gain = flux / lin
         gain = np.where(np.isfinite(gain) & (gain > 0), gain, 1.0)
-        # the peak and the continuous torque's chords on one packed network and reading
-        # (``network_yield_at``: each chord starts from the last solve's loop fluxes)
+        # the peak and the continuous rating's solves on one packed network and reading
+        # (``network_yield_at``: each solve starts from the last one's loop fluxes)
         at = network_yield_at(ladder)
         out["yield_torque"] = at(current[rows], gain=gain)
         # the network's error bound reads its solution at the peak (no second solve)
@@ -175,7 +175,7 @@ def evaluate_batch(
                                coil_temperature=op.coil_temperature,
                                flux_peak=flux[:, 0])  # fmt: skip
         out["torque_delay"] = resp.equivalent_delay
-        if not continuous:  # the chords are the last solves: nothing above reads them
+        if not continuous:  # the rating's are the last solves: nothing above reads them
             out["continuous_torque"] = np.full(np.shape(out["off_torque"]), np.nan)
             return out
         limit = fluid_limit(rg.materials)
