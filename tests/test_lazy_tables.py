@@ -143,3 +143,20 @@ def test_the_analytic_inertia_loads_no_hand_off_nor_the_viewer(fresh_python) -> 
     )
     p = fresh_python(code)
     assert p.stdout.strip() == "['mrclutch.inertia']"
+
+
+def test_haptic_answers_without_numpy_polynomial(fresh_python) -> None:
+    """``haptic`` (the MR pair's 1 ms delay) never multiplies a polynomial: it answers without
+    numpy.polynomial (~4 ms CPU of its start, issue 40 item 1); ``compare``'s zero-delay motor
+    takes its crossings as roots, so the same process loads it there."""
+    code = (
+        "import sys, io, contextlib\nfrom mrclutch.cli.main import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()) as out:\n"
+        "    assert main(['haptic']) == 0\n"
+        "print('numpy.polynomial' in sys.modules)\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        "    assert main(['compare']) == 0\n"
+        "print('numpy.polynomial' in sys.modules)"
+    )
+    p = fresh_python(code)
+    assert p.stdout.split() == ["False", "True"]

@@ -27,7 +27,6 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from numpy.polynomial import polynomial as P
 
 from geometry.numerics import illinois
 from geometry.validation import ParameterError
@@ -280,6 +279,7 @@ def _crossings(
 
     if tau == 0.0:
         # Im[−jωNum(jω)(k − jbω)] is a polynomial in ω: its positive real roots, exactly.
+        from numpy.polynomial import polynomial as P  # zero delay only (not haptic's)
 
         c = np.array(a[::-1], dtype=complex) * (1j ** np.arange(4))  # Num(jω) in ω
         poly = P.polymul(P.polymul([0, -1j], c), [p.k, -1j * p.b])

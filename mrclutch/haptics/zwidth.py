@@ -57,7 +57,6 @@ import math
 from typing import Any
 
 import numpy as np
-from numpy.polynomial import polynomial as P
 
 from geometry.numerics import illinois
 from geometry.validation import ParameterError
@@ -430,6 +429,8 @@ def _ray_crossings(p: HapticParams, c: float, sg: float, rho_stop: float) -> tup
 
     if tau == 0.0:
         # Im[−jω Num(jω)(k − jbω)(c − jσω)] is a polynomial in ω: its positive real roots
+        from numpy.polynomial import polynomial as P  # zero delay only (not haptic's)
+
         cn = np.array(a[::-1], dtype=complex) * (1j ** np.arange(4))  # Num(jω) in ω
         poly = P.polymul(P.polymul(P.polymul([0, -1j], cn), [p.k, -1j * p.b]), [c, -1j * sg])
         rts = np.roots(np.trim_zeros(poly.imag[::-1], "f"))
