@@ -75,15 +75,17 @@ def stable_stiffness_batch(p: HapticParams) -> np.ndarray:
         out[rows[done]] = best[done]
         todo = rows[~done]
     exact[todo] = True
-    for i in np.nonzero(exact)[0]:
-        out[i] = max_stable_stiffness(
-            HapticParams(
-                *(f[x][i] for x in ("m1", "b1", "k", "b", "m2")),
-                delay=f["delay"][i],
-                sample_period=f["sample_period"][i],
-            )
+    hard = np.nonzero(exact)[0]
+    if hard.size:  # the exact kernel's scans side by side (each row its scalar call's bits)
+        out[hard] = max_stable_stiffness(
+            HapticParams._of_checked(**{x: f[x][hard] for x in _EXACT_FIELDS})
         )
     return out.reshape(shape)
+
+
+#: The fields ``stable_stiffness_batch`` hands the exact kernel (the others at their
+#: defaults: the stability limit does not depend on the force capacity or workspace).
+_EXACT_FIELDS = ("m1", "b1", "k", "b", "m2", "delay", "sample_period")
 
 
 def zero_moduli(coeffs: tuple[np.ndarray, ...]) -> np.ndarray:

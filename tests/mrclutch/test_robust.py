@@ -81,6 +81,25 @@ def test_stable_stiffness_batch_without_delay_and_with_a_hold_goes_exact():
     assert got[1] == pytest.approx(max_stable_stiffness(p.item(1)), rel=1e-12)
 
 
+def test_stable_stiffness_batch_hands_long_delays_to_the_exact_kernel_at_once(monkeypatch):
+    """Designs whose linear grid would pass ``_MAX_LINEAR`` points (a 0.3–0.5 s delay on
+    a stiff lever: tests/mrclutch/test_json_walk.py's hot design) go to the exact kernel in
+    one vectorised call, each row the scalar call's bits (they went one by one: 203 scalar
+    scans in one ``compare``)."""
+    import mrclutch.robust_search as rs
+
+    n = 6
+    p = HapticParams(np.full(n, 1.5e-3), np.linspace(0.2, 0.4, n), 4000.0, 20.0, 14e-3,
+                     delay=np.linspace(0.3, 0.5, n))  # fmt: skip
+    calls = []
+    real = rs.max_stable_stiffness
+    monkeypatch.setattr(rs, "max_stable_stiffness", lambda q: calls.append(q.shape) or real(q))
+    got = stable_stiffness_batch(p)
+    assert calls == [(n,)]  # one call, every row
+    assert np.array_equal(got, [real(p.item(i)) for i in range(n)])
+    assert np.all(np.isfinite(got))
+
+
 def test_box_search_finds_an_interior_minimum_and_a_corner_maximum():
     lo = np.array([[0.0, 0.0], [-1.0, -1.0]])
     hi = np.array([[1.0, 1.0], [1.0, 1.0]])
