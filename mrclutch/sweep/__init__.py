@@ -22,60 +22,47 @@ Where a change goes: ``spec`` (the spec file, its parameters and material files,
 designs of each chunk), ``run`` (running, interrupting and resuming a sweep), ``store``
 (the CSV and Parquet output, reading it back), ``record`` (the ``.meta.json`` sidecar: what
 a resume checks), ``lock`` (one writer at a time), ``front`` (the Pareto front of the rows).
-This package re-exports their public names.
+This package re-exports their public names on first use (PEP 562, as geometry's
+``EXPORTS``): the sweep plot in a fresh process needs ``front`` and ``store`` only, not the
+running machinery ``run``, ``spec``, ``record`` and ``lock`` load (53–119 ms, issue 40).
 """
 
-from __future__ import annotations
+import importlib
+from typing import Any
 
-from mrclutch.sweep.front import pareto_front
-from mrclutch.sweep.lock import output_lock
-from mrclutch.sweep.record import META_INTERVAL, model_version
-from mrclutch.sweep.run import (
-    CHUNKS_PER_WORKER,
-    MAX_ROWS_IN_FLIGHT,
-    Evaluator,
-    SweepResult,
-    chunk_rows,
-    chunks_in_flight,
-    executor_workers,
-    run_sweep,
-    sigterm_as_interrupt,
-)
-from mrclutch.sweep.spec import (
-    DEFAULT_CHUNK,
-    MAX_DESIGNS,
-    UNUSED_SECTIONS,
-    MaterialFile,
-    ParamRange,
-    SweepSpec,
-    load_spec,
-    parse_parameters,
-)
-from mrclutch.sweep.store import csv_text, is_parquet, read_results
+#: Each re-exported name → the module that defines it (tests/test_architecture.py reads
+#: this table as imports of this package).
+EXPORTS: dict[str, str] = {
+    "CHUNKS_PER_WORKER": "mrclutch.sweep.run",
+    "DEFAULT_CHUNK": "mrclutch.sweep.spec",
+    "MAX_DESIGNS": "mrclutch.sweep.spec",
+    "MAX_ROWS_IN_FLIGHT": "mrclutch.sweep.run",
+    "META_INTERVAL": "mrclutch.sweep.record",
+    "UNUSED_SECTIONS": "mrclutch.sweep.spec",
+    "Evaluator": "mrclutch.sweep.run",
+    "MaterialFile": "mrclutch.sweep.spec",
+    "ParamRange": "mrclutch.sweep.spec",
+    "SweepResult": "mrclutch.sweep.run",
+    "SweepSpec": "mrclutch.sweep.spec",
+    "chunk_rows": "mrclutch.sweep.run",
+    "chunks_in_flight": "mrclutch.sweep.run",
+    "csv_text": "mrclutch.sweep.store",
+    "executor_workers": "mrclutch.sweep.run",
+    "is_parquet": "mrclutch.sweep.store",
+    "load_spec": "mrclutch.sweep.spec",
+    "model_version": "mrclutch.sweep.record",
+    "output_lock": "mrclutch.sweep.lock",
+    "pareto_front": "mrclutch.sweep.front",
+    "parse_parameters": "mrclutch.sweep.spec",
+    "read_results": "mrclutch.sweep.store",
+    "run_sweep": "mrclutch.sweep.run",
+    "sigterm_as_interrupt": "mrclutch.sweep.run",
+}
 
-__all__ = [
-    "CHUNKS_PER_WORKER",
-    "DEFAULT_CHUNK",
-    "MAX_DESIGNS",
-    "MAX_ROWS_IN_FLIGHT",
-    "META_INTERVAL",
-    "UNUSED_SECTIONS",
-    "Evaluator",
-    "MaterialFile",
-    "ParamRange",
-    "SweepResult",
-    "SweepSpec",
-    "chunk_rows",
-    "chunks_in_flight",
-    "csv_text",
-    "executor_workers",
-    "is_parquet",
-    "load_spec",
-    "model_version",
-    "output_lock",
-    "pareto_front",
-    "parse_parameters",
-    "read_results",
-    "run_sweep",
-    "sigterm_as_interrupt",
-]
+__all__ = sorted(EXPORTS)
+
+
+def __getattr__(name: str) -> Any:
+    if name not in EXPORTS:
+        raise AttributeError(f"module 'mrclutch.sweep' has no attribute {name!r}")
+    return getattr(importlib.import_module(EXPORTS[name]), name)

@@ -298,7 +298,9 @@ def test_the_rows_are_read_beside_matplotlibs_import_and_their_errors_come_back(
 def test_the_sweep_plot_loads_neither_pyplot_nor_the_solids(tmp_path):
     """In a process of its own, the sweep plot draws on an Agg canvas without pyplot (its
     import ~0.06 s) and without mrclutch.solids (the section figure's materials, ~0.08 s):
-    ``save_png`` closes a pyplot figure only where pyplot is loaded (issue 40)."""
+    ``save_png`` closes a pyplot figure only where pyplot is loaded (issue 40). Nor does it
+    load the sweep's running machinery (``mrclutch.sweep.run``, ``lock``: the package
+    re-exports on first use), only the front and the store it reads with."""
     n = 30
     cols = {"valid": np.ones(n), "bandwidth_hz": np.linspace(10, 60, n),
             "max_torque_N_m": np.linspace(2, 0.5, n), "drag_damping_N_m_s": np.full(n, 1e-4),
@@ -306,8 +308,8 @@ def test_the_sweep_plot_loads_neither_pyplot_nor_the_solids(tmp_path):
     csv = _results_csv(tmp_path / "r.csv", cols)
     code = ("import sys\nfrom mrclutch.cli.plots.design import pareto_plot\n"
             f"pareto_plot({str(csv)!r}, {str(tmp_path / 'p.png')!r})\n"
-            "print(sorted(m for m in ('matplotlib.pyplot', 'mrclutch.solids') "
-            "if m in sys.modules))")  # fmt: skip
+            "print(sorted(m for m in ('matplotlib.pyplot', 'mrclutch.solids', "
+            "'mrclutch.sweep.run', 'mrclutch.sweep.lock') if m in sys.modules))")  # fmt: skip
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                        timeout=300)  # fmt: skip
     assert r.returncode == 0, r.stderr
