@@ -150,11 +150,14 @@ def test_single_design_answers_do_not_import_numpy_ma(fresh_python):
 
 
 def test_evaluate_builds_the_feel_and_torque_response_circuit_once(monkeypatch):
-    """pipeline.evaluate builds the design's magnetic circuit once for the torque response
-    and the feel's loop (clutch_figures builds its own): 2 path_from_regions calls, not 3;
-    and feel_figures with that circuit handed over equals feel_figures building it."""
+    """pipeline.evaluate builds the design's magnetic circuit once, for the clutch figures'
+    thermal rating, the torque response and the feel's loop (c83662b: clutch_figures
+    takes it, where it built its own): 1 path_from_regions call, not 3; and feel_figures
+    and clutch_figures with that circuit handed over equal them building it."""
+    from geometry.section import build_section
     from magnetics import circuit, dynamics
     from mrclutch import feel, pipeline
+    from mrclutch.clutch import clutch_figures
 
     calls = []
     real = circuit.path_from_regions
@@ -167,11 +170,12 @@ def test_evaluate_builds_the_feel_and_torque_response_circuit_once(monkeypatch):
     monkeypatch.setattr(dynamics, "path_from_regions", counted)
     design = ClutchDesign()
     ev = pipeline.evaluate(design)
-    assert len(calls) == 2
+    assert len(calls) == 1
     f = ev.clutch
     args = (design, f.max_torque, f.yield_torque, f.off_state_torque, 1.0)
-    path = circuit.path_from_section(pipeline.build_section(design.clutch, design.materials))
+    path = circuit.path_from_section(build_section(design.clutch, design.materials))
     assert feel.feel_figures(*args, path) == feel.feel_figures(*args)
+    assert clutch_figures(design, path=path) == clutch_figures(design) == f
 
 
 def test_passivity_batch_is_metrics_batch_passivity_bit_for_bit():
