@@ -34,13 +34,8 @@ ROOT = Path(__file__).resolve().parents[1]
 CHILD = r"""
 import os, sys, time
 t0 = float(os.environ["BENCH_REPORT_T0"])
-def disk():
-    try:
-        with open("/proc/self/io") as f:
-            io = dict(line.split(": ") for line in f.read().splitlines())
-        return f"{int(io['read_bytes']) / 1e6:6.0f} MB"
-    except (OSError, KeyError, ValueError):
-        return "     ? MB"
+sys.path.insert(0, os.environ["BENCH_REPORT_DIR"])
+from bench_report_phases import _disk as disk  # this script's own reading of the disk
 def log(what):
     print(f"cad    {time.time() - t0:7.2f} s  cpu {time.process_time():6.2f} s  disk {disk()}  "
           f"{what}", file=sys.stderr, flush=True)
@@ -83,6 +78,7 @@ def main() -> None:
     args = ap.parse_args()
     t0 = time.time()
     os.environ["BENCH_REPORT_T0"] = repr(t0)
+    os.environ["BENCH_REPORT_DIR"] = str(Path(__file__).resolve().parent)
 
     def log(what: str) -> None:
         print(f"report {time.time() - t0:7.2f} s  cpu {time.process_time():6.2f} s  "
