@@ -49,7 +49,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from geometry.regions import Regions
 from geometry.validation import ParameterError, check_nonnegative, check_range
-from magnetics.amplifier import Amplifier, supply_current  # noqa: F401  (importable here)
+from magnetics.amplifier import Amplifier
 from magnetics.circuit import MagneticPath, _kernels, _mmf, path_from_regions, solve_flux
 from magnetics.eddy_lag import EddyPart, eddy_parts
 from magnetics.laminations import Laminations

@@ -21,8 +21,9 @@ from typing import Any
 from geometry.materials import SLOTS, MaterialChoice
 from geometry.params import INT_RANGES, LENGTH_RANGES, DrumClutch, preset
 from geometry.validation import ParameterError
+from magnetics.amplifier import Amplifier
 from magnetics.drag import Support
-from magnetics.dynamics import Amplifier, Laminations
+from magnetics.laminations import Laminations
 from mrclutch import design as design_mod
 from mrclutch.haptics.actuator import MR_170
 from mrclutch.process import PROCESS_KEYS, Process
@@ -139,9 +140,9 @@ def sections() -> list[tuple[str, str, list[tuple[str, str, str, str]]]]:
         ("operating", "mrclutch.design.Operating: current limit, speed, delay, temperatures",
          op_rows),
         ("support", "magnetics.drag.Support: bearing and seal drag", sup_rows),
-        ("amplifier", "magnetics.dynamics.Amplifier: supply current, torque response",
+        ("amplifier", "magnetics.amplifier.Amplifier: supply current, torque response",
          _rows(design_mod._AMPLIFIER_KEYS, Amplifier(), _replace(Amplifier()))),
-        ("laminations", "magnetics.dynamics.Laminations: eddy currents of the torque response",
+        ("laminations", "magnetics.laminations.Laminations: eddy currents of the torque response",
          _rows(design_mod._LAMINATION_KEYS, Laminations(), _replace(Laminations()))),
         ("transmission", "mrclutch.haptics.actuator.Transmission: Eq. 3-4 to the hand",
          _rows(design_mod._TRANSMISSION_KEYS, MR_170, _replace(MR_170))),

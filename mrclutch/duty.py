@@ -34,8 +34,8 @@ from geometry.params import INT_RANGES, valid
 from geometry.regions import Regions
 from geometry.validation import ParameterError
 from magnetics import thermal
+from magnetics.amplifier import Amplifier, supply_current
 from magnetics.drag import Support, drag_terms, totals
-from magnetics.dynamics import Amplifier, supply_current
 from magnetics.hot import Load, march, tau_y_coefficient, tau_y_factor
 from magnetics.life import fluid_volume, life_hours, mean_power
 from magnetics.materials import FLUIDS

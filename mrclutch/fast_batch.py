@@ -17,9 +17,10 @@ from geometry.materials import MaterialChoice
 from geometry.params import valid
 from geometry.validation import ParameterError, check_choice
 from magnetics import thermal
+from magnetics.amplifier import supply_current
 from magnetics.circuit import linear_flux, path_from_regions, solve_flux
 from magnetics.drag import coupled_fluid_inertia, drag_terms, totals
-from magnetics.dynamics import supply_current, torque_response
+from magnetics.dynamics import torque_response
 from magnetics.error_map import error_bound
 from magnetics.network import network_from_regions
 from magnetics.network_bound import FEATURES, solution_features

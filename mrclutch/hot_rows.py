@@ -25,8 +25,8 @@ from geometry import regions
 from geometry.params import valid
 from geometry.regions import Regions
 from magnetics import thermal
+from magnetics.amplifier import supply_current
 from magnetics.drag import drag_terms, totals
-from magnetics.dynamics import supply_current
 from magnetics.fluid import MRFluid
 from magnetics.hot import march_batch, tau_y_factor
 from magnetics.materials import FLUIDS

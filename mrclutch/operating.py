@@ -79,7 +79,7 @@ class Operating:
 
 def current_limit(operating: Operating, wire_diameter: Any, supply: Any = math.inf) -> Any:
     """max_current capped by the current-density limit in the copper and by ``supply``
-    (A, the amplifier's V/R: ``magnetics.dynamics.supply_current``) (floats or arrays)."""
+    (A, the amplifier's V/R: ``magnetics.amplifier.supply_current``) (floats or arrays)."""
     # batches hold rows that valid() refused (a 1e150 m wire): their area may overflow to
     # inf, which caps nothing; those rows' currents are never used
     with np.errstate(over="ignore"):

@@ -7,7 +7,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from magnetics.dynamics import Laminations
+from magnetics.laminations import Laminations
 from mrclutch.design import design_preset
 from mrclutch.haptics.actuator import TABLE2_MR
 from mrclutch.haptics.delay import lag_stable_stiffness

@@ -14,8 +14,8 @@ import pytest
 
 from geometry.section import build_section
 from geometry.validation import ParameterError
+from magnetics.amplifier import supply_current
 from magnetics.drag import drag_terms, totals
-from magnetics.dynamics import supply_current
 from magnetics.hot import tau_y_factor
 from magnetics.materials import FLUIDS
 from magnetics.torque import torque_curve

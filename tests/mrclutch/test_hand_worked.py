@@ -21,8 +21,9 @@ from scipy.optimize import brentq
 
 from geometry.params import preset
 from geometry.section import build_section
+from magnetics.amplifier import Amplifier
 from magnetics.circuit import path_from_section
-from magnetics.dynamics import Amplifier, current_rise, lag_bandwidth, lag_step
+from magnetics.dynamics import current_rise, lag_bandwidth, lag_step
 from magnetics.materials import linear_materials
 from mrclutch.haptics.actuator import TABLE2_EM_136206, TABLE2_MR
 from mrclutch.haptics.model import closed_loop_impedance, passive_impedance, rendering_area

@@ -6,7 +6,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from magnetics.dynamics import Amplifier, Laminations
+from magnetics.amplifier import Amplifier
+from magnetics.laminations import Laminations
 from mrclutch.design import ClutchDesign, Operating, design_preset
 from mrclutch.haptics.actuator import TABLE2_MR
 from mrclutch.haptics.delay import lag_stable_stiffness
