@@ -43,7 +43,7 @@ PARTS = (
     ("of which the limits over the box", "mrclutch.robust", "robust_limits", 2),
     ("robust verdicts (searches, thresholds)", "mrclutch.verdict", "robust_verdicts", 1),
     ("of which the Z-width (nominal, searches)", "mrclutch.robust", "zwidth_of", 2),
-    ("of which the thresholds (b1, delay)", "mrclutch.robust", "thresholds", 2),
+    ("of which the thresholds (b1, delay)", "mrclutch.robust", "threshold", 2),
     ("network kernel in Python (_solve_rows)", "magnetics.network.kernels", "_solve_rows", 1),
     ("text", "mrclutch.cli.commands.evaluate", "format_evaluation", 0),
 )

@@ -44,7 +44,7 @@ thresholds, the model against a bench). The machinery lives by concept:
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Generator
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -77,7 +77,7 @@ __all__ = [
     "CASES", "ROBUST_COLUMNS", "THRESHOLD_INPUTS", "HandBox", "RobustBatchEvaluator",
     "RobustBox", "box_search", "hand_box_batch", "headline", "measured_comparison",
     "robust_box", "robust_columns_batch", "robust_limits", "robust_verdicts",
-    "stable_stiffness_batch", "threshold", "thresholds",
+    "stable_stiffness_batch", "threshold",
 ]  # fmt: skip
 
 # ---- one design: the robust read-out of an Evaluation ----------------------------------
@@ -127,23 +127,31 @@ def threshold(p: HapticParams, K: float, verdict: str, field: str) -> dict[str, 
     "passive") at K flips: the limit's exact kernel equals K there (a bracketed root-find on
     log x over 10⁻³–10³ × the value in ``p``, the delay up to 1 s). ``sense`` "≥" when the
     verdict holds above x*, "≤" below. None where no value of this input alone flips it."""
-    return thresholds(p, K, [(verdict, field)])[0]
+    limit = _LIMITS[verdict]
+    x0 = float(getattr(p, field))
+    if x0 <= 0:
+        return None
 
+    def gain(v: float) -> float:  # log of the limit over K, an unbounded limit capped
+        return math.log(min(float(v), 1e12) / K)
 
-#: What one threshold's search (``_search``) asks of its driver (``thresholds``): the limit
-#: at these values of its field (grid points), or the root of its gain on a bracket.
-_Grid = tuple[str, list[float]]
-_Root = tuple[str, float, float, float, float]
-
-
-def _search(x0: float, field: str) -> Generator[_Grid | _Root, Any, dict[str, Any] | None]:
-    """One threshold's search (``threshold``) as a generator: it yields ("grid", values of
-    the field) and is sent the gains log(limit/K) there, or ("root", a, b, ga, gb) and is
-    sent the root u of the gain on the bracket [a, b] of log x; it returns the threshold."""
+    def g(u: float) -> float:
+        return gain(limit(replace(p, **{field: math.exp(u)})))
 
     lo, hi = math.log(x0 * 1e-3), math.log(min(x0 * 1e3, 1.0) if field == "delay" else x0 * 1e3)
     us = np.linspace(lo, hi, 13)
     gs: dict[int, float] = {}  # the grid's values, evaluated as the search reaches them
+    others = {f: getattr(p, f) for f in _FIELDS}
+
+    def at(idx: list[int]) -> None:
+        new = [i for i in idx if i not in gs]
+        if new and verdict in _VECTORISED:  # in one call: its rows are the scalar calls' bits
+            # p's fields, checked, and the searched one: exp of a finite u, > 0 (issue 40)
+            xs = np.array([math.exp(us[i]) for i in new])
+            q = HapticParams._of_checked(**{**others, field: xs})
+            gs.update(zip(new, (gain(v) for v in limit(q)), strict=True))
+        elif new:
+            gs.update((i, g(us[i])) for i in new)
 
     # the crossing nearest the value in p (the lowest cell of equal nearness): cells in order
     # of their distance from it, each one's root no nearer than that, so the search stops
@@ -155,93 +163,17 @@ def _search(x0: float, field: str) -> Generator[_Grid | _Root, Any, dict[str, An
     for i in sorted(range(12), key=lambda i: (near[i], i)):
         if best is not None and near[i] > best[0] + 1e-9 * (1.0 + abs(u0)):
             break
-        idx = ([i, i + 1] if near[i] > 0 else [j for j in range(13) if near[min(j, 11)] == 0
-                                                or near[max(j - 1, 0)] == 0])  # fmt: skip
-        new = [j for j in idx if j not in gs]
-        if new:
-            got = yield ("grid", [math.exp(us[j]) for j in new])
-            gs.update(zip(new, got, strict=True))
+        at([i, i + 1] if near[i] > 0 else [j for j in range(13) if near[min(j, 11)] == 0
+                                            or near[max(j - 1, 0)] == 0])  # fmt: skip
         a, b, ga, gb = us[i], us[i + 1], gs[i], gs[i + 1]
         if ga == 0 or ga * gb < 0:
-            r = a if ga == 0 else (yield ("root", float(a), float(b), ga, gb))
+            r = a if ga == 0 else bracket_root(g, a, b, ga, gb)
             if best is None or (abs(r - u0), i) < (best[0], best[1]):
                 best = (abs(r - u0), i, r, ga, gb)
     if best is None:
         return None
     _, _, r, ga, gb = best
     return {"value": math.exp(r), "sense": "≥" if gb > ga else "≤"}
-
-
-def thresholds(p: HapticParams, K: float, asks: list[tuple[str, str]]
-               ) -> list[dict[str, Any] | None]:  # fmt: skip
-    """``threshold(p, K, verdict, field)`` of each (verdict, field) of ``asks``, their
-    searches run side by side (issue 40): at each step the grid points every search asks
-    for in one call of each verdict's kernel, and every root asked for in one Illinois
-    root-find (``bracket_root``'s, on v = u − a + 1), whose rows each verdict's kernel
-    evaluates in one call. A row's limit is its own in a vectorised call (``_VECTORISED``:
-    the scalar call's bits) and Illinois refines each bracket alone, so each threshold is
-    the one it is searched alone, to the bit (tests/mrclutch/test_robust_one_answer.py)."""
-
-    def gain(v: float) -> float:  # log of the limit over K, an unbounded limit capped
-        return math.log(min(float(v), 1e12) / K)
-
-    def gains(rows: list[tuple[int, float]]) -> list[float]:
-        """The gains at (ask, value of its field) rows: per verdict one vectorised call,
-        or scalar calls where its kernel is not vectorised."""
-        out = [0.0] * len(rows)
-        for verdict in {asks[a][0] for a, _ in rows}:
-            mine = [j for j, (a, _) in enumerate(rows) if asks[a][0] == verdict]
-            limit = _LIMITS[verdict]
-            if verdict in _VECTORISED:
-                vals = {f: np.array([rows[j][1] if asks[rows[j][0]][1] == f
-                                     else float(getattr(p, f)) for j in mine])
-                        for f in {asks[rows[j][0]][1] for j in mine}}  # fmt: skip
-                # p's fields, checked, and the searched ones: exp of a finite u, > 0
-                q = HapticParams._of_checked(**{**{f: getattr(p, f) for f in _FIELDS}, **vals})
-                got = [gain(v) for v in limit(q)]
-            else:
-                got = [gain(limit(replace(p, **{asks[rows[j][0]][1]: rows[j][1]})))
-                       for j in mine]  # fmt: skip
-            for j, v in zip(mine, got, strict=True):
-                out[j] = v
-        return out
-
-    results: list[dict[str, Any] | None] = [None] * len(asks)
-    live: dict[int, Any] = {}  # ask → (its search, what it asks now)
-    for a, (_, field) in enumerate(asks):
-        x0 = float(getattr(p, field))
-        if x0 > 0:
-            s = _search(x0, field)
-            live[a] = (s, next(s))
-    while live:
-        grid = [(a, x) for a, (_, req) in live.items() if req[0] == "grid" for x in req[1]]
-        answers: dict[int, Any] = {}
-        if grid:
-            gv = gains(grid)
-            for (a, _), v in zip(grid, gv, strict=True):
-                answers.setdefault(a, []).append(v)
-        roots = [(a, req[1:]) for a, (_, req) in live.items() if req[0] == "root"]
-        if roots:
-            ab = [(r[0], r[1]) for _, r in roots]
-
-            def f(act: np.ndarray, v: np.ndarray, roots: Any = roots, ab: Any = ab) -> np.ndarray:
-                return np.array(gains([(roots[i][0], math.exp(float(v[n]) + ab[i][0] - 1.0))
-                                       for n, i in enumerate(act)]))  # fmt: skip
-
-            one = np.ones(len(roots))
-            v = illinois(f, one, np.array([b - a + 1.0 for a, b in ab]),
-                         np.array([r[2] for _, r in roots]), np.array([r[3] for _, r in roots]),
-                         1e-11)  # fmt: skip
-            for n, (a, _) in enumerate(roots):
-                answers[a] = float(v[n]) + ab[n][0] - 1.0
-        for a in list(live):
-            s = live[a][0]
-            try:
-                live[a] = (s, s.send(answers[a]))
-            except StopIteration as stop:
-                results[a] = stop.value
-                del live[a]
-    return results
 
 
 def _rescaled(box: HandBox, p: HapticParams, K: float, bench: tuple[float, float]) -> HandBox:
@@ -335,18 +267,18 @@ def robust_verdicts(ev: Any, uncertainty: Uncertainty | None = None,
     verdicts: dict[str, Any] = {}
     keys = (("stable", "max_stable_K_N_per_m"), ("passive", "max_passive_K_N_per_m"))
     holds = {verdict: _holds(out[key]["worst"], out[key]["best"], K) for verdict, key in keys}
-    # every threshold asked for, searched side by side (``thresholds``)
-    asks = [(verdict, field) for verdict, _ in keys if holds[verdict] == "depends"
-            for field, *_ in THRESHOLD_INPUTS if field not in fixed]  # fmt: skip
-    found = dict(zip(asks, thresholds(mr, K, asks), strict=True))
     for verdict, key in keys:
         th = {}
-        for (v_, field), t in found.items():
-            if v_ == verdict and t is not None:
-                rng = getattr(box, field)  # THRESHOLD_INPUTS' fields are HandBox's
-                t["range"] = [float(rng[1][0]), float(rng[2][0])]
-                t["at_nominal_of_others"] = True
-                th[field] = t
+        if holds[verdict] == "depends":
+            for field, *_ in THRESHOLD_INPUTS:
+                if field in fixed:
+                    continue
+                t = threshold(mr, K, verdict, field)
+                if t is not None:
+                    rng = getattr(box, field)  # THRESHOLD_INPUTS' fields are HandBox's
+                    t["range"] = [float(rng[1][0]), float(rng[2][0])]
+                    t["at_nominal_of_others"] = True
+                    th[field] = t
         verdicts[verdict] = {"nominal": bool(K <= out[key]["nominal"] * (1 + 1e-9)),
                              "holds": holds[verdict], "thresholds": th}  # fmt: skip
     out["verdicts"] = verdicts

@@ -189,27 +189,6 @@ def test_threshold_searched_outward_is_the_whole_grids(verdict, field):
     assert seen == {True, False}  # a crossing found, and none
 
 
-def test_thresholds_side_by_side_are_each_searched_alone():
-    """``robust.thresholds`` runs the searches of b1 and of the delay for both verdicts side
-    by side (their grid points in one call per verdict, their roots in one Illinois): each
-    is the whole grid's scalar search of its own, value and sense to the bit, None where it
-    is — the paper's pair and three random ones, K beside and far from each limit."""
-    rng = np.random.default_rng(44)
-    pairs = [replace(TABLE2_MR, delay=1e-3),
-             *(_take(_params(_random_boxes(rng, 1)), [0]).item(0) for _ in range(3))]  # fmt: skip
-    asks = [(v, f) for v in ("stable", "passive") for f in ("b1", "delay")]
-    seen = set()
-    for p in pairs:
-        lim = float(max_stable_stiffness(p))
-        for f in (1e-4, 0.6, 1.3):
-            K = f * lim
-            got = robust.thresholds(p, K, asks)
-            want = [_threshold_on_the_whole_grid(p, K, v, fd) for v, fd in asks]
-            assert got == want, (p, f)
-            seen.update(g is None for g in got)
-    assert seen == {True, False}
-
-
 def test_the_box_nominal_zwidth_is_the_evaluations_own_where_the_pair_is_the_same():
     """robust_verdicts' nominal Z-width area is read from the evaluation (its MR pair's,
     computed beside the motor) where the box's nominal pair is that pair field for field:
