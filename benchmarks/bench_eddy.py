@@ -16,7 +16,6 @@ import numpy as np
 
 from geometry.params import preset
 from geometry.section import build_section
-from magnetics.eddy_lag import Laminations
 from magnetics.fem.eddy import (
     FREQUENCIES,
     WITH_STAINLESS,
@@ -24,6 +23,7 @@ from magnetics.fem.eddy import (
     diffusion_eddy,
     eddy_response,
 )
+from magnetics.laminations import Laminations
 
 PARTS = ("core", "poles", "back_iron", "drums")
 

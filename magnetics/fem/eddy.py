@@ -20,7 +20,7 @@ eddy term jωσA·(v/r) integrated like the source):
   T = λᵀMψ₀/Φ₀, λ = K⁻¹Pᵀ (K symmetric; P the gap-flux functional): the group delay
   −dφ/dω at ω → 0, which the 1-D model's Σ weight·mean delay approximates. The integrand
   σψ₀λ/r splits T exactly into each part's share (``EddyFEM.parts``).
-* **Laminations** (``magnetics.eddy_lag.Laminations``): a laminated or slotted part carries
+* **Laminations** (``magnetics.laminations.Laminations``): a laminated or slotted part carries
   no azimuthal current (σ_φ = 0: the sheets cut the path); the currents inside each sheet
   of thickness d are homogenised as a complex reluctivity ν·x/tanh(x), x = (d/2)√(jωμσ)
   (the slab's tanh(x)/x flux ratio, [stoll1974] ch. 2; a stack homogenised as in the
@@ -49,9 +49,10 @@ from geometry.section import Section
 from geometry.validation import ParameterError, check_choice, check_range
 from magnetics.circuit import _kernels, _mmf, path_from_section, solve_flux
 from magnetics.dynamics import BIAS
-from magnetics.eddy_lag import STEEL_CONDUCTIVITY, Laminations, eddy_parts, eddy_transfer
+from magnetics.eddy_lag import STEEL_CONDUCTIVITY, eddy_parts, eddy_transfer
 from magnetics.fem import DEFAULT_SIZE, build_grid, solve_fem
 from magnetics.fem.grid import Grid
+from magnetics.laminations import Laminations
 from magnetics.materials import MATERIALS, Magnetic
 
 FloatArray = NDArray[np.float64]

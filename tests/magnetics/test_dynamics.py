@@ -19,12 +19,12 @@ from magnetics.dynamics import (
     torque_response,
 )
 from magnetics.eddy_lag import (
-    Laminations,
     diffusion_mean_delay,
     diffusion_response,
     diffusion_step,
     diffusion_time_constant,
 )
+from magnetics.laminations import Laminations
 from magnetics.materials import MU0, linear_materials
 
 PAPER = preset("paper")

@@ -9,7 +9,7 @@ import pytest
 from geometry.params import preset
 from geometry.section import build_section
 from geometry.validation import ParameterError
-from magnetics.eddy_lag import Laminations, diffusion_mean_delay, diffusion_time_constant
+from magnetics.eddy_lag import diffusion_mean_delay, diffusion_time_constant
 from magnetics.fem.eddy import (
     WITH_STAINLESS,
     bias_current,
@@ -19,6 +19,7 @@ from magnetics.fem.eddy import (
     slab_flux_ratio,
     solid_cylinder,
 )
+from magnetics.laminations import Laminations
 from magnetics.materials import MU0
 
 MU, SIGMA, A = 500 * MU0, 5.8e6, 2.5e-3  # τ₁ = μσa²/j₁² ≈ 3.9 ms
